@@ -1,0 +1,144 @@
+"""Comparisons as values: trajectory deviations, event measures, energy, frequency matching.
+
+Each comparison is computed once, as a dataclass, and rendered by the JSON output, the report
+and the recording alike.
+"""
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Comparison:
+    a: str
+    b: str
+    channel: str
+    max_abs: float
+    rms: float
+    max_rel: float          # max |Δ| / scale
+    scale: float            # the channel's scale: max |value| over both runs
+    tolerance: float        # relative to scale
+    verdict: str            # agree | disagree | skipped
+    decided_by: str         # the number that decided, in words
+
+    def as_dict(self):
+        return asdict(self)
+
+
+def deviation(a, b, channel, tolerance):
+    """Deviation of two trajectories on their common output grid, with the verdict."""
+    if a.status != "ok" or b.status != "ok":
+        why = ", ".join(f"{t.solver} {t.status}" for t in (a, b) if t.status != "ok")
+        return Comparison(a.solver, b.solver, channel, np.nan, np.nan, np.nan, np.nan,
+                          tolerance, "skipped", f"not compared: {why}")
+    if len(a.t) != len(b.t) or np.max(np.abs(a.t - b.t)) > 1e-9 * max(a.t[-1], 1.0):
+        raise ValueError("trajectories of one run must share the output grid")
+    x, y = a.channels[channel], b.channels[channel]
+    d = np.abs(x - y)
+    scale = float(max(np.max(np.abs(x)), np.max(np.abs(y)), 1e-300))
+    max_abs = float(np.max(d))
+    rel = max_abs / scale
+    verdict = "agree" if rel <= tolerance else "disagree"
+    return Comparison(a.solver, b.solver, channel, max_abs, float(np.sqrt(np.mean(d**2))), rel,
+                      scale, tolerance, verdict,
+                      f"max|Δ|/scale = {rel:.2e} {'≤' if verdict == 'agree' else '>'} "
+                      f"{tolerance:.0e} (at t = {a.t[np.argmax(d)]:.4g} s)")
+
+
+def pairwise(trajectories, tolerances):
+    out = []
+    for i, a in enumerate(trajectories):
+        for b in trajectories[i + 1:]:
+            out += [deviation(a, b, ch, tol) for ch, tol in tolerances.items()]
+    return out
+
+
+def energy_residual(traj, channel="energy_balance"):
+    """Largest |E(t) − E(0)| in joules over the finite part of the run."""
+    e = traj.channels.get(channel)
+    if e is None:
+        return None
+    e = e[np.isfinite(e)]
+    return float(np.max(np.abs(e - e[0]))) if len(e) else None
+
+
+# --- event measures: meaningful when phases drift ------------------------------------------
+
+def first_crossing(t, x, level):
+    """Time x first reaches `level` from below (linear interpolation), or None."""
+    above = np.nonzero(x >= level)[0]
+    if len(above) == 0 or above[0] == 0:
+        return None
+    i = above[0]
+    return float(t[i - 1] + (level - x[i - 1]) * (t[i] - t[i - 1]) / (x[i] - x[i - 1]))
+
+
+def peak(t, x):
+    """(value, time) of the maximum, refined by a parabola through the three samples."""
+    i = int(np.nanargmax(x))
+    if 0 < i < len(x) - 1:
+        y0, y1, y2 = x[i - 1], x[i], x[i + 1]
+        den = y0 - 2 * y1 + y2
+        if den < 0:
+            off = 0.5 * (y0 - y2) / den
+            return float(y1 - 0.25 * (y0 - y2) * off), float(t[i] + off * (t[1] - t[0]))
+    return float(x[i]), float(t[i])
+
+
+def window_mean(t, x, t0, t1):
+    w = (t >= t0) & (t <= t1)
+    return float(np.mean(x[w])) if w.any() else None
+
+
+# --- convergence order ---------------------------------------------------------------------
+
+def observed_order(steps, errors):
+    """Least-squares slope of log(error) against log(step)."""
+    steps, errors = np.asarray(steps, float), np.asarray(errors, float)
+    ok = errors > 0
+    return float(np.polyfit(np.log(steps[ok]), np.log(errors[ok]), 1)[0])
+
+
+# --- frequencies ---------------------------------------------------------------------------
+
+def match_modes(fa, la, fb, lb):
+    """Pair the modes of two solvers: by label where both name a mode uniquely, else by nearest
+    value — accepted only when it is nearer than half the gap to any other candidate, so two
+    close modes are never both paired with one. Returns [(i, j)] index pairs."""
+    pairs, used_a, used_b = [], set(), set()
+    for i, name in enumerate(la):
+        if la.count(name) == 1 and lb.count(name) == 1 and name:
+            j = lb.index(name)
+            pairs.append((i, j))
+            used_a.add(i)
+            used_b.add(j)
+    cand = sorted((abs(fa[i] - fb[j]), i, j) for i in range(len(fa)) for j in range(len(fb))
+                  if i not in used_a and j not in used_b)
+    for d, i, j in cand:
+        if i in used_a or j in used_b:
+            continue
+        others = [abs(fa[i] - fb[k]) for k in range(len(fb)) if k != j and k not in used_b]
+        others += [abs(fa[k] - fb[j]) for k in range(len(fa)) if k != i and k not in used_a]
+        if all(d < 0.5 * o for o in others):
+            pairs.append((i, j))
+            used_a.add(i)
+            used_b.add(j)
+    return sorted(pairs)
+
+
+def frequency_comparisons(results, tolerance):
+    """Every pair of solvers, mode by mode, as Comparisons (channel = the mode's label)."""
+    out = []
+    ok = [r for r in results if r.status == "ok"]
+    for i, a in enumerate(ok):
+        for b in ok[i + 1:]:
+            for ia, ib in match_modes(list(a.frequencies_hz), a.labels,
+                                      list(b.frequencies_hz), b.labels):
+                fa, fb = a.frequencies_hz[ia], b.frequencies_hz[ib]
+                d = abs(fa - fb)
+                scale = max(abs(fa), abs(fb), 1e-300)
+                v = "agree" if d / scale <= tolerance else "disagree"
+                out.append(Comparison(a.solver, b.solver, a.labels[ia] or f"mode {ia + 1}", d, d,
+                                      d / scale, scale, tolerance, v,
+                                      f"{fa:.8g} vs {fb:.8g} Hz: rel {d / scale:.2e}"))
+    return out

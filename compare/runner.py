@@ -1,0 +1,84 @@
+"""One run of a scene: every requested solver, compared, recorded and reported.
+
+Used by `xval run` and by the campaign jobs. Solvers run one after another in this process;
+each trajectory is written atomically as soon as it exists, so a later crash loses nothing.
+"""
+from dataclasses import dataclass, field
+import datetime
+import os
+from pathlib import Path
+
+from . import metrics, solvers
+from .atomic import write_json
+
+
+@dataclass
+class RunResult:
+    scene: object
+    params: dict
+    trajectories: list
+    comparisons: list
+    findings: list
+    out_dir: Path
+    files: dict = field(default_factory=dict)      # solver -> .npz path
+
+    def as_json(self):
+        runs = []
+        for tr in self.trajectories:
+            r = {"solver": tr.solver, "status": tr.status, "wall_s": round(tr.wall_s, 6),
+                 "settings": tr.settings,
+                 "stats": {k: v for k, v in tr.stats.items() if k != "traceback"},
+                 "final": tr.final(),
+                 "energy_residual": metrics.energy_residual(tr, self.scene.energy_channel)
+                 if self.scene.energy_channel else None,
+                 "invariants": tr.invariants,
+                 "trajectory": str(self.files.get(tr.solver, ""))}
+            if tr.status != "ok":
+                r["t_fail"], r["reason"] = tr.t_fail, tr.reason
+                if tr.status == "error":
+                    r["message"] = tr.reason
+            runs.append(r)
+        out = {"scene": self.scene.name, "params": self.params, "runs": runs,
+               "comparisons": [c.as_dict() for c in self.comparisons],
+               "findings": [f.__dict__ for f in self.findings]}
+        if "recording" in self.files:
+            out["recording"] = str(self.files["recording"])
+        if "report" in self.files:
+            out["report"] = str(self.files["report"])
+        return out
+
+
+def new_run_dir(out, scene_name):
+    stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
+    return Path(out) / "runs" / f"{scene_name}-{stamp}-{os.getpid()}"
+
+
+def run_scene(scene, params, chosen, settings_for, out_dir, record=True, report=True, log=None):
+    """Simulate `scene` with each solver in `chosen`; `settings_for(solver)` gives settings."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    trajectories, files = [], {}
+    for s in chosen:
+        if log:
+            log(f"{scene.name}: running {s.name} …")
+        tr = solvers.simulate(scene, s, params, settings_for(s))
+        files[s.name] = tr.save(out_dir / f"{s.name}.npz")
+        if log:
+            log(f"{scene.name}: {s.name} {tr.status} in {tr.wall_s:.3g} s"
+                + (f" ({tr.reason})" if tr.reason else ""))
+        trajectories.append(tr)
+    return finish_run(scene, params, trajectories, files, out_dir, record, report)
+
+
+def finish_run(scene, params, trajectories, files, out_dir, record=True, report=True):
+    comparisons = metrics.pairwise(trajectories, scene.tolerances)
+    findings = scene.findings(params, trajectories) if scene.findings else []
+    result = RunResult(scene, params, trajectories, comparisons, findings, Path(out_dir), files)
+    if record:
+        from .recording import write_run_recording
+        files["recording"] = write_run_recording(out_dir / "run.rrd", result)
+    if report:
+        from .report import write_run_report
+        files["report"] = write_run_report(out_dir, result)
+    write_json(out_dir / "result.json", result.as_json())
+    return result

@@ -1,0 +1,441 @@
+"""Exudyn model of the crank–rod–rocker–slider press (`press`) and its lock/release cycle
+(`press-cycle`).
+
+Model: three `NodeRigidBody2D`/`ObjectRigidBody2D` links (node = centre of mass, so the lumped
+"paper" masses sit at A, B, C), a `NodePoint2D`/`MassPoint2D` slider, four `RevoluteJoint2D`
+(O, A, B, C) and a `CoordinateConstraint` y_slider = 0 — an index-3 DAE with 11 coordinates and
+9 constraints, solved with Exudyn's generalized-α (position-level constraints, no drift).
+The Kloss motor torque is a `LoadCoordinate` on the crank's rotation coordinate whose user function
+reads the crank speed of the current Newton iterate. Slider spring/damper:
+`CoordinateSpringDamper` on the slider's x displacement.
+
+The run is split into segments (each output interval, plus lock_after / release_after) solved by
+`SolveDynamic` with `updateInitialValues=True`; a pre-step user function records every step's
+state so the motor work, the damper loss and the press work are integrated step by step with the
+Hermite-corrected trapezoid (4th order) and so the lock event is found between two steps; the
+lock instant is then located by bisection with one-step re-solves from the saved state.
+
+The lock is a `CoordinateConstraint` on the rocker's rotation coordinate, switched on at the
+event with the plastic impact applied explicitly: q̇⁺ = q̇⁻ − M⁻¹Gᵀ(GM⁻¹Gᵀ)⁻¹Gq̇⁻ with the
+mass matrix M of the Exudyn bodies and the Jacobian G of all active constraints (lock included)
+on Exudyn's coordinates — the momentum of the remaining coordinate is kept, the loss is T⁻ − T⁺.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from reference_models import press_common as pc
+
+DEFAULT_SETTINGS = {"integrator": "generalized-alpha", "dt": 2e-5, "spectral_radius": 0.8,
+                    "newton_rtol": 1e-10, "newton_atol": 1e-12}
+INTEGRATORS = ("generalized-alpha", "trapezoidal-index2")
+
+_BISECT_TOL = 1e-9   # s, width of the final lock-time bracket
+
+
+class _Diverged(Exception):
+    def __init__(self, t, reason):
+        super().__init__(reason)
+        self.t, self.reason = t, reason
+
+
+def _check_settings(settings: dict) -> dict:
+    s = dict(DEFAULT_SETTINGS)
+    s.update(settings or {})
+    if s["integrator"] not in INTEGRATORS:
+        raise ValueError(f"integrator must be one of {INTEGRATORS}, got {s['integrator']!r}")
+    if "rtol" in (settings or {}):
+        raise ValueError("exudyn press runs fixed-step: give dt, not rtol")
+    s["dt"] = float(s["dt"])
+    if not s["dt"] > 0:
+        raise ValueError(f"dt must be > 0, got {s['dt']!r}")
+    rho = float(s["spectral_radius"])
+    if not 0.0 <= rho <= 1.0:
+        raise ValueError(f"spectral_radius must be in [0, 1], got {rho!r}")
+    s["spectral_radius"] = rho
+    return s
+
+
+class _Press:
+    """The Exudyn system plus the bookkeeping the scene needs."""
+
+    def __init__(self, p: dict, st: dict, settings: dict, cycle: bool):
+        import exudyn as exu
+        from exudyn import itemInterface as ii
+        self.exu = exu
+        self.p, self.st, self.cycle = p, st, cycle
+        self.u = float(p["gear_ratio"])
+        self.k, self.c = float(p["slider_stiffness"]), float(p["slider_damping"])
+        self.F = float(p.get("press_force", 0.0))
+        self.g = float(p["gravity"])
+        self.locked = False
+        lay = pc.link_layout(p)
+        self.lay = lay
+        SC = exu.SystemContainer()
+        mbs = SC.AddSystem()
+        self.SC, self.mbs = SC, mbs
+        ground = mbs.AddObject(ii.ObjectGround())
+        ng = mbs.AddNode(ii.NodePointGround())
+        mg = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=ng, coordinate=0))
+
+        # link: (first point, direction angle, rate, velocity of first point, length)
+        links = {
+            "crank": (np.zeros(2), st["phi"], st["phid"], np.zeros(2), float(p["l1"])),
+            "rod": (st["A"], st["theta2"], st["theta2d"], st["vA"], float(p["l2"])),
+            "rocker": (st["C"], st["psi"], st["psid"], st["vC"], float(p["l3"])),
+        }
+        self.nodes, self.bodies, self.local = {}, {}, {}
+        for name, (P0, ang, rate, v0, L) in links.items():
+            cx, m, J = lay[name]
+            e = np.array([math.cos(ang), math.sin(ang)])
+            en = np.array([-math.sin(ang), math.cos(ang)])
+            com = P0 + cx * e
+            vcom = v0 + rate * cx * en
+            n = mbs.AddNode(ii.NodeRigidBody2D(referenceCoordinates=[com[0], com[1], ang],
+                                               initialCoordinates=[0, 0, 0],
+                                               initialVelocities=[vcom[0], vcom[1], rate]))
+            b = mbs.AddObject(ii.ObjectRigidBody2D(nodeNumber=n, mass=m, inertia=J))
+            mm = mbs.AddMarker(ii.MarkerBodyMass(bodyNumber=b))
+            mbs.AddLoad(ii.LoadMassProportional(markerNumber=mm, loadVector=[0, -self.g, 0]))
+            self.nodes[name], self.bodies[name] = n, b
+            # local positions of the link's first and second joint points (from the COM)
+            self.local[name] = (np.array([-cx, 0.0]), np.array([L - cx, 0.0]))
+        ns = mbs.AddNode(ii.NodePoint2D(referenceCoordinates=[st["C"][0], 0.0],
+                                        initialCoordinates=[0, 0],
+                                        initialVelocities=[st["vC"][0], 0.0]))
+        mbs.AddObject(ii.MassPoint2D(nodeNumber=ns, mass=float(p["m4"])))
+        self.nodes["slider"] = ns
+
+        def bm(name, which):
+            return mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=self.bodies[name],
+                                                       localPosition=[*self.local[name][which], 0.0]))
+        mO = mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=ground, localPosition=[0, 0, 0]))
+        mS = mbs.AddMarker(ii.MarkerNodePosition(nodeNumber=ns))
+        # joints: O (ground–crank), A (crank end – rod start), B (rod end – rocker end), C (rocker start – slider)
+        for m0, m1 in ((mO, bm("crank", 0)), (bm("crank", 1), bm("rod", 0)),
+                       (bm("rod", 1), bm("rocker", 1)), (bm("rocker", 0), mS)):
+            mbs.AddObject(ii.RevoluteJoint2D(markerNumbers=[m0, m1]))
+        msx = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=ns, coordinate=0))
+        msy = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=ns, coordinate=1))
+        mbs.AddObject(ii.CoordinateConstraint(markerNumbers=[mg, msy]))
+        mbs.AddObject(ii.CoordinateSpringDamper(markerNumbers=[mg, msx], stiffness=self.k,
+                                                damping=self.c, offset=0.0))
+        # motor
+        mcr = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=self.nodes["crank"], coordinate=2))
+        ncr = self.nodes["crank"]
+        Ct = exu.OutputVariableType.Coordinates_t
+        u = self.u
+
+        def motor(mbs_, t, load):
+            return pc.motor_torque(mbs_.GetNodeOutput(ncr, Ct)[2], u)
+        mbs.AddLoad(ii.LoadCoordinate(markerNumber=mcr, load=0.0, loadUserFunction=motor))
+        self.lock = None
+        if cycle:
+            F = self.F
+
+            def press(mbs_, t, load):
+                if not self.locked:
+                    return 0.0
+                v = mbs_.GetNodeOutput(ns, Ct)[0]
+                return -F * float(np.sign(v))
+            mbs.AddLoad(ii.LoadCoordinate(markerNumber=msx, load=0.0, loadUserFunction=press))
+            mro = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=self.nodes["rocker"], coordinate=2))
+            self.lock = mbs.AddObject(ii.CoordinateConstraint(markerNumbers=[mg, mro], offset=0.0,
+                                                              activeConnector=False))
+        mbs.Assemble()
+        self.idx = {k: mbs.GetNodeODE2Index(n) for k, n in self.nodes.items()}
+        self.ref = np.array(mbs.systemData.GetODE2Coordinates(configuration=exu.ConfigurationType.Reference))
+
+        ss = exu.SimulationSettings()
+        ss.solution.file.write = False
+        ss.timeIntegration.verboseMode = 0
+        ss.displayStatistics = False
+        ss.displayComputationTime = False
+        ss.timeIntegration.adaptiveStep = False
+        ss.timeIntegration.newton.relativeTolerance = float(settings["newton_rtol"])
+        ss.timeIntegration.newton.absoluteTolerance = float(settings["newton_atol"])
+        ss.timeIntegration.newton.useModifiedNewton = False
+        ss.linearSolver.solverType = exu.LinearSolverType.EXUdense
+        if settings["integrator"] == "generalized-alpha":
+            ss.timeIntegration.generalizedAlpha.spectralRadius = settings["spectral_radius"]
+            ss.timeIntegration.generalizedAlpha.useIndex2Constraints = False
+            ss.timeIntegration.generalizedAlpha.useNewmark = False
+        else:
+            ss.timeIntegration.generalizedAlpha.useIndex2Constraints = True
+            ss.timeIntegration.generalizedAlpha.useNewmark = True
+            ss.timeIntegration.generalizedAlpha.spectralRadius = 1.0
+        self.ss = ss
+        self.solver_type = exu.DynamicSolverType.GeneralizedAlpha
+        self.steps = 0
+        self.rec = []          # per step: (t, q, v, a) of the start-of-step states
+        self.h = None
+        self.t0 = None
+        mbs.SetPreStepUserFunction(self._prestep)
+
+    # ---- state ----------------------------------------------------------------------------
+    def state(self):
+        sd, C = self.mbs.systemData, self.exu.ConfigurationType.Current
+        return (np.array(sd.GetODE2Coordinates(configuration=C)),
+                np.array(sd.GetODE2Coordinates_t(configuration=C)),
+                np.array(sd.GetODE2Coordinates_tt(configuration=C)))
+
+    def set_initial(self, q, v):
+        sd, I = self.mbs.systemData, self.exu.ConfigurationType.Initial
+        sd.SetODE2Coordinates(list(q), configuration=I)
+        sd.SetODE2Coordinates_t(list(v), configuration=I)
+
+    def _prestep(self, mbs, t):
+        # called with t = end of the coming step, state = start of that step
+        self.rec.append((t - self.h, *self.state()))
+        return True
+
+    # ---- observation ------------------------------------------------------------------------
+    def observe(self, q, v, a):
+        i = self.idx
+        x = self.ref + q
+        pos = {}
+        for name in ("crank", "rod", "rocker"):
+            j = i[name]
+            th = x[j + 2]
+            R = np.array([[math.cos(th), -math.sin(th)], [math.sin(th), math.cos(th)]])
+            pos[name] = [x[j:j + 2] + R @ r for r in self.local[name]]
+        S = x[i["slider"]:i["slider"] + 2]
+        viol = max(np.linalg.norm(pos["crank"][0]),
+                   np.linalg.norm(pos["crank"][1] - pos["rod"][0]),
+                   np.linalg.norm(pos["rod"][1] - pos["rocker"][1]),
+                   np.linalg.norm(pos["rocker"][0] - S), abs(S[1]))
+        T = 0.0
+        Vg = 0.0
+        for name in ("crank", "rod", "rocker"):
+            j = i[name]
+            _, m, J = self.lay[name]
+            T += 0.5 * m * (v[j] ** 2 + v[j + 1] ** 2) + 0.5 * J * v[j + 2] ** 2
+            Vg += m * self.g * x[j + 1]
+        js = i["slider"]
+        T += 0.5 * float(self.p["m4"]) * (v[js] ** 2 + v[js + 1] ** 2)
+        Vg += float(self.p["m4"]) * self.g * x[js + 1]
+        Vs = 0.5 * self.k * q[js] ** 2
+        jc, jr = i["crank"] + 2, i["rocker"] + 2
+        return {"crank_angle": x[jc], "crank_rate": v[jc], "crank_accel": a[jc],
+                "rocker_angle": x[jr], "slider_x": x[js], "loop_violation": viol,
+                "T": T, "V": Vg + Vs}
+
+    def rates(self, v, a, locked):
+        """(integrand, derivative) of motor work, damper loss, press work at one state."""
+        jc, js = self.idx["crank"] + 2, self.idx["slider"]
+        w, wd = v[jc], a[jc]
+        tau = pc.motor_torque(w, self.u)
+        eps = 1e-6 * max(1.0, abs(w))
+        dtau = (pc.motor_torque(w + eps, self.u) - pc.motor_torque(w - eps, self.u)) / (2 * eps)
+        vs, as_ = v[js], a[js]
+        out = [tau * w, (dtau * w + tau) * wd, self.c * vs * vs, 2 * self.c * vs * as_, 0.0, 0.0]
+        if locked:
+            out[4], out[5] = self.F * abs(vs), self.F * np.sign(vs) * as_
+        return np.array(out)
+
+    # ---- solving ----------------------------------------------------------------------------
+    def solve(self, t0, t1, nsteps, record=True):
+        """Solve [t0, t1] in nsteps from the Initial configuration; returns the records."""
+        ss = self.ss
+        ss.timeIntegration.startTime = t0
+        ss.timeIntegration.endTime = t1
+        ss.timeIntegration.numberOfSteps = int(nsteps)
+        self.h = (t1 - t0) / nsteps
+        self.rec = []
+        try:
+            ok = self.mbs.SolveDynamic(ss, solverType=self.solver_type, updateInitialValues=True)
+        except Exception as exc:  # exudyn.SolverError, RuntimeError
+            raise _Diverged(t0, f"exudyn solver failed in [{t0:.6g}, {t1:.6g}]: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}")
+        if not ok:
+            raise _Diverged(t0, f"exudyn SolveDynamic returned False in [{t0:.6g}, {t1:.6g}]")
+        self.steps += int(nsteps)
+        q, v, a = self.state()
+        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v)) and np.all(np.isfinite(a))):
+            raise _Diverged(t1, "non-finite state")
+        rec = self.rec + [(t1, q, v, a)]
+        return rec
+
+    def impact_matrices(self, q):
+        """Mass matrix and Jacobian of every active constraint (the four revolute joints, y_slider
+        = 0 and the lock) on Exudyn's ODE2 coordinates at the configuration q.  Node = centre of
+        mass, so M is diag(m, m, J) per link and (m4, m4) for the slider."""
+        i = self.idx
+        x = self.ref + q
+        n2 = len(q)
+        M = np.zeros((n2, n2))
+        for name in ("crank", "rod", "rocker"):
+            _, m, J = self.lay[name]
+            j = i[name]
+            M[j, j] = M[j + 1, j + 1] = m
+            M[j + 2, j + 2] = J
+        js = i["slider"]
+        M[js, js] = M[js + 1, js + 1] = float(self.p["m4"])
+
+        def point_jac(name, which):
+            j = i[name]
+            th = x[j + 2]
+            r = self.local[name][which]
+            Rr = np.array([math.cos(th) * r[0] - math.sin(th) * r[1], math.sin(th) * r[0] + math.cos(th) * r[1]])
+            G = np.zeros((2, n2))
+            G[:, j:j + 2] = np.eye(2)
+            G[:, j + 2] = [-Rr[1], Rr[0]]
+            return G
+        Gs = np.zeros((2, n2))
+        Gs[:, js:js + 2] = np.eye(2)
+        rows = [point_jac("crank", 0),
+                point_jac("crank", 1) - point_jac("rod", 0),
+                point_jac("rod", 1) - point_jac("rocker", 1),
+                point_jac("rocker", 0) - Gs,
+                Gs[1:2]]
+        lock = np.zeros((1, n2))
+        lock[0, i["rocker"] + 2] = 1.0
+        rows.append(lock)
+        return M, np.vstack(rows)
+
+
+def _hermite(rec_rates, t):
+    """∫ of several integrands over consecutive records, Hermite-corrected trapezoid."""
+    f = rec_rates[:, 0::2]
+    fd = rec_rates[:, 1::2]
+    h = np.diff(t)[:, None]
+    return np.sum(0.5 * h * (f[1:] + f[:-1]) + h * h / 12.0 * (fd[:-1] - fd[1:]), axis=0)
+
+
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, cycle: bool | None = None) -> dict:
+    """Run the press (idle) scene; with lock_after/lock_angle/press_force/release_after in params
+    (or cycle=True) the press-cycle scene."""
+    if cycle is None:
+        cycle = any(k in (params or {}) for k in ("lock_after", "lock_angle", "press_force", "release_after"))
+    p = pc.merged(params, cycle=cycle)
+    s = _check_settings(settings)
+    dt = s["dt"]
+    t_out = pc.output_grid_check(t_out, dt)
+    st = pc.initial_state(p)
+    n = len(t_out)
+    ch = {k: np.full(n, np.nan) for k in pc.CHANNELS}
+    extra = {}
+    wall0 = time.perf_counter()
+    model = _Press(p, st, s, cycle)
+    status, t_fail, reason = "ok", None, None
+
+    work = np.zeros(3)          # motor work, damper loss, press work
+    lock_loss = 0.0
+    t_lock = None
+
+    def store(k, obs):
+        for name in ("crank_angle", "crank_rate", "crank_accel", "rocker_angle", "slider_x", "loop_violation"):
+            ch[name][k] = obs[name]
+        ch["energy_balance"][k] = obs["T"] + obs["V"] - work[0] + work[1] + work[2] + lock_loss
+
+    # segment boundaries
+    bounds = list(t_out)
+    if cycle:
+        la, ra = float(p["lock_after"]), float(p["release_after"])
+        psiL = math.radians(float(p["lock_angle"]))
+        for tb in (la, ra):
+            if 0.0 < tb < t_out[-1] and not np.any(np.isclose(t_out, tb, rtol=0, atol=1e-12)):
+                bounds.append(tb)
+        bounds = sorted(bounds)
+    out_index = {float(t): k for k, t in enumerate(t_out)}
+
+    q0, v0, a0 = model.state()
+    store(0, model.observe(q0, v0, a0))
+    t = 0.0
+    bi = 1
+    released = False
+    try:
+        while bi < len(bounds):
+            t1 = bounds[bi]
+            nst = max(1, int(math.ceil((t1 - t) / dt - 1e-9)))
+            qs, vs_, _ = model.state()
+            rec = model.solve(t, t1, nst)
+            if t == 0.0:   # GA computed the consistent initial accelerations: store t = 0 again
+                store(0, model.observe(*rec[0][1:]))
+            armed = cycle and t_lock is None and t >= la - 1e-15
+            if armed:
+                g = np.array([model.ref[model.idx["rocker"] + 2] + r[1][model.idx["rocker"] + 2] - psiL
+                              for r in rec])
+                hit = np.nonzero(np.sign(g[1:]) * np.sign(g[:-1]) <= 0)[0]
+                hit = [j for j in hit if not (g[j] == 0.0 and j == 0 and False)]
+                if len(hit):
+                    j = int(hit[0])
+                    rec = rec[:j + 1]
+                    work += _hermite(np.array([model.rates(r[2], r[3], model.locked) for r in rec]),
+                                     np.array([r[0] for r in rec]))
+                    ta, (qa, va) = rec[j][0], (rec[j][1], rec[j][2])
+                    tb = rec[j + 1][0] if j + 1 < len(rec) else None
+                    lo, hi = 0.0, (t1 - t) / nst
+                    ga = g[j]
+                    nb = 0
+                    last = None
+                    while hi - lo > _BISECT_TOL:
+                        mid = 0.5 * (lo + hi)
+                        model.set_initial(qa, va)
+                        r2 = model.solve(ta, ta + mid, 1)
+                        nb += 1
+                        gm = model.ref[model.idx["rocker"] + 2] + r2[-1][1][model.idx["rocker"] + 2] - psiL
+                        if np.sign(gm) == np.sign(ga) and gm != 0.0:
+                            lo = mid
+                        else:
+                            hi, last = mid, r2
+                    if last is None or abs(last[-1][0] - (ta + hi)) > 1e-15:
+                        model.set_initial(qa, va)
+                        last = model.solve(ta, ta + hi, 1)
+                    t_lock = ta + hi
+                    work += _hermite(np.array([model.rates(r[2], r[3], False) for r in last]),
+                                     np.array([r[0] for r in last]))
+                    # plastic lock: activate, project velocities with Exudyn's own M and G
+                    q, v, a = model.state()
+                    jr = model.idx["rocker"] + 2
+                    model.mbs.SetObjectParameter(model.lock, "offset", float(q[jr]))
+                    model.mbs.SetObjectParameter(model.lock, "activeConnector", True)
+                    model.set_initial(q, v)
+                    M, G = model.impact_matrices(q)
+                    Minv_Gt = np.linalg.solve(M, G.T)
+                    lam = np.linalg.lstsq(G @ Minv_Gt, G @ v, rcond=None)[0]
+                    v_new = v - Minv_Gt @ lam
+                    T_before = model.observe(q, v, a)["T"]
+                    T_after = model.observe(q, v_new, a)["T"]
+                    lock_loss = T_before - T_after
+                    model.locked = True
+                    model.set_initial(q, v_new)
+                    extra.update({"lock_time": np.array([t_lock]),
+                                  "lock_energy_loss": np.array([lock_loss]),
+                                  "lock_bisections": np.array([nb]),
+                                  "crank_rate_jump": np.array([v_new[model.idx['crank'] + 2] - v[model.idx['crank'] + 2]])})
+                    t = t_lock
+                    # bounds[bi] is still the target: loop again from t_lock
+                    continue
+            work += _hermite(np.array([model.rates(r[2], r[3], model.locked) for r in rec]),
+                             np.array([r[0] for r in rec]))
+            t = t1
+            if cycle and model.locked and not released and abs(t - ra) < 1e-12:
+                model.mbs.SetObjectParameter(model.lock, "activeConnector", False)
+                model.locked = False
+                released = True
+            k = out_index.get(float(t1))
+            if k is not None:
+                obs = model.observe(*model.state())
+                store(k, obs)
+                if not all(np.isfinite(obs[c]) for c in ("crank_angle", "slider_x")):
+                    raise _Diverged(t1, "non-finite output")
+            bi += 1
+    except _Diverged as d:
+        status, t_fail, reason = "diverged", float(d.t), d.reason
+        bad = t_out > d.t - 1e-15
+        for name in ch:
+            ch[name][bad] = np.nan
+    finally:
+        model.mbs.SetPreStepUserFunction(0)
+    if cycle:
+        extra.setdefault("lock_time", np.array([np.nan]))
+        extra.setdefault("lock_energy_loss", np.array([np.nan]))
+        extra["motor_work"] = np.array([work[0]])
+        extra["press_work"] = np.array([work[2]])
+    used = dict(s)
+    return {"channels": ch, "status": status, "t_fail": t_fail, "reason": reason,
+            "stats": {"steps": model.steps, "rhs_evals": -1},
+            "settings": used, "extra": extra}

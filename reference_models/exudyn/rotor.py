@@ -1,0 +1,586 @@
+"""Exudyn reference model of the spin-up rotor (scenes `rotor-spinup` and `rotor-whirl`).
+
+The rotor (massless shaft of length l on a spherical joint at O, eccentric disk at its end) is an
+`ObjectKinematicTree` gimbal: three revolute joints X -> Y -> Z in one chain, the first two links
+massless, the disk on the third. With the chart rotation A0 (see below) the body rotation is
+
+    R = A0 · Rx(q0) · Ry(q1) · Rz(q2),
+
+and the spatial angular velocity is ω = J(q)·q̇ with the columns A0·e_x, A0·Rx·e_y, R·e_z.
+
+Loads (all in the tree's `forceUserFunction`, as generalised forces Jᵀτ of a spatial moment τ):
+- the transverse spring τ_s = −kγ, γ = θ·(e_z × n)/|e_z × n|, n = R·e_z, θ = angle(e_z, n); it
+  is −∂/∂q of ½kθ², so exactly conservative, and has no component along n;
+- the drive torque τ_d = torque·e_z, fixed in space. (`linkTorques` is not used: it acts with
+  the opposite sign to its docstring, see the Exudyn notes.)
+Gravity is the tree's built-in `gravity`. The work A = ∫ torque·ω_z dt is an extra first-order
+coordinate (`ObjectGenericODE1`) integrated by the same Runge–Kutta stages as the mechanics.
+
+Charts. The Cardan chain locks where n = ±A0·e_x. The run starts with A0 = identity (lock at
+n = ±e_x, i.e. tilt 90° towards x); when |cos q1| falls below `CHART_SWITCH` the run goes back to
+the last output sample and continues on a new model whose A0·e_x is perpendicular both to n and
+to its current velocity, so every tilt short of π is reachable. At tilt π the spring direction
+itself is undefined; the run stops there with status `diverged`.
+
+`modes` linearises the same tree (drive torque 0) about steady spin Ω at tilt 0 with Exudyn's
+`ComputeLinearizedSystem` (M, K and the gyroscopic D = −∂f/∂q̇; gravity enters K through the
+tree) and solves the quadratic eigenproblem.
+"""
+import math
+import time
+
+import numpy as np
+import exudyn as exu
+from exudyn.itemInterface import (NodeGenericODE1, NodeGenericODE2, ObjectGenericODE1,
+                                  ObjectKinematicTree, SensorNode)
+
+CHANNELS = ("omega_norm", "spin_rate", "tilt", "work", "kinetic", "potential", "energy_balance")
+
+_SOLVERS = {
+    "rk4": exu.DynamicSolverType.RK44,
+    "rk67": exu.DynamicSolverType.RK67,
+    "dopri5": exu.DynamicSolverType.DOPRI5,
+    "ode23": exu.DynamicSolverType.ODE23,
+    "explicit-euler": exu.DynamicSolverType.ExplicitEuler,
+    "generalized-alpha": exu.DynamicSolverType.GeneralizedAlpha,
+}
+_ADAPTIVE = ("dopri5", "ode23")
+INTEGRATORS = tuple(_SOLVERS)
+
+# Accurate default (measured, see tests and the module report): RK67 fixed step 2 ms gives an
+# energy-balance drift of ~2e-6 J over the 10 s default run and |ω| converged to ~1e-8 rad/s.
+DEFAULT_SETTINGS = {"integrator": "rk67", "dt": 2e-3, "rtol": 1e-10}
+
+TILT_LIMIT = math.pi - 1e-3        # stop here: −kγ has no defined direction at tilt π
+CHART_SWITCH = 0.6                 # |cos q1| below this after a step -> change of Cardan chart
+CHART_LOCK = 0.2                   # ... and in any stage state (hard guard near the lock)
+_COS_TILT_LIMIT = math.cos(TILT_LIMIT)
+
+ENERGY_JUMP = 0.05                 # |ΔE| above this share of the energy scale -> diverged
+MAX_CHART_CHANGES = 10000
+_REASON_TILT = "singular spring direction at tilt pi"
+_REASON_NONFINITE = "non-finite state"
+
+
+class _Stop(Exception):
+    """Raised inside a user function to end the Exudyn run (rechart / failure)."""
+
+
+# ----------------------------------------------------------------------------------------------
+# parameters and small rotation helpers
+
+def _physical(params):
+    l, m, R = float(params["l"]), float(params["m"]), float(params["R"])
+    e = float(params.get("eccentricity", 0.0))
+    g = np.asarray(params.get("gravity", (0.0, 0.0, -9.81)), dtype=float).reshape(3)
+    k = float(params["k"])
+    if not (l > 0 and m > 0 and R > 0 and k >= 0) or not np.all(np.isfinite(g)):
+        raise ValueError("rotor parameters must have l, m, R > 0, k >= 0 and a finite gravity")
+    rc0 = np.array([0.0, e, l])
+    I_c = np.diag([m * R * R / 4, m * R * R / 4, m * R * R / 2])
+    return {"l": l, "m": m, "R": R, "e": e, "g": g, "k": k, "rc0": rc0, "I_c": I_c,
+            "torque": float(params.get("torque", 0.0))}
+
+
+def _rx(a):
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[1.0, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def _ry(b):
+    c, s = math.cos(b), math.sin(b)
+    return np.array([[c, 0, s], [0, 1.0, 0], [-s, 0, c]])
+
+
+def _rz(c_):
+    c, s = math.cos(c_), math.sin(c_)
+    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
+
+
+def _chart_motion(A0, q, qd):
+    """Body rotation R and spatial angular velocity ω from Cardan coordinates in chart A0."""
+    Rx = A0 @ _rx(q[0])
+    Rxy = Rx @ _ry(q[1])
+    R = Rxy @ _rz(q[2])
+    J = np.column_stack([A0[:, 0], Rx[:, 1], Rxy[:, 2]])
+    return R, J @ qd
+
+
+def _chart_coordinates(A0, R, w):
+    """Inverse of `_chart_motion` (Cardan XYZ angles of A0ᵀR and the rates that give ω)."""
+    M = A0.T @ R
+    b = math.asin(max(-1.0, min(1.0, M[0, 2])))
+    a = math.atan2(-M[1, 2], M[2, 2])
+    c = math.atan2(-M[0, 1], M[0, 0])
+    q = np.array([a, b, c])
+    Rx = A0 @ _rx(a)
+    Rxy = Rx @ _ry(b)
+    J = np.column_stack([A0[:, 0], Rx[:, 1], Rxy[:, 2]])
+    return q, np.linalg.solve(J, w)
+
+
+def _new_chart(R):
+    """Chart for the current body axis n, with its lock axes ±A0·e_x at least 45° from n and
+    from the cone n sweeps when it whirls about e_z at the current tilt θ:
+    - 45° < θ < 135°: lock axis e_z (distance θ and π − θ from the whirl cone);
+    - otherwise: lock axis horizontal and ⊥ n (distance 90° − |90° − θ| ≥ 45° from the cone)."""
+    n = R[:, 2]
+    tilt = math.atan2(math.hypot(n[0], n[1]), n[2])
+    if math.pi / 4 < tilt < 3 * math.pi / 4:
+        a = np.array([0.0, 0.0, 1.0])
+    else:
+        a = np.cross([0.0, 0.0, 1.0], n)
+        if np.linalg.norm(a) < 1e-9:
+            a = np.array([1.0, 0.0, 0.0])
+    a = a / np.linalg.norm(a)
+    b = np.cross(a, [1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.cross(a, [0.0, 1.0, 0.0])
+    b /= np.linalg.norm(b)
+    return np.column_stack([a, b, np.cross(a, b)])
+
+
+def _quaternions(R):
+    """(n,4) unit quaternions w,x,y,z of rotation matrices (n,3,3), sign kept continuous."""
+    n = R.shape[0]
+    Q = np.empty((n, 4))
+    tr = R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2]
+    cand = np.stack([tr, R[:, 0, 0], R[:, 1, 1], R[:, 2, 2]], axis=1)
+    which = np.argmax(cand, axis=1)
+    for i in range(n):
+        r = R[i]
+        j = which[i]
+        if j == 0:
+            s = 2.0 * math.sqrt(max(1.0 + tr[i], 0.0))
+            Q[i] = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
+        elif j == 1:
+            s = 2.0 * math.sqrt(max(1.0 + r[0, 0] - r[1, 1] - r[2, 2], 0.0))
+            Q[i] = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
+        elif j == 2:
+            s = 2.0 * math.sqrt(max(1.0 + r[1, 1] - r[0, 0] - r[2, 2], 0.0))
+            Q[i] = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
+        else:
+            s = 2.0 * math.sqrt(max(1.0 + r[2, 2] - r[0, 0] - r[1, 1], 0.0))
+            Q[i] = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
+        if i > 0 and Q[i] @ Q[i - 1] < 0:
+            Q[i] = -Q[i]
+    return Q
+
+
+# ----------------------------------------------------------------------------------------------
+# the Exudyn model
+
+def _build(ph, A0, q0, qd0, w0, torque, with_work=True, stop_checks=True):
+    """Kinematic-tree rotor in chart A0 with initial coordinates q0, rates qd0 and work w0."""
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    nq = mbs.AddNode(NodeGenericODE2(referenceCoordinates=[0.0] * 3,
+                                     initialCoordinates=list(map(float, q0)),
+                                     initialCoordinates_t=list(map(float, qd0)),
+                                     numberOfODE2Coordinates=3))
+    k = ph["k"]
+    a0 = [float(x) for x in A0[:, 0]]
+    A = [[float(x) for x in row] for row in A0]
+    flag = {"kind": None, "t": None, "calls": 0}
+
+    def force(mbs_, t, itemNumber, q, q_t):
+        flag["calls"] += 1
+        ca, sa = math.cos(q[0]), math.sin(q[0])
+        cb, sb = math.cos(q[1]), math.sin(q[1])
+        # joint axes in the chart frame: e_x, Rx e_y, Rx Ry e_z; then rotate by A0
+        u1 = (0.0, ca, sa)
+        u2 = (sb, -sa * cb, ca * cb)
+        j1 = (A[0][1] * u1[1] + A[0][2] * u1[2], A[1][1] * u1[1] + A[1][2] * u1[2],
+              A[2][1] * u1[1] + A[2][2] * u1[2])
+        nx = A[0][0] * u2[0] + A[0][1] * u2[1] + A[0][2] * u2[2]
+        ny = A[1][0] * u2[0] + A[1][1] * u2[1] + A[1][2] * u2[2]
+        nz = A[2][0] * u2[0] + A[2][1] * u2[1] + A[2][2] * u2[2]
+        if stop_checks:
+            if not (math.isfinite(q[0] + q[1] + q[2]) and math.isfinite(q_t[0] + q_t[1] + q_t[2])):
+                flag["kind"], flag["t"] = "nonfinite", t
+                raise _Stop()
+            if nz < _COS_TILT_LIMIT:
+                flag["kind"], flag["t"] = "tilt", t
+                raise _Stop()
+            if abs(cb) < CHART_LOCK:               # hard guard inside a stage
+                flag["kind"], flag["t"] = "chart", t
+                raise _Stop()
+        s = math.sqrt(nx * nx + ny * ny)
+        th = math.atan2(s, nz)
+        f = th / s if s > 1e-6 else 1.0 + th * th / 6.0    # θ/sinθ, no 0/0 at θ = 0
+        # τ = −k·θ/sinθ·(e_z × n) + torque·e_z
+        tx = k * f * ny
+        ty = -k * f * nx
+        tz = torque
+        return [tx * a0[0] + ty * a0[1] + tz * a0[2],
+                tx * j1[0] + ty * j1[1] + tz * j1[2],
+                tx * nx + ty * ny + tz * nz]
+
+    Z = np.zeros((3, 3))
+    mbs.AddObject(ObjectKinematicTree(
+        nodeNumber=nq,
+        jointTypes=[exu.JointType.RevoluteX, exu.JointType.RevoluteY, exu.JointType.RevoluteZ],
+        linkParents=[-1, 0, 1],
+        jointTransformations=exu.Matrix3DList([np.asarray(A0, float), np.eye(3), np.eye(3)]),
+        jointOffsets=exu.Vector3DList([[0.0, 0.0, 0.0]] * 3),
+        linkInertiasCOM=exu.Matrix3DList([Z, Z, ph["I_c"]]),
+        linkCOMs=exu.Vector3DList([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], list(ph["rc0"])]),
+        linkMasses=[0.0, 0.0, ph["m"]],
+        gravity=[float(x) for x in ph["g"]],
+        forceUserFunction=force))
+    items = {"mbs": mbs, "SC": SC, "nq": nq, "flag": flag}
+    if with_work:
+        nw = mbs.AddNode(NodeGenericODE1(referenceCoordinates=[0.0], initialCoordinates=[float(w0)],
+                                         numberOfODE1Coordinates=1))
+        sysdata = mbs.systemData
+        cur = exu.ConfigurationType.Current
+
+        def work_rate(mbs_, t, itemNumber, w):
+            # ω_z = (J q̇)_z at the stage state the solver is evaluating
+            q = sysdata.GetODE2Coordinates(cur)
+            qd = sysdata.GetODE2Coordinates_t(cur)
+            ca, sa = math.cos(q[0]), math.sin(q[0])
+            cb, sb = math.cos(q[1]), math.sin(q[1])
+            j1z = A[2][1] * ca + A[2][2] * sa
+            nz = A[2][0] * sb - A[2][1] * sa * cb + A[2][2] * ca * cb
+            return [torque * (A[2][0] * qd[0] + j1z * qd[1] + nz * qd[2])]
+
+        mbs.AddObject(ObjectGenericODE1(nodeNumbers=[nw], rhsUserFunction=work_rate))
+
+        if stop_checks:
+            def post_step(mbs_, t):
+                # completed step: leave the chart well before its lock (restart happens outside)
+                if abs(math.cos(sysdata.GetODE2Coordinates(cur)[1])) < CHART_SWITCH:
+                    flag["kind"], flag["t"] = "chart", t
+                    return False
+                return True
+
+            mbs.SetPostStepUserFunction(post_step)
+        items["nw"] = nw
+        items["sq"] = mbs.AddSensor(SensorNode(nodeNumber=nq, storeInternal=True, writeToFile=False,
+                                               outputVariableType=exu.OutputVariableType.Coordinates))
+        items["sv"] = mbs.AddSensor(SensorNode(nodeNumber=nq, storeInternal=True, writeToFile=False,
+                                               outputVariableType=exu.OutputVariableType.Coordinates_t))
+        items["sw"] = mbs.AddSensor(SensorNode(nodeNumber=nw, storeInternal=True, writeToFile=False,
+                                               outputVariableType=exu.OutputVariableType.Coordinates))
+    mbs.Assemble()
+    return items
+
+
+def _sim_settings(t0, t1, n_steps, write_period, name, rtol, spectral_radius=1.0, h0=None):
+    ss = exu.SimulationSettings()
+    ti = ss.timeIntegration
+    ti.startTime = float(t0)
+    ti.endTime = float(t1)
+    ti.numberOfSteps = int(n_steps)
+    ti.verboseMode = 0
+    ti.explicit.useLieGroupIntegration = False     # no rotation nodes: plain RK on q
+    ti.explicit.eliminateConstraints = False
+    ti.explicit.computeEndOfStepAccelerations = False   # not needed: saves one RHS per step
+    if name in _ADAPTIVE:
+        ti.automaticStepSize = True
+        ti.relativeTolerance = float(rtol)
+        ti.absoluteTolerance = float(rtol)
+        ti.minimumStepSize = 1e-12
+        # a huge first trial step can hit the lock guard: start small, then go on with the
+        # step size the previous interval ended with
+        ti.initialStepSize = float(h0) if h0 else 1e-6 * (t1 - t0)
+    else:
+        ti.automaticStepSize = False
+    if name == "generalized-alpha":
+        ti.generalizedAlpha.spectralRadius = float(spectral_radius)
+        ti.adaptiveStep = False
+    ss.solution.file.write = False
+    ss.solution.sensors.writePeriod = float(write_period)
+    ss.displayComputationTime = False
+    ss.displayStatistics = False
+    return ss
+
+
+def _steps_of(mbs):
+    dyn = mbs.sys.get("dynamicSolver") if hasattr(mbs, "sys") else None
+    try:
+        return int(dyn.it.currentStepIndex)
+    except Exception:                               # noqa: BLE001 - stats are best effort
+        return 0
+
+
+def _last_step_of(mbs, default):
+    dyn = mbs.sys.get("dynamicSolver") if hasattr(mbs, "sys") else None
+    try:
+        it = dyn.it
+        # the last step may be cut short to land on the interval end: take the mean step too
+        h = max(float(it.currentStepSize),
+                (float(it.endTime) - float(it.startTime)) / max(1, int(it.currentStepIndex)))
+        return h if math.isfinite(h) and h > 0 else default
+    except Exception:                               # noqa: BLE001
+        return default
+
+
+def _solve(mbs, ss, solver, update=False):
+    """SolveDynamic with Exudyn's console chatter off; returns the exception (or None)."""
+    exu.SetWriteToConsole(False)
+    try:
+        mbs.SolveDynamic(ss, solverType=solver, storeSolver=True, updateInitialValues=update)
+        return None
+    except Exception as ex:                         # noqa: BLE001 - _Stop, SolverError, ModelError
+        return ex
+    finally:
+        exu.SetWriteToConsole(True)
+
+
+# ----------------------------------------------------------------------------------------------
+# time domain
+
+def _merge_settings(settings):
+    s = dict(DEFAULT_SETTINGS)
+    s.update({k: v for k, v in (settings or {}).items() if v is not None})
+    name = s["integrator"]
+    if name not in _SOLVERS:
+        raise ValueError(f"unknown integrator {name!r}; choose one of {', '.join(INTEGRATORS)}")
+    if name in _ADAPTIVE:
+        rtol = float(s["rtol"])
+        if not (math.isfinite(rtol) and 0 < rtol < 1):
+            raise ValueError(f"rtol must be in (0, 1), got {s['rtol']!r}")
+    else:
+        dt = float(s["dt"])
+        if not (math.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be a positive number, got {s['dt']!r}")
+    return s
+
+
+def _energy(R, w, W, ph):
+    """T + U − A for single states (vectorised over a leading axis)."""
+    ch = _channels(R, w, W, ph)
+    return ch["energy_balance"], ch["kinetic"], ch["potential"]
+
+
+def simulate(params, t_out, settings):
+    """Spin-up run on the output grid t_out (uniform, t_out[0] = 0); see the leaf contract."""
+    t_out = np.asarray(t_out, dtype=float)
+    s = _merge_settings(settings)
+    name = s["integrator"]
+    adaptive = name in _ADAPTIVE
+    ph = _physical(params)
+    n_out = len(t_out)
+    dto = float(t_out[1] - t_out[0]) if n_out > 1 else 1.0
+    used = {"integrator": name}
+    if adaptive:
+        used["rtol"] = float(s["rtol"])
+        h = dto
+    else:
+        dt = float(s["dt"])
+        if dt > dto * (1 + 1e-9):
+            raise ValueError(f"dt ({dt:g}) must not exceed output_dt ({dto:g}); "
+                             "lower output_dt to study larger steps")
+        h = dto / int(math.ceil(dto / dt - 1e-9))       # largest step <= dt dividing output_dt
+        used["dt"] = h
+        if abs(h - dt) > 1e-12 * dt:
+            used["dt_requested"] = dt
+    if name == "generalized-alpha":
+        used["spectral_radius"] = float(s.get("spectral_radius", 1.0))
+
+    R0 = _rx(float(params.get("tilt0", 0.0)))
+    Rs = np.full((n_out, 3, 3), np.nan)
+    Ws = np.full((n_out, 3), np.nan)
+    Wk = np.full(n_out, np.nan)
+    Rs[0], Ws[0], Wk[0] = R0, float(params.get("spin0", 0.0)) * R0[:, 2], 0.0
+    E0 = float(_energy(Rs[:1], Ws[:1], Wk[:1], ph)[0][0])
+    scale = [abs(E0)]                                   # running energy scale for the guard
+
+    def energy_jump(R, w, W):
+        """Index of the first sample whose energy balance left the band, else None."""
+        E, T, U = _energy(R, w, W, ph)
+        scale[0] = max(scale[0], float(np.nanmax(np.abs(T), initial=0.0)),
+                       float(np.nanmax(np.abs(U), initial=0.0)),
+                       float(np.nanmax(np.abs(W), initial=0.0)))
+        bad = np.nonzero(~(np.abs(E - E0) <= ENERGY_JUMP * scale[0] + 1e-9))[0]
+        return (int(bad[0]), float(np.max(np.abs(E - E0)))) if len(bad) else None
+
+    # state to start the next Exudyn run from: time, rotation, angular velocity, work
+    t_c, R_c, w_c, W_c = 0.0, Rs[0], Ws[0], 0.0
+    i_good = 0                                          # last output sample filled
+    A0 = np.eye(3)
+    status, t_fail, reason = "ok", None, None
+    steps = rhs_evals = charts = 0
+    no_progress = 0
+    h_adapt = None                                      # adaptive: step size to go on with
+    solver = _SOLVERS[name]
+    while i_good < n_out - 1:
+        q0, qd0 = _chart_coordinates(A0, R_c, w_c)
+        model = _build(ph, A0, q0, qd0, W_c, ph["torque"])
+        mbs, flag = model["mbs"], model["flag"]
+        t_start = t_c
+        ex = None
+        # adaptive runs go interval by interval (each run ends exactly on the grid, the end state
+        # is the next run's initial state); fixed-step runs go to the end in one call
+        while i_good < n_out - 1:
+            t_end = t_out[i_good + 1] if adaptive else t_out[-1]
+            n_steps = 1 if adaptive else max(1, int(round((t_end - t_c) / h)))
+            ss = _sim_settings(t_c, t_end, n_steps, 0.0, name, s["rtol"],
+                               s.get("spectral_radius", 1.0), h_adapt)
+            ex = _solve(mbs, ss, solver, update=adaptive)
+            steps += _steps_of(mbs)
+            if adaptive:
+                h_adapt = _last_step_of(mbs, h_adapt)
+            rows = [np.atleast_2d(mbs.GetSensorStoredData(model[k])) for k in ("sq", "sv", "sw")]
+            m = min(len(r) for r in rows)
+            data = np.column_stack([rows[0][:m, :4], rows[1][:m, 1:4], rows[2][:m, 1:2]])
+            data = data[data[:, 0] > t_c + 1e-12 * max(1.0, t_c)] if m else data[:0]
+            fin = np.all(np.isfinite(data), axis=1)
+            if not np.all(fin):
+                first = int(np.argmin(fin))
+                flag["kind"], flag["t"] = "nonfinite", float(data[first, 0])
+                data = data[:first]
+                ex = ex or _Stop()
+            if len(data):
+                Rd = np.empty((len(data), 3, 3))
+                wd = np.empty((len(data), 3))
+                for r in range(len(data)):
+                    Rd[r], wd[r] = _chart_motion(A0, data[r, 1:4], data[r, 4:7])
+                idx = np.rint((data[:, 0] - t_out[0]) / dto).astype(int)
+                on_grid = (idx > i_good) & (idx < n_out) & \
+                    (np.abs(t_out[np.clip(idx, 0, n_out - 1)] - data[:, 0]) <= 1e-6 * dto)
+                jump = energy_jump(Rd, wd, data[:, 7])
+                if jump is not None:
+                    j, dE = jump
+                    status, t_fail = "diverged", float(data[j, 0])
+                    reason = (f"energy balance jumped by {dE:.3g} J (more than {ENERGY_JUMP:g} of "
+                              "the energy scale): step too large or unstable")
+                    keep = on_grid & (np.arange(len(data)) < j)
+                    Rs[idx[keep]], Ws[idx[keep]], Wk[idx[keep]] = Rd[keep], wd[keep], data[keep, 7]
+                    if np.any(keep):
+                        i_good = int(idx[keep][-1])
+                    break
+                Rs[idx[on_grid]], Ws[idx[on_grid]] = Rd[on_grid], wd[on_grid]
+                Wk[idx[on_grid]] = data[on_grid, 7]
+                if np.any(on_grid):
+                    i_good = int(idx[on_grid][-1])
+                t_c, R_c, w_c, W_c = float(data[-1, 0]), Rd[-1], wd[-1], float(data[-1, 7])
+            if ex is not None or not adaptive or flag["kind"] is not None:
+                break
+        rhs_evals += flag["calls"]
+        if status != "ok":
+            break
+        if ex is None and flag["kind"] == "chart":     # stopped by the post-step check
+            ex = _Stop()
+        if ex is None:
+            if i_good < n_out - 1:                      # ran without error but fell short
+                status, t_fail = "diverged", float(t_out[i_good + 1])
+                reason = "exudyn run ended before t_end"
+            break
+        kind = flag["kind"]
+        no_progress = no_progress + 1 if t_c <= t_start else 0
+        if kind == "chart" and no_progress < 2 and charts < MAX_CHART_CHANGES:
+            A0 = _new_chart(R_c)
+            charts += 1
+            continue
+        status = "diverged"
+        t_fail = float(flag["t"]) if flag["t"] is not None else float(t_c)
+        if kind == "tilt":
+            reason = _REASON_TILT
+        elif kind == "nonfinite":
+            reason = _REASON_NONFINITE
+        elif kind == "chart":
+            reason = ("Cardan chart lock persists after a chart change (state running away: "
+                      "step too large?)" if no_progress >= 2 else "too many chart changes")
+        else:
+            msg = str(ex).strip().splitlines()
+            reason = "exudyn: " + (msg[0] if msg else type(ex).__name__)
+        break
+
+    last = i_good if status != "ok" else n_out - 1
+    Rs[last + 1:], Ws[last + 1:], Wk[last + 1:] = np.nan, np.nan, np.nan
+    ch = _channels(Rs, Ws, Wk, ph)
+    quat = np.full((n_out, 4), np.nan)
+    quat[: last + 1] = _quaternions(Rs[: last + 1])
+    used["chart_changes"] = charts
+    return {"channels": ch, "status": status, "t_fail": t_fail, "reason": reason,
+            "stats": {"steps": int(steps), "rhs_evals": int(rhs_evals)},
+            "settings": used, "extra": {"orientation": quat}}
+
+
+def _channels(Rs, Ws, Wk, ph):
+    """The scene channels from rotations, spatial angular velocities and work."""
+    m, k, g = ph["m"], ph["k"], ph["g"]
+    rc = Rs @ ph["rc0"]                                            # (n,3)
+    I_c = np.einsum("nij,jk,nlk->nil", Rs, ph["I_c"], Rs)
+    r2 = np.einsum("ni,ni->n", rc, rc)
+    I_o = I_c + m * (r2[:, None, None] * np.eye(3) - np.einsum("ni,nj->nij", rc, rc))
+    T = 0.5 * np.einsum("ni,nij,nj->n", Ws, I_o, Ws)
+    n = Rs[:, :, 2]
+    tilt = np.arctan2(np.hypot(n[:, 0], n[:, 1]), n[:, 2])
+    U = 0.5 * k * tilt ** 2 - m * (rc @ g)
+    return {"omega_norm": np.linalg.norm(Ws, axis=1), "spin_rate": Ws[:, 2].copy(),
+            "tilt": tilt, "work": Wk.copy(), "kinetic": T, "potential": U,
+            "energy_balance": T + U - Wk}
+
+
+# ----------------------------------------------------------------------------------------------
+# whirl frequencies
+
+def _linearised(model, spin):
+    """M, K, D of the tree at tilt 0 spinning at `spin` (rad/s) about e_z."""
+    mbs = model["mbs"]
+    mbs.systemData.SetODE2Coordinates([0.0, 0.0, 0.0], exu.ConfigurationType.Initial)
+    mbs.systemData.SetODE2Coordinates_t([0.0, 0.0, float(spin)], exu.ConfigurationType.Initial)
+    out = mbs.ComputeLinearizedSystem()
+    return [np.asarray(x, float) for x in out[:3]]
+
+
+def _whirl_pair(M, K, D, spin):
+    """Two whirl frequencies (rad/s) and their labels from the quadratic eigenproblem."""
+    n = M.shape[0]
+    Minv = np.linalg.inv(M)
+    Acal = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ D]])
+    lam, V = np.linalg.eig(Acal)
+    w = lam.imag
+    sel = np.where(w > 1e-6 * max(1.0, np.max(np.abs(lam))))[0]
+    pairs = []
+    for i in sel:
+        X, Y = V[0, i], V[1, i]           # q0 ~ tilt about x, q1 ~ tilt about y
+        # n ≈ (q1, −q0): sense of the whirl of n about +z for the motion Re(v e^{iwt})
+        nx, ny = Y, -X
+        sense = w[i] * np.imag(nx * np.conj(ny))
+        pairs.append((w[i], sense, lam[i].real))
+    pairs.sort(key=lambda p: p[0])
+    if len(pairs) != 2:
+        raise RuntimeError(f"expected two whirl modes, found {len(pairs)}")
+    if abs(spin) < 1e-12:
+        labels = ["backward whirl", "forward whirl"]
+    else:
+        labels = ["forward whirl" if p[1] * spin > 0 else "backward whirl" for p in pairs]
+    return [p[0] for p in pairs], labels, [p[2] for p in pairs]
+
+
+def _modes_model(params):
+    ph = _physical(params)
+    return _build(ph, np.eye(3), np.zeros(3), np.zeros(3), 0.0, torque=0.0,
+                  with_work=False, stop_checks=False)
+
+
+def modes(params, settings=None):
+    """Linearised whirl frequencies (Hz) at steady spin params['spin'] about the upright axis."""
+    spin = float(params.get("spin", 0.0))
+    model = _modes_model(params)
+    M, K, D = _linearised(model, spin)
+    w, labels, re = _whirl_pair(M, K, D, spin)
+    return {"frequencies_hz": [x / (2 * math.pi) for x in w], "labels": labels,
+            "damping": [float(r) for r in re],
+            "settings": {"method": "exudyn ComputeLinearizedSystem + dense quadratic eigenproblem",
+                         "drive_torque": 0.0}}
+
+
+def whirl_sweep(params, spins):
+    """Backward and forward whirl frequencies (rad/s) over an array of spins, one model reused."""
+    model = _modes_model(params)
+    spins = np.asarray(spins, dtype=float)
+    bw = np.empty(len(spins))
+    fw = np.empty(len(spins))
+    for i, sp in enumerate(spins):
+        M, K, D = _linearised(model, sp)
+        w, labels, _ = _whirl_pair(M, K, D, sp)
+        if sp == 0.0:
+            bw[i], fw[i] = w
+        else:
+            fw[i] = w[labels.index("forward whirl")]
+            bw[i] = w[labels.index("backward whirl")]
+    return bw, fw

@@ -1,0 +1,626 @@
+"""MuJoCo reference model of the spin-up rotor (scenes ``rotor-spinup`` and ``rotor-whirl``).
+
+A disk on a massless shaft stands on a ball joint at the origin. The transverse spring is the
+isotropic cone-angle spring of the scene: with n = R e_z the body axis and θ = ∠(n, e_z), it
+applies the spatial moment −kγ, γ = θ (e_z × n)/|e_z × n|, so U = ½kθ² and nothing resists the
+spin. MuJoCo has no such element (its ball-joint stiffness also resists spin), so the moment is
+added to ``qfrc_passive`` by a passive-force callback. The callback runs inside every RK4 stage,
+which keeps RK4 4th order (a per-step ``qfrc_applied`` would freeze the force over the stages).
+
+The callback is, by default, a numba ``cfunc`` installed as a raw C function pointer: it reads
+``qpos``/``qvel`` and writes ``qfrc_passive``/``ctrl`` through the ``mjData`` pointer it is given,
+so MuJoCo never re-enters Python (about 10x faster than a Python callable). The offsets of those
+``mjData`` fields are found at run time by matching the pointers of a live ``MjData`` object;
+if that or numba fails, the pure-Python callable (``settings["callback"] = "python"``) is used.
+
+The drive work A = ∫ torque·ω_z dt is an extra state integrated by MuJoCo's own integrator: an
+actuator with integrator dynamics and zero gain/gear (it exerts no force) whose ``ctrl`` the
+callback sets to torque·ω_z in every stage, so A is RK4-consistent (act_dot = ctrl).
+
+The drive torque is a constant world-frame wrench in ``xfrc_applied``; gravity is MuJoCo's.
+
+Optional model variant ``settings["spring"] = "cardan"``: the Cardan spring k/2(α²+β²) of
+R = Rx(α)Ry(β)Rz(φ) (a different spring at large tilt; the compare layer reports the deviation).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import time as _time
+
+import mujoco
+import numpy as np
+
+DEFAULT_SETTINGS = {
+    "integrator": "rk4",
+    "dt": 1e-3,
+    "spring": "cone",       # "cone" (the scene's −kγ) | "cardan" (named model variant)
+    "callback": "native",   # "native" (numba cfunc, no GIL) | "python" (Python callable)
+    "omega_max": 1e5,       # |ω| bound [rad/s]: beyond it the run is reported diverged
+    "energy_tol_div": 0.5,  # diverged when |ΔE_bal| > this × (T + |U| + |A| + m|g||r_c|)
+}
+INTEGRATORS = ("rk4", "euler", "implicitfast", "implicit")
+SPRINGS = ("cone", "cardan")
+CALLBACKS = ("native", "python")
+
+_INTEGRATOR_ENUM = {
+    "rk4": mujoco.mjtIntegrator.mjINT_RK4,
+    "euler": mujoco.mjtIntegrator.mjINT_EULER,
+    "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+    "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
+}
+_RHS_PER_STEP = {"rk4": 4, "euler": 1, "implicitfast": 1, "implicit": 1}
+
+DEFAULT_PARAMS = {
+    "l": 0.5, "k": 2000.0, "m": 5.0, "R": 0.25, "eccentricity": 0.005,
+    "gravity": np.array([0.0, 0.0, -9.81]), "torque": 1.5, "t_end": 10.0, "output_dt": 0.01,
+    "tilt0": 0.0, "spin0": 0.0, "spin": 0.0,
+}
+
+# --- userdata layout (doubles in mjData.userdata, read/written by the callback) -------------
+_U_K, _U_TORQUE, _U_COS_PI, _U_OMEGA2, _U_FLAG, _U_TFAIL, _U_VARIANT, _U_COS_CARDAN = range(8)
+_NUSERDATA = 8
+_PI_MARGIN = 1e-3            # stop when θ > π − this (the direction of −kγ is undefined at π)
+_CARDAN_MARGIN = 1e-3        # Cardan variant: stop when |cos β| < this (β → ±90°)
+_FLAG_REASONS = {
+    1.0: "singular spring direction at tilt pi",
+    2.0: "non-finite state",
+    3.0: "angular velocity bound omega_max exceeded",
+    4.0: "Cardan spring singular at beta = +-90 deg",
+}
+
+
+# ----------------------------------------------------------------------------------------------
+# The spring kernel (plain scalar Python; compiled by numba for the native callback)
+# ----------------------------------------------------------------------------------------------
+def _spring_kernel(w, x, y, z, vx, vy, vz, k, variant, cos_pi, omega2, cos_cardan):
+    """Body-frame spring moment (tbx, tby, tbz), spatial ω_z and a status flag (0 = fine)."""
+    nq = w * w + x * x + y * y + z * z
+    qv = vx * vx + vy * vy + vz * vz
+    if not (nq > 0.0 and nq < 1e300 and qv <= omega2):
+        if nq == nq and qv == qv and nq < 1e300 and qv < 1e300:
+            return 0.0, 0.0, 0.0, 0.0, 3.0
+        return 0.0, 0.0, 0.0, 0.0, 2.0
+    s2 = 2.0 / nq
+    # b = R^T e_z (third row of R): spatial ω_z = b·ω_body, cos θ = b_z
+    bx = s2 * (x * z - w * y)
+    by = s2 * (y * z + w * x)
+    bz = 1.0 - s2 * (x * x + y * y)
+    omz = bx * vx + by * vy + bz * vz
+    if variant == 0.0:
+        # cone spring: body moment R^T(−kγ) = −k θ/sinθ (b × e_z) = −k θ/sinθ (b_y, −b_x, 0)
+        if bz < cos_pi:
+            return 0.0, 0.0, 0.0, omz, 1.0
+        sn = math.sqrt(bx * bx + by * by)
+        if sn < 1e-4 and bz > 0.0:
+            f = 1.0 + sn * sn / 6.0            # θ/sinθ, series (error < 1e-17)
+        else:
+            f = math.atan2(sn, bz) / sn
+        c = -k * f
+        return c * by, -c * bx, 0.0, omz, 0.0
+    # Cardan variant: R = Rx(α)Ry(β)Rz(φ), U = k/2(α²+β²); spatial τ from Eᵀτ = (−kα, −kβ, 0),
+    # E = [e_x, Rx(α)e_y, n]. n = R e_z = (R02, R12, R22).
+    r00 = 1.0 - s2 * (y * y + z * z)
+    r01 = s2 * (x * y - w * z)
+    r02 = s2 * (x * z + w * y)
+    r10 = s2 * (x * y + w * z)
+    r11 = 1.0 - s2 * (x * x + z * z)
+    r12 = s2 * (y * z - w * x)
+    r20 = bx
+    r21 = by
+    r22 = bz
+    sb = min(1.0, max(-1.0, r02))
+    cb = math.sqrt(max(0.0, 1.0 - sb * sb))
+    if cb < cos_cardan:
+        return 0.0, 0.0, 0.0, omz, 4.0
+    beta = math.asin(sb)
+    alpha = math.atan2(-r12, r22)
+    ca = math.cos(alpha)
+    sa = math.sin(alpha)
+    # τ = (−kα (u2×u3) − kβ (u3×u1)) / cosβ, u2 = (0, ca, sa), u3 = n, u1 = e_x
+    ga = -k * alpha / cb
+    gb = -k * beta / cb
+    tx = ga * (ca * r22 - sa * r12)
+    ty = ga * (sa * r02) + gb * r22
+    tz = ga * (-ca * r02) - gb * r12
+    return (r00 * tx + r10 * ty + r20 * tz,
+            r01 * tx + r11 * ty + r21 * tz,
+            r02 * tx + r12 * ty + r22 * tz, omz, 0.0)
+
+
+def _python_callback(m, d):
+    """Pure-Python passive callback (reference/fallback for the native one)."""
+    ud = d.userdata
+    if ud[_U_FLAG] != 0.0:
+        return
+    w, x, y, z = d.qpos.tolist()
+    vx, vy, vz = d.qvel.tolist()
+    u = ud.tolist()
+    tbx, tby, tbz, omz, flag = _spring_kernel(w, x, y, z, vx, vy, vz, u[_U_K], u[_U_VARIANT],
+                                              u[_U_COS_PI], u[_U_OMEGA2], u[_U_COS_CARDAN])
+    if flag != 0.0:
+        ud[_U_FLAG] = flag
+        ud[_U_TFAIL] = d.time
+        return
+    qf = d.qfrc_passive
+    qf[0] += tbx
+    qf[1] += tby
+    qf[2] += tbz
+    d.ctrl[0] = u[_U_TORQUE] * omz
+
+
+# ----------------------------------------------------------------------------------------------
+# Native callback: numba cfunc reading mjData through its pointer
+# ----------------------------------------------------------------------------------------------
+_NATIVE = {"cb": None, "error": None}
+
+
+def _mjdata_offsets():
+    """Byte offsets of time, qpos, qvel, ctrl, qfrc_passive, userdata inside struct mjData.
+
+    Found by matching the buffer addresses of a live MjData against the pointer fields of the
+    struct (a zero-size array aliases the next array, so the last match is the real field)."""
+    spec = mujoco.MjSpec()
+    spec.nuserdata = 2
+    b = spec.worldbody.add_body(name="b")
+    b.add_joint(type=mujoco.mjtJoint.mjJNT_BALL, name="j")
+    b.mass, b.inertia, b.explicitinertial = 1.0, [1.0, 1.0, 1.0], True
+    a = spec.add_actuator(trntype=mujoco.mjtTrn.mjTRN_JOINT, target="j")
+    a.dyntype = mujoco.mjtDyn.mjDYN_INTEGRATOR
+    m = spec.compile()
+    d = mujoco.MjData(m)
+    marker = 7.123456789e-3
+    d.time = marker
+    names = ("qpos", "qvel", "ctrl", "qfrc_passive", "userdata")
+    want = {int(getattr(d, n).ctypes.data): n for n in names}
+    found: dict[str, list[int]] = {}
+    base = int(d._address)
+    for blk in range(0, 1 << 22, 4096):        # the struct is ~160 kB; stop once all are found
+        words = np.frombuffer((ctypes.c_uint64 * 512).from_address(base + blk), dtype=np.uint64)
+        if "time" not in found:
+            hit = np.nonzero(words.view(np.float64) == marker)[0]
+            if hit.size:
+                found["time"] = [blk + 8 * int(hit[0])]
+        for i in np.nonzero(np.isin(words, np.array(list(want), dtype=np.uint64)))[0]:
+            found.setdefault(want[int(words[i])], []).append(blk + 8 * int(i))
+        if "time" in found and "qfrc_passive" in found and "userdata" in found:
+            break
+    if not all(n in found for n in names + ("time",)):
+        raise RuntimeError("could not locate mjData fields")
+    off = {n: max(v) for n, v in found.items()}
+    off["time"] = found["time"][0]
+    if not off["time"] < off["qpos"] < off["qvel"] < off["ctrl"]:
+        raise RuntimeError("unexpected mjData layout")
+    return off
+
+
+def _native_callback():
+    """The compiled cfunc (built once per process), or None with _NATIVE['error'] set."""
+    if _NATIVE["cb"] is not None or _NATIVE["error"] is not None:
+        return _NATIVE["cb"]
+    try:
+        from numba import carray, cfunc, njit, types
+        from numba.extending import intrinsic
+
+        off = _mjdata_offsets()
+        o_time, o_qpos, o_qvel = off["time"] // 8, off["qpos"] // 8, off["qvel"] // 8
+        o_ctrl, o_qfrc, o_ud = off["ctrl"] // 8, off["qfrc_passive"] // 8, off["userdata"] // 8
+        nwords = max(off.values()) // 8 + 1
+
+        @intrinsic
+        def _as_f64ptr(typingctx, addr):
+            sig = types.CPointer(types.float64)(addr)
+
+            def codegen(context, builder, signature, args):
+                return builder.inttoptr(args[0],
+                                        context.get_value_type(types.CPointer(types.float64)))
+            return sig, codegen
+
+        kernel = njit(cache=True)(_spring_kernel)   # cached in __pycache__
+
+        @cfunc(types.void(types.voidptr, types.voidptr), nopython=True)
+        def _cb(m, d):
+            words = carray(d, (nwords,), np.int64)
+            ud = carray(_as_f64ptr(words[o_ud]), (_NUSERDATA,))
+            if ud[_U_FLAG] != 0.0:
+                return
+            q = carray(_as_f64ptr(words[o_qpos]), (4,))
+            v = carray(_as_f64ptr(words[o_qvel]), (3,))
+            tbx, tby, tbz, omz, flag = kernel(q[0], q[1], q[2], q[3], v[0], v[1], v[2],
+                                              ud[_U_K], ud[_U_VARIANT], ud[_U_COS_PI],
+                                              ud[_U_OMEGA2], ud[_U_COS_CARDAN])
+            if flag != 0.0:
+                ud[_U_FLAG] = flag
+                ud[_U_TFAIL] = carray(d, (nwords,), np.float64)[o_time]
+                return
+            qf = carray(_as_f64ptr(words[o_qfrc]), (3,))
+            qf[0] += tbx
+            qf[1] += tby
+            qf[2] += tbz
+            carray(_as_f64ptr(words[o_ctrl]), (1,))[0] = ud[_U_TORQUE] * omz
+
+        _NATIVE["cb"] = _cb
+    except Exception as exc:  # numba missing, layout not found, ...: fall back to Python
+        _NATIVE["error"] = f"{type(exc).__name__}: {exc}"
+    return _NATIVE["cb"]
+
+
+class _Callback:
+    """Context manager: install the passive callback (and a quiet warning handler), restore."""
+
+    def __init__(self, kind):
+        self.kind = kind
+        self.warnings: list[str] = []
+
+    def __enter__(self):
+        if self.kind == "native":
+            cb = _native_callback()
+            if cb is None:
+                self.kind = "python"
+        self._prev_warning = mujoco.get_mju_user_warning()
+        mujoco.set_mju_user_warning(self.warnings.append)   # no stdout, no MUJOCO_LOG.TXT
+        mujoco.set_mjcb_passive(_NATIVE["cb"].ctypes if self.kind == "native"
+                                else _python_callback)
+        return self
+
+    def __exit__(self, *exc):
+        mujoco.set_mjcb_passive(None)
+        mujoco.set_mju_user_warning(self._prev_warning)
+        return False
+
+
+# ----------------------------------------------------------------------------------------------
+# Model
+# ----------------------------------------------------------------------------------------------
+def _p(params, key):
+    return params[key] if key in params else DEFAULT_PARAMS[key]
+
+
+def _check_settings(settings):
+    s = {**DEFAULT_SETTINGS, **(settings or {})}
+    if s["integrator"] not in INTEGRATORS:
+        raise ValueError(f"integrator must be one of {INTEGRATORS}, got {s['integrator']!r}")
+    if not (isinstance(s["dt"], (int, float)) and math.isfinite(s["dt"]) and s["dt"] > 0):
+        raise ValueError(f"dt must be a positive number, got {s['dt']!r}")
+    if s["spring"] not in SPRINGS:
+        raise ValueError(f"spring must be one of {SPRINGS}, got {s['spring']!r}")
+    if s["callback"] not in CALLBACKS:
+        raise ValueError(f"callback must be one of {CALLBACKS}, got {s['callback']!r}")
+    if not (float(s["omega_max"]) > 0):
+        raise ValueError(f"omega_max must be positive, got {s['omega_max']!r}")
+    if not (float(s["energy_tol_div"]) > 0):
+        raise ValueError(f"energy_tol_div must be positive, got {s['energy_tol_div']!r}")
+    s["dt"] = float(s["dt"])
+    return s
+
+
+def _build(params, settings, integrator, torque):
+    """Compile the ball-joint rotor; return (model, data, body id)."""
+    l, k, mass, rad = (float(_p(params, n)) for n in ("l", "k", "m", "R"))
+    ecc = float(_p(params, "eccentricity"))
+    g = np.asarray(_p(params, "gravity"), dtype=float).reshape(3)
+    spec = mujoco.MjSpec()
+    spec.modelname = "rotor"
+    spec.nuserdata = _NUSERDATA
+    spec.option.timestep = settings["dt"]
+    spec.option.integrator = _INTEGRATOR_ENUM[integrator]
+    spec.option.gravity = g.tolist()
+    body = spec.worldbody.add_body(name="rotor")
+    body.add_joint(type=mujoco.mjtJoint.mjJNT_BALL, name="pivot")
+    body.mass = mass
+    body.ipos = [0.0, ecc, l]
+    body.inertia = [mass * rad**2 / 4, mass * rad**2 / 4, mass * rad**2 / 2]
+    body.explicitinertial = True
+    # work integrator: act_dot = ctrl = torque·ω_z (set by the callback); no force (gain, gear 0)
+    act = spec.add_actuator(trntype=mujoco.mjtTrn.mjTRN_JOINT, target="pivot", name="work")
+    act.dyntype = mujoco.mjtDyn.mjDYN_INTEGRATOR
+    act.gainprm = np.zeros_like(np.asarray(act.gainprm)).tolist()
+    act.biasprm = np.zeros_like(np.asarray(act.biasprm)).tolist()
+    act.gear = [0.0] * 6
+    act.ctrllimited = mujoco.mjtLimited.mjLIMITED_FALSE
+    act.actlimited = mujoco.mjtLimited.mjLIMITED_FALSE
+    m = spec.compile()
+    m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
+    d = mujoco.MjData(m)
+    bid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "rotor")
+    d.xfrc_applied[bid, 3:6] = (0.0, 0.0, float(torque))
+    ud = d.userdata
+    ud[_U_K] = k
+    ud[_U_TORQUE] = float(torque)
+    ud[_U_COS_PI] = math.cos(math.pi - _PI_MARGIN)
+    ud[_U_OMEGA2] = float(settings["omega_max"]) ** 2
+    ud[_U_VARIANT] = 0.0 if settings["spring"] == "cone" else 1.0
+    ud[_U_COS_CARDAN] = _CARDAN_MARGIN
+    return m, d, bid
+
+
+def _bad_warnings(d):
+    return sum(int(d.warning[int(w)].number) for w in (mujoco.mjtWarning.mjWARN_BADQPOS,
+                                                        mujoco.mjtWarning.mjWARN_BADQVEL,
+                                                        mujoco.mjtWarning.mjWARN_BADQACC))
+
+
+# ----------------------------------------------------------------------------------------------
+# Channels (vectorised, from stored states)
+# ----------------------------------------------------------------------------------------------
+def _channels(params, spring, quat, vel, work):
+    l, k, mass, rad = (float(_p(params, n)) for n in ("l", "k", "m", "R"))
+    ecc = float(_p(params, "eccentricity"))
+    g = np.asarray(_p(params, "gravity"), dtype=float).reshape(3)
+    q = quat / np.linalg.norm(quat, axis=1, keepdims=True)
+    w, x, y, z = q.T
+    # rotation matrix rows/cols
+    R = np.empty((len(q), 3, 3))
+    R[:, 0, 0] = 1 - 2 * (y * y + z * z)
+    R[:, 0, 1] = 2 * (x * y - w * z)
+    R[:, 0, 2] = 2 * (x * z + w * y)
+    R[:, 1, 0] = 2 * (x * y + w * z)
+    R[:, 1, 1] = 1 - 2 * (x * x + z * z)
+    R[:, 1, 2] = 2 * (y * z - w * x)
+    R[:, 2, 0] = 2 * (x * z - w * y)
+    R[:, 2, 1] = 2 * (y * z + w * x)
+    R[:, 2, 2] = 1 - 2 * (x * x + y * y)
+    c = np.array([0.0, ecc, l])
+    J = np.diag([mass * rad**2 / 4, mass * rad**2 / 4, mass * rad**2 / 2])
+    J = J + mass * (c @ c * np.eye(3) - np.outer(c, c))     # inertia about O, body frame
+    omega_s = np.einsum("nij,nj->ni", R, vel)
+    kinetic = 0.5 * np.einsum("ni,ij,nj->n", vel, J, vel)
+    n = R[:, :, 2]
+    tilt = np.arctan2(np.hypot(n[:, 0], n[:, 1]), n[:, 2])
+    if spring == "cone":
+        u_spring = 0.5 * k * tilt**2
+    else:
+        beta = np.arcsin(np.clip(n[:, 0], -1, 1))
+        alpha = np.arctan2(-n[:, 1], n[:, 2])
+        u_spring = 0.5 * k * (alpha**2 + beta**2)
+    r_c = R @ c
+    potential = u_spring - mass * (r_c @ g)
+    return {
+        "omega_norm": np.linalg.norm(vel, axis=1),
+        "spin_rate": omega_s[:, 2],
+        "tilt": tilt,
+        "work": work,
+        "kinetic": kinetic,
+        "potential": potential,
+        "energy_balance": kinetic + potential - work,
+    }
+
+
+def _energy_blowup(params, ch, tol):
+    """First index where |E_bal − E_bal(0)| > tol · (running energy scale), and a reason."""
+    mass = float(_p(params, "m"))
+    g = np.linalg.norm(np.asarray(_p(params, "gravity"), dtype=float))
+    c = math.hypot(float(_p(params, "l")), float(_p(params, "eccentricity")))
+    err = np.abs(ch["energy_balance"] - ch["energy_balance"][0])
+    scale = np.maximum.accumulate(ch["kinetic"] + np.abs(ch["potential"]) + np.abs(ch["work"])
+                                  + mass * g * c + 1e-300)
+    with np.errstate(invalid="ignore"):
+        hit = np.nonzero(err > tol * scale)[0]
+    if hit.size == 0:
+        return None
+    i = int(hit[0])
+    return i, (f"energy balance error {err[i]:.3g} J exceeds {tol:g} x energy scale "
+               f"{scale[i]:.3g} J (integration unstable)")
+
+
+CHANNELS = ("omega_norm", "spin_rate", "tilt", "work", "kinetic", "potential", "energy_balance")
+
+
+# ----------------------------------------------------------------------------------------------
+# simulate
+# ----------------------------------------------------------------------------------------------
+def simulate(params: dict, t_out: np.ndarray, settings: dict) -> dict:
+    """Integrate the rotor; channels on t_out (see module doc and the leaf-model contract).
+
+    Steps: each output interval Δ is split into N = ceil(Δ/dt) equal steps (h = Δ/N ≤ dt; h = dt
+    when dt divides Δ, reported as ``settings['dt_effective']``). If dt > Δ the integrator steps
+    at exactly dt and the channels are interpolated linearly onto t_out."""
+    s = _check_settings(settings)
+    t_out = np.asarray(t_out, dtype=float)
+    if t_out.ndim != 1 or t_out.size < 1 or t_out[0] != 0.0 or np.any(np.diff(t_out) <= 0):
+        raise ValueError("t_out must be increasing and start at 0")
+    torque = float(_p(params, "torque"))
+    tilt0, spin0 = float(_p(params, "tilt0")), float(_p(params, "spin0"))
+    m, d, bid = _build(params, s, s["integrator"], torque)
+    d.qpos[:] = (math.cos(tilt0 / 2), math.sin(tilt0 / 2), 0.0, 0.0)    # R0 = Rx(tilt0)
+    d.qvel[:] = (0.0, 0.0, spin0)                                       # spin0·n0, body frame
+    d.act[0] = 0.0
+
+    dt = s["dt"]
+    intervals = np.diff(t_out)
+    coarse = bool(intervals.size) and dt > intervals.min() * (1 + 1e-9)
+    if coarse:   # step grid t = j·dt, interpolate
+        nsteps = int(math.ceil(t_out[-1] / dt - 1e-9))
+        step_t = dt * np.arange(nsteps + 1)
+        chunks = [(1, dt)] * nsteps
+    else:
+        ns = np.maximum(1, np.ceil(intervals / dt - 1e-9).astype(int))
+        chunks = list(zip(ns.tolist(), (intervals / ns).tolist()))
+        step_t = t_out
+    nrec = len(chunks) + 1
+    quat = np.full((nrec, 4), np.nan)
+    vel = np.full((nrec, 3), np.nan)
+    work = np.full(nrec, np.nan)
+    quat[0], vel[0], work[0] = d.qpos, d.qvel, 0.0
+
+    status, t_fail, reason, steps = "ok", None, None, 0
+    ud = d.userdata
+    wall0 = _time.perf_counter()
+    with _Callback(s["callback"]) as cbk:
+        t_now = 0.0
+        cur_h = None
+        for i, (n, h) in enumerate(chunks):
+            if h != cur_h:
+                m.opt.timestep = cur_h = h
+            mujoco.mj_step(m, d, n)
+            steps += n
+            t_expect = step_t[i + 1]
+            qp, qv = d.qpos, d.qvel
+            bad = None
+            if ud[_U_FLAG] != 0.0:
+                bad = _FLAG_REASONS.get(float(ud[_U_FLAG]), "callback flag")
+                t_fail = float(ud[_U_TFAIL])
+            elif _bad_warnings(d):
+                bad = "MuJoCo reported a bad (NaN/huge) qpos/qvel/qacc"
+            elif not (np.all(np.isfinite(qp)) and np.all(np.isfinite(qv))
+                      and math.isfinite(d.act[0])):
+                bad = "non-finite state"
+            elif abs(d.time - t_expect) > 1e-9 * max(1.0, t_expect):
+                bad = f"time did not advance as expected (MuJoCo reset?) t={d.time:.6g}"
+            if bad is not None:
+                status, reason = "diverged", bad
+                if t_fail is None or not math.isfinite(t_fail):
+                    t_fail = float(t_expect)
+                t_fail = float(min(max(t_fail, t_now), t_expect))
+                break
+            quat[i + 1], vel[i + 1], work[i + 1] = qp, qv, d.act[0]
+            t_now = t_expect
+        kind = cbk.kind
+    wall = _time.perf_counter() - wall0
+
+    ch = _channels(params, s["spring"], quat, vel, work)
+    if status == "ok":      # a finite but exploding run: energy error beyond the energy scale
+        bad_e = _energy_blowup(params, ch, float(s["energy_tol_div"]))
+        if bad_e is not None:
+            status, reason = "diverged", bad_e[1]
+            t_fail = float(step_t[bad_e[0]])
+    orient = quat / np.linalg.norm(quat, axis=1, keepdims=True)
+    if coarse:
+        good = np.isfinite(work)
+        tt = step_t[good]
+        out = {}
+        for name, v in ch.items():
+            out[name] = np.interp(t_out, tt, v[good], right=np.nan) if tt.size > 1 else \
+                np.where(t_out == 0, v[0], np.nan)
+        ch = out
+        o = np.stack([np.interp(t_out, tt, orient[good, j], right=np.nan) if tt.size > 1 else
+                      np.where(t_out == 0, orient[0, j], np.nan) for j in range(4)], axis=1)
+        orient = o / np.linalg.norm(o, axis=1, keepdims=True)
+    if status != "ok":
+        late = t_out >= t_fail
+        for v in ch.values():
+            v[late] = np.nan
+        orient[late] = np.nan
+    used = dict(s)
+    used["callback"] = kind
+    used["dt_effective"] = float(dt if coarse else min(h for _, h in chunks) if chunks else dt)
+    if kind != s["callback"]:
+        used["callback_fallback_reason"] = _NATIVE["error"]
+    return {
+        "channels": {name: np.ascontiguousarray(ch[name], dtype=np.float64) for name in CHANNELS},
+        "status": status,
+        "t_fail": t_fail,
+        "reason": reason,
+        "stats": {"steps": int(steps), "rhs_evals": int(steps * _RHS_PER_STEP[s["integrator"]]),
+                  "wall_s": wall, "steps_per_s": steps / wall if wall > 0 else float("nan")},
+        "settings": used,
+        "extra": {"orientation": orient},
+    }
+
+
+# ----------------------------------------------------------------------------------------------
+# Linearised whirl (rotor-whirl)
+# ----------------------------------------------------------------------------------------------
+_FD_H = 1e-3        # Euler step used for transitionFD; the extraction below is h-independent
+_FD_EPS = 1e-6
+
+
+def _whirl_setup(params, settings):
+    s = _check_settings({**(settings or {}), "integrator": "euler", "dt": _FD_H})
+    m, d, _ = _build(params, s, "euler", torque=0.0)   # no drive torque in the linearisation
+    return s, m, d
+
+
+def _whirl_at(m, d, spin):
+    """Continuous-time eigen-analysis at steady spin; returns [(signed inertial rad/s, damping)]."""
+    ud = d.userdata.copy()
+    mujoco.mj_resetData(m, d)        # (this also zeroes userdata: restore it)
+    d.userdata[:] = ud
+    d.qpos[:] = (1.0, 0.0, 0.0, 0.0)
+    d.qvel[:] = (0.0, 0.0, spin)
+    d.act[0] = 0.0
+    d.userdata[_U_FLAG] = 0.0
+    nv = m.nv
+    ns = 2 * nv + m.na
+    A = np.zeros((ns, ns))
+    mujoco.mjd_transitionFD(m, d, _FD_EPS, True, A, None, None, None)
+    h = m.opt.timestep
+    # Euler: v' = v + h·a(q, v) exactly, so Aq = A21/h and Av = (A22 − I)/h are exact. The
+    # kinematic blocks are taken analytically: ball tangent coordinates are body-frame,
+    # q = q_ref(t) ⊗ exp(δ), so δ' = −[ω×]δ + δω (the discrete map has exp(−h[ω×]) there,
+    # which (A11 − I)/h would only approximate to O(hΩ)).
+    A21 = A[nv:2 * nv, :nv]
+    A22 = A[nv:2 * nv, nv:2 * nv]
+    Aq = A21 / h
+    Av = (A22 - np.eye(nv)) / h
+    om = np.array(d.qvel, dtype=float)
+    wx = np.array([[0, -om[2], om[1]], [om[2], 0, -om[0]], [-om[1], om[0], 0]])
+    Ac = np.block([[-wx, np.eye(nv)], [Aq, Av]])
+    lam, vec = np.linalg.eig(Ac)
+    out = []
+    for j in np.argsort(-np.abs(lam.imag)):
+        lj = lam[j]
+        if lj.imag <= 1e-9 * max(1.0, abs(lj)):
+            continue
+        v = vec[:, j]
+        tilt_part = np.linalg.norm(v[0:2])
+        if tilt_part < 1e-6 * np.linalg.norm(v[:3]):
+            continue
+        # body-frame rotation sense of δ(t) = Re(v e^{λt}) in the (x, y) tangent plane
+        sense_b = -(v[0].real * v[1].imag - v[1].real * v[0].imag)
+        mu = lj.imag
+        signed_body = mu if sense_b > 0 else -mu
+        if abs(sense_b) < 1e-9 * (abs(v[0]) ** 2 + abs(v[1]) ** 2):
+            signed_body = mu    # linear (non-circular) mode: no sense
+        out.append((signed_body + spin, -lj.real / abs(lj), sense_b))
+    return out
+
+
+def _classify(pairs, spin):
+    """Pick the two whirl modes; return (backward, forward) as (freq_rad_s, damping)."""
+    if len(pairs) < 2:
+        raise RuntimeError(f"expected two whirl modes, found {len(pairs)}")
+    pairs = pairs[:2]
+    if abs(spin) < 1e-12:
+        a, b = sorted((abs(p[0]), p[1]) for p in pairs)
+        return a, b
+    fw = [p for p in pairs if np.sign(p[0]) == np.sign(spin)]
+    bw = [p for p in pairs if np.sign(p[0]) != np.sign(spin)]
+    if len(fw) != 1 or len(bw) != 1:   # fall back to the closed-form ordering: backward lower
+        a, b = sorted((abs(p[0]), p[1]) for p in pairs)
+        return a, b
+    return (abs(bw[0][0]), bw[0][1]), (abs(fw[0][0]), fw[0][1])
+
+
+def modes(params: dict, settings: dict) -> dict:
+    """Linearised whirl frequencies at steady spin params['spin'] (rad/s) about the upright axis.
+
+    Linearisation: mjd_transitionFD under Euler (no drive torque), continuous-time blocks
+    recovered exactly, ball-joint body-frame tangent frequencies converted to the inertial frame
+    (+Ω), backward/forward labelled from the eigenvector's rotation sense."""
+    spin = float(_p(params, "spin"))
+    s, m, d = _whirl_setup(params, settings)
+    with _Callback(s["callback"]) as cbk:
+        pairs = _whirl_at(m, d, spin)
+        kind = cbk.kind
+    (wb, zb), (wf, zf) = _classify(pairs, spin)
+    used = {"integrator": "euler", "dt": _FD_H, "fd_eps": _FD_EPS, "spring": s["spring"],
+            "callback": kind, "linearisation": "mjd_transitionFD, ball joint, inertial frame"}
+    return {"frequencies_hz": [wb / (2 * math.pi), wf / (2 * math.pi)],
+            "labels": ["backward whirl", "forward whirl"],
+            "damping": [zb, zf],
+            "settings": used}
+
+
+def whirl_sweep(params: dict, spins, settings: dict | None = None):
+    """Campbell sweep: (backward_rad_s, forward_rad_s) arrays over ``spins``, one compiled model."""
+    spins = np.asarray(spins, dtype=float)
+    s, m, d = _whirl_setup(params, settings)
+    bw = np.empty(spins.size)
+    fw = np.empty(spins.size)
+    with _Callback(s["callback"]):
+        for i, om in enumerate(spins):
+            (b, _), (f, _) = _classify(_whirl_at(m, d, float(om)), float(om))
+            bw[i], fw[i] = b, f
+    return bw, fw

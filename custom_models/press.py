@@ -31,9 +31,14 @@ so that E = T + V_spring + V_gravity − W_motor + W_damper + W_press (+ the los
 stay constant; the guard stops a run whose balance jumps (the linear-acceleration instability).
 """
 import math
+import time
 
 import numba as nb
 import numpy as np
+
+from .integrators import (ADAPTIVE_TABLEAUS, FAIL_REASONS, FIXED_TABLEAUS, LA_REASONS,
+                          MODE_FIXED_POINT, MODE_NEWTON, MODE_PC, integrate_adaptive,
+                          integrate_fixed, integrate_wilson, wilson_step)
 
 # ---- scene constants (motor 4A80B4U3, Kloss characteristic; scene-press.md) -----------------
 P_N, N_SYNC_RPM, S_N, LAMBDA_K, ROTOR_J = 1500.0, 1500.0, 0.058, 2.2, 0.0033
@@ -440,3 +445,374 @@ def guard_partial(t, y, p):
     # the nested stencil reaches 2Δφ, 2Δψ: bound its change of s = sin θ2
     reach = 2.0 * (p[L1] * p[DPHI] + p[L3] * p[DPSI]) / p[L2]
     return _guard_common(y, p, reach)
+
+
+# ---- drivers ----------------------------------------------------------------------------------
+# method ids of the event-capable segment driver (press-cycle)
+M_RK, M_WILSON = 0, 1
+EVENT = 50
+
+
+@nb.njit(cache=True)
+def _rk_step(f, t, y, p, h, A, B, C):
+    n_st, ny = B.shape[0], y.shape[0]
+    K = np.empty((n_st, ny))
+    ys = np.empty(ny)
+    K[0] = f(t, y, p)
+    for s in range(1, n_st):
+        for j in range(ny):
+            acc = 0.0
+            for r in range(s):
+                acc += A[s, r] * K[r, j]
+            ys[j] = y[j] + h * acc
+        K[s] = f(t + C[s] * h, ys, p)
+    y1 = y.copy()
+    for j in range(ny):
+        acc = 0.0
+        for s in range(n_st):
+            acc += B[s] * K[s, j]
+        y1[j] += h * acc
+    return y1
+
+
+@nb.njit
+def segment(f, acc, guard, method, y0, p, t0, t_stop, t_out, i_next, Y, h_nom, tA, tB, tC,
+            theta, la_mode, tol, max_iter, ev_on, psi_target, t_tol):
+    """Fixed-step integration from (t0, y0) to t_stop, filling Y at the output times in
+    (t0, t_stop]; intervals between stops are split into equal steps ≤ h_nom, so a segment may
+    start off the output grid (after an event). With ev_on, stops at the first crossing of
+    ψ = psi_target, located by bisection on the step length (re-stepping from the step start)
+    to t_tol. Returns (code, t, y, i_next, steps, evals); code EVENT at an event, 0 at t_stop."""
+    n_out = t_out.shape[0]
+    t = t0
+    y = y0.copy()
+    steps = 0
+    evals = 0
+    qdd = np.zeros(2)
+    zd = np.zeros(y.shape[0] - 4)
+    if method == M_WILSON:
+        r = acc(t, y[:2], y[2:4], p)
+        qdd = r[:2].copy()
+        zd = r[2:].copy()
+        evals += 1
+    n_st = tB.shape[0]
+    i = i_next
+    while True:
+        on_grid = i < n_out and t_out[i] <= t_stop + 1e-12 * max(1.0, abs(t_stop))
+        tb = t_out[i] if on_grid else t_stop
+        span = tb - t
+        if span > 0.0:
+            nsub = max(1, int(math.ceil(span / h_nom - 1e-9)))
+            h = span / nsub
+            ta = t
+            for k in range(nsub):
+                tk = ta + k * h
+                if method == M_RK:
+                    y1 = _rk_step(f, tk, y, p, h, tA, tB, tC)
+                    evals += n_st
+                    code = 0
+                else:
+                    q1, qd1, qdd1, z1, zd1, ev, code = wilson_step(
+                        acc, tk, y[:2], y[2:4], qdd, y[4:], zd, p, h, theta, la_mode, tol,
+                        max_iter)
+                    evals += ev
+                    y1 = np.concatenate((q1, qd1, z1))
+                steps += 1
+                if code == 0:
+                    for v in y1:
+                        if not np.isfinite(v):
+                            code = 1
+                            break
+                if code == 0:
+                    code = guard(tk + h, y1, p)
+                if code != 0:
+                    return code, tk + h, y, i, steps, evals
+                g0 = y[1] - psi_target
+                g1 = y1[1] - psi_target
+                if ev_on and g0 != 0.0 and g0 * g1 <= 0.0:
+                    lo, hi = 0.0, h
+                    y_hi = y1
+                    while hi - lo > t_tol:
+                        mid = 0.5 * (lo + hi)
+                        if method == M_RK:
+                            ym = _rk_step(f, tk, y, p, mid, tA, tB, tC)
+                            evals += n_st
+                        else:
+                            q1, qd1, qdd1, z1, zd1, ev, c2 = wilson_step(
+                                acc, tk, y[:2], y[2:4], qdd, y[4:], zd, p, mid, theta,
+                                la_mode, tol, max_iter)
+                            evals += ev
+                            ym = np.concatenate((q1, qd1, z1))
+                        if (ym[1] - psi_target) * g0 > 0.0:
+                            lo = mid
+                        else:
+                            hi = mid
+                            y_hi = ym
+                    return EVENT, tk + hi, y_hi, i, steps, evals
+                y = y1
+                if method == M_WILSON:
+                    qdd = qdd1
+                    zd = zd1
+            t = tb
+        if on_grid:
+            Y[i] = y
+            i += 1
+            if abs(tb - t_stop) <= 1e-12 * max(1.0, abs(t_stop)):
+                return 0, t_stop, y, i, steps, evals
+        else:
+            return 0, t_stop, y, i, steps, evals
+
+
+# ---- the leaf contract ------------------------------------------------------------------------
+WILSON_INTEGRATORS = {"linacc": (1.0, MODE_NEWTON), "wilson": (None, MODE_NEWTON),
+                      "linacc-pc": (1.0, MODE_PC), "linacc-fp": (1.0, MODE_FIXED_POINT)}
+INTEGRATORS = tuple(WILSON_INTEGRATORS) + tuple(FIXED_TABLEAUS) + tuple(ADAPTIVE_TABLEAUS)
+COMMON_SETTINGS = {"theta": 1.4, "newton_tol": 1e-10, "max_iter": 30, "rtol": None,
+                   "atol": None, "h_max": None, "max_steps": 10**8, "singular_tol": 0.02,
+                   "energy_jump": 0.1, "event_tol": 1e-10}
+REASONS = {**FAIL_REASONS, **LA_REASONS,
+           FAIL_SINGULAR: "singular: the rod reached the vertical, where the loop-closure root "
+                          "for x_B is double and the (phi, psi) chart's Jacobian is singular",
+           FAIL_STENCIL: "singular: the finite-difference stencil of the partial systems "
+                         "reaches past the double loop-closure root (rod near vertical)",
+           FAIL_ENERGY: "unstable: the energy balance jumped"}
+SOLVERS = {"exact": (acc_exact, f_exact, guard_exact),
+           "partial": (acc_partial, f_partial, guard_partial)}
+
+
+def merged_params(params, cycle):
+    par = dict(DEFAULT_PARAMS)
+    if cycle:
+        par.update(CYCLE_DEFAULTS)
+    par.update(params or {})
+    return par
+
+
+def _settings(defaults, settings):
+    s = dict(COMMON_SETTINGS, **defaults)
+    s.update({k: v for k, v in (settings or {}).items() if v is not None})
+    if s["integrator"] not in INTEGRATORS:
+        raise ValueError(f"unknown integrator {s['integrator']!r}; choose one of "
+                         f"{', '.join(INTEGRATORS)}")
+    if s["integrator"] == "wilson" and not float(s["theta"]) >= 1.0:
+        raise ValueError(f"theta must be >= 1, got {s['theta']!r}")
+    for k in ("dphi_deg", "dpsi_deg"):
+        if k in s and not float(s[k]) > 0.0:
+            raise ValueError(f"{k} must be > 0, got {s[k]!r}")
+    return s
+
+
+def initial_state(par, p):
+    y0 = np.array([math.radians(par["phi0"]), math.radians(par["psi0"]), par["omega0"],
+                   par["rocker_rate0"], 0.0, 0.0, 0.0])
+    s = rod_sine(y0[0], y0[1], p)
+    if 1.0 - s * s < p[SING_TOL] ** 2:
+        raise ValueError("initial configuration at the double loop-closure root (rod vertical, "
+                         f"|cos theta2| = {math.sqrt(max(0.0, 1 - s * s)):.2e})")
+    T, Vs, Vg, E = energy_terms(y0, p)
+    p[E0], p[E_SCALE] = E, abs(T) + 1e-9
+    return y0
+
+
+def _steps_per_output(t_out, dt):
+    dt_out = t_out[1] - t_out[0]
+    if not dt or not dt > 0.0:
+        raise ValueError(f"dt must be > 0, got {dt!r}")
+    n = dt_out / dt
+    return max(1, int(round(n)) if abs(n - round(n)) < 1e-6 * n else int(math.ceil(n)))
+
+
+def _integrate_plain(solver, y0, p, t_out, s):
+    """One idle run (scene `press`) with the shared drivers."""
+    acc, f, guard = SOLVERS[solver]
+    name = s["integrator"]
+    if name in ADAPTIVE_TABLEAUS:
+        tb = ADAPTIVE_TABLEAUS[name]
+        rtol = float(s["rtol"] or 1e-10)
+        atol = float(s["atol"] or rtol * 1e-2)
+        h_max = float(s["h_max"] or (t_out[1] - t_out[0]))
+        Y, steps, evals, rej, t_fail, code = integrate_adaptive(
+            f, guard, y0, p, t_out, rtol, atol, h_max, int(s["max_steps"]), tb["A"], tb["B"],
+            tb["C"], tb["E"], tb["E3"], tb["err_order"])
+        return Y, {"steps": int(steps), "rhs_evals": int(evals), "rejected": int(rej)}, \
+            t_fail, code, {"rtol": rtol, "atol": atol, "h_max": h_max}
+    n_sub = _steps_per_output(t_out, s["dt"])
+    used = {"dt": (t_out[1] - t_out[0]) / n_sub}
+    if name in FIXED_TABLEAUS:
+        tb = FIXED_TABLEAUS[name]
+        Y, steps, evals, t_fail, code = integrate_fixed(f, guard, y0, p, t_out, n_sub, tb["A"],
+                                                        tb["B"], tb["C"])
+    else:
+        theta, mode = _wilson_args(s)
+        Y, steps, evals, t_fail, code = integrate_wilson(
+            acc, guard, y0, 2, p, t_out, n_sub, theta, mode, float(s["newton_tol"]),
+            int(s["max_iter"]))
+        used["theta"] = theta
+    return Y, {"steps": int(steps), "rhs_evals": int(evals)}, t_fail, code, used
+
+
+def _wilson_args(s):
+    theta, mode = WILSON_INTEGRATORS[s["integrator"]]
+    return (float(s["theta"]) if theta is None else theta), mode
+
+
+def _integrate_cycle(solver, y0, p, par, t_out, s):
+    """press-cycle: idle → lock at ψ = lock_angle (first crossing after lock_after, located by
+    bisection) → locked crank–slider under the working load → release at release_after → idle.
+    Returns Y, per-row mode, stats, t_fail, code, used settings, lock record."""
+    acc, f, guard = SOLVERS[solver]
+    name = s["integrator"]
+    if name in ADAPTIVE_TABLEAUS:
+        raise ValueError(f"press-cycle runs fixed-step integrators only, got {name!r}")
+    h = (t_out[1] - t_out[0]) / _steps_per_output(t_out, s["dt"])
+    used = {"dt": h}
+    if name in FIXED_TABLEAUS:
+        tb = FIXED_TABLEAUS[name]
+        method, theta, mode = M_RK, 1.0, 0
+        tA, tB, tC = tb["A"], tb["B"], tb["C"]
+    else:
+        theta, mode = _wilson_args(s)
+        method, tA, tB, tC = M_WILSON, np.zeros((1, 1)), np.zeros(1), np.zeros(1)
+        used["theta"] = theta
+    t_end = float(t_out[-1])
+    t_lock_after, t_release = float(par["lock_after"]), float(par["release_after"])
+    psi_lock = math.radians(par["lock_angle"])
+    Y = np.full((len(t_out), len(y0)), np.nan)
+    Y[0] = y0
+    modes = np.zeros(len(t_out))
+    stats = {"steps": 0, "rhs_evals": 0}
+    lock = {"t_lock": np.nan, "loss": 0.0, "rate_before": np.nan, "rate_after": np.nan}
+    # phases: (mode, t_stop, event on)
+    t, y, i = 0.0, y0.copy(), 1
+    p[MODE] = 0.0
+    plan = [(0.0, min(t_lock_after, t_end), False), (0.0, min(t_release, t_end), True)]
+    while plan:
+        md, t_stop, ev = plan.pop(0)
+        p[MODE] = md
+        if t_stop > t:
+            code, t_new, y_new, i_new, st, evs = segment(
+                f, acc, guard, method, y, p, t, t_stop, t_out, i, Y, h, tA, tB, tC, theta,
+                mode, float(s["newton_tol"]), int(s["max_iter"]), ev, psi_lock,
+                float(s["event_tol"]))
+            modes[i:i_new] = md
+            stats["steps"] += st
+            stats["rhs_evals"] += evs
+            t, y, i = t_new, y_new, i_new
+            if code not in (0, EVENT):
+                return Y, modes, stats, t, code, used, lock
+            if code == EVENT:
+                # plastic lock: ψ' → 0 keeping the crank's generalized momentum
+                # p_φ = A11 φ' + A12 ψ'  (A of the solver's own description)
+                A = (lagrange_exact(y[:2], p)[2] if solver == "exact"
+                     else lagrange_partial(y[:2], p)[2])
+                T_before = energy_terms(y, p)[0]
+                lock["t_lock"], lock["rate_before"] = t, y[2]
+                y = y.copy()
+                y[2] = y[2] + A[0, 1] / A[0, 0] * y[3]
+                y[3] = 0.0
+                lock["rate_after"] = y[2]
+                lock["loss"] = T_before - energy_terms(y, p)[0]
+                p[E_LOST] = lock["loss"]
+                plan = [(1.0, min(t_release, t_end), False), (0.0, t_end, False)]
+                continue
+        if ev and not plan:              # no lock before release: idle to the end
+            plan = [(0.0, t_end, False)]
+    return Y, modes, stats, None, 0, used, lock
+
+
+def _channels(solver, Y, modes, p, t_out, e_lost_rows):
+    acc = SOLVERS[solver][0]
+    n = len(t_out)
+    ch = {k: np.full(n, np.nan) for k in CHANNELS}
+    mode0 = p[MODE]
+    e_lost0 = p[E_LOST]
+    for r in range(n):
+        y = Y[r]
+        if not np.all(np.isfinite(y)):
+            continue
+        p[MODE], p[E_LOST] = modes[r], e_lost_rows[r]
+        xA, yA, xB, yB, xC, ok = positions(y[0], y[1], p)
+        ch["crank_angle"][r], ch["crank_rate"][r], ch["rocker_angle"][r] = y[0], y[2], y[1]
+        ch["crank_accel"][r] = acc(t_out[r], y[:2], y[2:4], p)[0]
+        ch["slider_x"][r] = xC
+        ch["loop_violation"][r] = abs(math.hypot(xB - xA, yB - yA) - p[L2])
+        ch["energy_balance"][r] = energy_terms(y, p)[3]
+    p[MODE], p[E_LOST] = mode0, e_lost0
+    return ch
+
+
+def _reason(code, t_fail, Y, p):
+    reason = REASONS.get(int(code), f"failure code {code}")
+    good = Y[np.all(np.isfinite(Y), axis=1)]
+    if len(good):
+        y = good[-1]
+        s = rod_sine(y[0], y[1], p)
+        tilt = math.degrees(math.acos(min(1.0, abs(s))))
+        reason += f" (last output state: rod {tilt:.3g} deg from vertical"
+        if code == FAIL_ENERGY:
+            reason += f", energy balance {energy_terms(y, p)[3] - p[E0]:+.3g} J from start"
+        reason += ")"
+    return reason
+
+
+def simulate(solver, defaults, params, t_out, settings):
+    """The leaf contract for both solvers; `press-cycle` when params carry `lock_after`."""
+    cycle = "lock_after" in (params or {})
+    par = merged_params(params, cycle)
+    s = _settings(defaults, settings)
+    t_out = np.asarray(t_out, dtype=float)
+    if t_out.ndim != 1 or len(t_out) < 2 or t_out[0] != 0.0 or np.any(np.diff(t_out) <= 0):
+        raise ValueError("t_out must be an increasing grid starting at 0 with >= 2 points")
+    p = pack(par, s.get("dphi_deg", 0.1), s.get("dpsi_deg", 0.1), float(s["singular_tol"]),
+             float(s["energy_jump"]))
+    y0 = initial_state(par, p)
+    t0 = time.perf_counter()
+    extra = {}
+    if cycle:
+        Y, modes, stats, t_fail, code, used, lock = _integrate_cycle(solver, y0, p, par, t_out, s)
+        lost = np.where(t_out >= lock["t_lock"], lock["loss"], 0.0)
+        extra = {"t_lock": np.array([lock["t_lock"]]),
+                 "lock_energy_loss": np.array([lock["loss"]]),
+                 "crank_rate_at_lock": np.array([lock["rate_before"], lock["rate_after"]]),
+                 "locked": modes.copy(), "press_work": Y[:, 6].copy()}
+    else:
+        Y, stats, t_fail, code, used = _integrate_plain(solver, y0, p, t_out, s)
+        modes, lost = np.zeros(len(t_out)), np.zeros(len(t_out))
+        t_fail = None if code == 0 else t_fail
+    stats["integrate_s"] = time.perf_counter() - t0
+    ch = _channels(solver, Y, modes, p, t_out, lost)
+    extra.update({"motor_work": Y[:, 4].copy(), "damper_loss": Y[:, 5].copy()})
+    used = dict(used, integrator=s["integrator"], singular_tol=float(s["singular_tol"]),
+                energy_jump=float(s["energy_jump"]))
+    if s["integrator"] in WILSON_INTEGRATORS:
+        used.update(newton_tol=float(s["newton_tol"]), max_iter=int(s["max_iter"]))
+    if solver == "partial":
+        used.update(dphi_deg=float(s["dphi_deg"]), dpsi_deg=float(s["dpsi_deg"]))
+    if cycle:
+        used["event_tol"] = float(s["event_tol"])
+    ok = code == 0
+    return {"channels": ch, "status": "ok" if ok else "diverged",
+            "t_fail": None if ok else float(t_fail),
+            "reason": None if ok else _reason(code, t_fail, Y, p),
+            "stats": stats, "settings": used, "extra": extra}
+
+
+def linearised_modes(params, q=None, solver="exact", settings=None):
+    """Eigen-analysis of the idle system about the initial state (or q): ω² = eig(A⁻¹K), K the
+    Hessian of V = V_spring + V_gravity in (φ, ψ) by central differences of the generalized
+    forces at rest. Returns (omega (rad/s), T = 2π/ω) sorted by ω descending."""
+    par = merged_params(params, False)
+    p = pack(par)
+    q0 = np.radians([par["phi0"], par["psi0"]]) if q is None else np.asarray(q, float)
+    p[U] = 0.0                                  # no motor torque: the conservative part only
+    base, G, A, dA = lagrange_exact(q0, p)
+    K = np.zeros((2, 2))
+    for k, dq in enumerate(np.eye(2) * 1e-6):
+        fp = acc_exact(0.0, q0 + dq, np.zeros(2), p)[:2]
+        fm = acc_exact(0.0, q0 - dq, np.zeros(2), p)[:2]
+        Ap = lagrange_exact(q0 + dq, p)[2]
+        Am = lagrange_exact(q0 - dq, p)[2]
+        K[:, k] = -(Ap @ fp - Am @ fm) / 2e-6     # K = −∂Q/∂q
+    w2 = np.sort(np.linalg.eigvals(np.linalg.solve(A, K)).real)[::-1]
+    w = np.sqrt(np.maximum(w2, 0.0))
+    return w, np.where(w > 0, 2 * np.pi / np.where(w > 0, w, 1), np.inf)

@@ -87,7 +87,7 @@ INTEGRATORS = ("rk4", "imr")
 VARIANTS = ("paper", "conservative")
 DEFAULT_SETTINGS = {"integrator": "imr", "dt": 1e-3, "variant": "conservative",
                     "velocity_turn": None, "stored_in_hub": None, "q_damper": None,
-                    "newton_tol": 1e-13, "stretch_limit": 0.5, "eps_fallback": 1e-10}
+                    "newton_tol": 1e-12, "stretch_limit": 0.5, "eps_fallback": 1e-10}
 DEFAULT_PARAMS = {"J_hub": 0.004, "rho_L": 0.000735, "L": 5.0, "L_c": 0.05, "r": 0.01,
                   "Omega0": 6.0, "omega_spool": 3.5, "tip_mass": 0.0005, "n": 20,
                   "stiffness": 1e7, "damping": 1e-3, "t_end": 142.857, "output_dt": 0.05}
@@ -406,6 +406,7 @@ def _step_imr(t, h, y, P, m, b, tol, F, Ym, Dm, Bm, Dinv, U, R, X, G):
     for q in range(ny):
         Ym[q] = y[q]
     it = 0
+    dprev = np.inf
     for it in range(1, 40):
         # midpoint state from the midpoint velocities
         Om = Ym[0]
@@ -476,8 +477,12 @@ def _step_imr(t, h, y, P, m, b, tol, F, Ym, Dm, Bm, Dinv, U, R, X, G):
                 dmax = max(dmax, abs(X[j, a]))
         if not np.isfinite(dOm) or not np.isfinite(dmax):
             return FAIL_NONFINITE, it
-        if dmax <= tol * vmax and abs(dOm) <= tol * (abs(Ym[0]) + 1e-3):
+        rel = max(dmax / vmax, abs(dOm) / (abs(Ym[0]) + 1e-3))
+        if rel <= tol:
             break
+        if rel <= 1e-9 and rel >= 0.5 * dprev:   # stagnated at round-off: converged
+            break
+        dprev = rel
     else:
         return FAIL_NEWTON, it
     # final midpoint (consistent with the converged velocities) and the step

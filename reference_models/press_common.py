@@ -26,10 +26,24 @@ DEFAULT_PARAMS = {
     "t_end": 0.05, "output_dt": 0.00125,
 }
 
-# press-cycle: our own test defaults (the custom helper may pick others; any value is accepted).
-# At the idle defaults the rocker swings from -46.34 deg to -55.2 deg by 0.05 s (-48 deg near 0.034 s).
-CYCLE_DEFAULTS = {"lock_after": 0.01, "lock_angle": -48.0, "press_force": 2000.0,
-                  "release_after": 0.045}
+# press-cycle defaults, as the custom solvers (custom_models/press.py) pick them; any value is
+# accepted. The working load is -press_force * tanh(v_slider / press_force_vreg) while locked.
+# NB: at the idle defaults the rocker only swings from -46.34 deg to -55.2 deg by 0.05 s, so a
+# lock at -60 deg is not reached inside [lock_after, release_after) = [4, 30) ms.
+CYCLE_DEFAULTS = {"lock_after": 0.004, "lock_angle": -60.0, "press_force": 2000.0,
+                  "press_force_vreg": 0.01, "release_after": 0.03}
+
+
+def press_load(v: float, F: float, vreg: float) -> float:
+    """Working load on the slider while locked (N): -F tanh(v / vreg)."""
+    return -F * math.tanh(v / vreg)
+
+
+def press_power(v: float, a: float, F: float, vreg: float) -> tuple:
+    """Dissipated power F tanh(v/vreg) v and its time derivative (for the Hermite quadrature)."""
+    th = math.tanh(v / vreg)
+    return F * th * v, F * (th + v / vreg * (1.0 - th * th)) * a
+
 
 # motor 4A80B4U3, Kloss characteristic
 P_N = 1500.0

@@ -23,7 +23,6 @@ on Exudyn's coordinates — the momentum of the remaining coordinate is kept, th
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 
@@ -136,11 +135,12 @@ class _Press:
         if cycle:
             F = self.F
 
+            vreg = float(p["press_force_vreg"])
+
             def press(mbs_, t, load):
                 if not self.locked:
                     return 0.0
-                v = mbs_.GetNodeOutput(ns, Ct)[0]
-                return -F * float(np.sign(v))
+                return pc.press_load(mbs_.GetNodeOutput(ns, Ct)[0], F, vreg)
             mbs.AddLoad(ii.LoadCoordinate(markerNumber=msx, load=0.0, loadUserFunction=press))
             mro = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=self.nodes["rocker"], coordinate=2))
             self.lock = mbs.AddObject(ii.CoordinateConstraint(markerNumbers=[mg, mro], offset=0.0,
@@ -152,8 +152,8 @@ class _Press:
         ss = exu.SimulationSettings()
         ss.solution.file.write = False
         ss.timeIntegration.verboseMode = 0
-        ss.displayStatistics = False
-        ss.displayComputationTime = False
+        ss.show.statistics = False
+        ss.show.computationTime = False
         ss.timeIntegration.adaptiveStep = False
         ss.timeIntegration.newton.relativeTolerance = float(settings["newton_rtol"])
         ss.timeIntegration.newton.absoluteTolerance = float(settings["newton_atol"])
@@ -233,7 +233,7 @@ class _Press:
         vs, as_ = v[js], a[js]
         out = [tau * w, (dtau * w + tau) * wd, self.c * vs * vs, 2 * self.c * vs * as_, 0.0, 0.0]
         if locked:
-            out[4], out[5] = self.F * abs(vs), self.F * np.sign(vs) * as_
+            out[4], out[5] = pc.press_power(vs, as_, self.F, float(self.p["press_force_vreg"]))
         return np.array(out)
 
     # ---- solving ----------------------------------------------------------------------------
@@ -317,7 +317,17 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, c
     n = len(t_out)
     ch = {k: np.full(n, np.nan) for k in pc.CHANNELS}
     extra = {}
-    wall0 = time.perf_counter()
+    import exudyn as exu
+    prev = exu.config.printToConsole
+    exu.config.printToConsole = False      # the failure banner would otherwise go to stdout
+    try:
+        return _run(p, s, st, t_out, cycle, ch, extra)
+    finally:
+        exu.config.printToConsole = prev
+
+
+def _run(p, s, st, t_out, cycle, ch, extra):
+    dt = s["dt"]
     model = _Press(p, st, s, cycle)
     status, t_fail, reason = "ok", None, None
 
@@ -350,23 +360,20 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, c
         while bi < len(bounds):
             t1 = bounds[bi]
             nst = max(1, int(math.ceil((t1 - t) / dt - 1e-9)))
-            qs, vs_, _ = model.state()
             rec = model.solve(t, t1, nst)
             if t == 0.0:   # GA computed the consistent initial accelerations: store t = 0 again
                 store(0, model.observe(*rec[0][1:]))
-            armed = cycle and t_lock is None and t >= la - 1e-15
+            armed = cycle and t_lock is None and la - 1e-15 <= t < ra - 1e-15
             if armed:
                 g = np.array([model.ref[model.idx["rocker"] + 2] + r[1][model.idx["rocker"] + 2] - psiL
                               for r in rec])
                 hit = np.nonzero(np.sign(g[1:]) * np.sign(g[:-1]) <= 0)[0]
-                hit = [j for j in hit if not (g[j] == 0.0 and j == 0 and False)]
                 if len(hit):
                     j = int(hit[0])
                     rec = rec[:j + 1]
                     work += _hermite(np.array([model.rates(r[2], r[3], model.locked) for r in rec]),
                                      np.array([r[0] for r in rec]))
                     ta, (qa, va) = rec[j][0], (rec[j][1], rec[j][2])
-                    tb = rec[j + 1][0] if j + 1 < len(rec) else None
                     lo, hi = 0.0, (t1 - t) / nst
                     ga = g[j]
                     nb = 0

@@ -17,10 +17,13 @@ Gravity is the tree's built-in `gravity`. The work A = ∫ torque·ω_z dt is an
 coordinate (`ObjectGenericODE1`) integrated by the same Runge–Kutta stages as the mechanics.
 
 Charts. The Cardan chain locks where n = ±A0·e_x. The run starts with A0 = identity (lock at
-n = ±e_x, i.e. tilt 90° towards x); when |cos q1| falls below `CHART_SWITCH` the run goes back to
-the last output sample and continues on a new model whose A0·e_x is perpendicular both to n and
-to its current velocity, so every tilt short of π is reachable. At tilt π the spring direction
-itself is undefined; the run stops there with status `diverged`.
+n = ±e_x, i.e. tilt 90° towards x). When |cos q1| falls below `CHART_SWITCH` after a step (a
+post-step user function stops the run), the run continues from that completed step on a new
+model whose lock axis is ≥ 45° away from n and from the cone n sweeps when whirling about e_z
+(`_new_chart`), so every tilt short of π is reachable; the output grid is kept because the step
+size is unchanged. At tilt π the spring direction itself is undefined; the run stops there with
+status `diverged`. A jump of the energy balance by more than `ENERGY_JUMP` of the energy scale
+(an unstable step) also ends the run as `diverged`.
 
 `modes` linearises the same tree (drive torque 0) about steady spin Ω at tilt 0 with Exudyn's
 `ComputeLinearizedSystem` (M, K and the gyroscopic D = −∂f/∂q̇; gravity enters K through the
@@ -290,8 +293,8 @@ def _sim_settings(t0, t1, n_steps, write_period, name, rtol, spectral_radius=1.0
         ti.adaptiveStep = False
     ss.solution.file.write = False
     ss.solution.sensors.writePeriod = float(write_period)
-    ss.displayComputationTime = False
-    ss.displayStatistics = False
+    ss.show.computationTime = False
+    ss.show.statistics = False
     return ss
 
 
@@ -317,14 +320,15 @@ def _last_step_of(mbs, default):
 
 def _solve(mbs, ss, solver, update=False):
     """SolveDynamic with Exudyn's console chatter off; returns the exception (or None)."""
-    exu.SetWriteToConsole(False)
+    previous = exu.config.printToConsole
+    exu.config.printToConsole = False
     try:
         mbs.SolveDynamic(ss, solverType=solver, storeSolver=True, updateInitialValues=update)
         return None
     except Exception as ex:                         # noqa: BLE001 - _Stop, SolverError, ModelError
         return ex
     finally:
-        exu.SetWriteToConsole(True)
+        exu.config.printToConsole = previous
 
 
 # ----------------------------------------------------------------------------------------------
@@ -337,11 +341,17 @@ def _merge_settings(settings):
     if name not in _SOLVERS:
         raise ValueError(f"unknown integrator {name!r}; choose one of {', '.join(INTEGRATORS)}")
     if name in _ADAPTIVE:
-        rtol = float(s["rtol"])
+        try:
+            rtol = float(s["rtol"])
+        except (TypeError, ValueError):
+            raise ValueError(f"rtol must be in (0, 1), got {s['rtol']!r}") from None
         if not (math.isfinite(rtol) and 0 < rtol < 1):
             raise ValueError(f"rtol must be in (0, 1), got {s['rtol']!r}")
     else:
-        dt = float(s["dt"])
+        try:
+            dt = float(s["dt"])
+        except (TypeError, ValueError):
+            raise ValueError(f"dt must be a positive number, got {s['dt']!r}") from None
         if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a positive number, got {s['dt']!r}")
     return s
@@ -495,7 +505,8 @@ def simulate(params, t_out, settings):
     used["chart_changes"] = charts
     return {"channels": ch, "status": status, "t_fail": t_fail, "reason": reason,
             "stats": {"steps": int(steps), "rhs_evals": int(rhs_evals)},
-            "settings": used, "extra": {"orientation": quat}}
+            "settings": used,
+            "extra": {"orientation": quat, "angular_velocity": Ws.copy()}}
 
 
 def _channels(Rs, Ws, Wk, ph):
@@ -543,7 +554,8 @@ def _whirl_pair(M, K, D, spin):
         pairs.append((w[i], sense, lam[i].real))
     pairs.sort(key=lambda p: p[0])
     if len(pairs) != 2:
-        raise RuntimeError(f"expected two whirl modes, found {len(pairs)}")
+        raise ValueError(f"the upright rotor is not a stable whirl at spin {spin:g} rad/s "
+                         f"({len(pairs)} oscillatory modes; is k <= m g l?)")
     if abs(spin) < 1e-12:
         labels = ["backward whirl", "forward whirl"]
     else:

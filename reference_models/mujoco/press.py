@@ -133,6 +133,7 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, c
     u = float(p["gear_ratio"])
     c = float(p["slider_damping"])
     F = float(p.get("press_force", 0.0))
+    vreg = float(p.get("press_force_vreg", 0.01))
     flags = {"locked": False}
     sid_r = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "C_rocker")
     sid_s = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "C_slider")
@@ -142,14 +143,14 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, c
     def passive(m_, d_):
         d_.qfrc_passive[0] += pc.motor_torque(d_.qvel[0], u)
         if flags["locked"] and F != 0.0:
-            d_.qfrc_passive[3] -= F * math.copysign(1.0, d_.qvel[3]) if d_.qvel[3] != 0 else 0.0
+            d_.qfrc_passive[3] += pc.press_load(d_.qvel[3], F, vreg)
 
     def act_dyn(m_, d_, i):
         if i == 0:
             return pc.motor_torque(d_.qvel[0], u) * d_.qvel[0]
         if i == 1:
             return c * d_.qvel[3] ** 2
-        return F * abs(d_.qvel[3]) if flags["locked"] else 0.0
+        return -pc.press_load(d_.qvel[3], F, vreg) * d_.qvel[3] if flags["locked"] else 0.0
 
     # initial state
     d.qpos[:] = [st["phi"], st["theta2"] - st["phi"], st["psi"] + math.pi - st["theta2"], 0.0]
@@ -167,6 +168,8 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, c
     def psi_of(qpos):
         return qpos[0] + qpos[1] + qpos[2] - math.pi
 
+    vmax = 1e-3 * (float(p["l1"]) + float(p["l2"]) + float(p["l3"]))   # the model has fallen apart
+
     def observe(k):
         mujoco.mj_forward(m, d)
         T = d.energy[1]
@@ -178,6 +181,8 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, c
         ch["slider_x"][k] = st["C"][0] + d.qpos[3]
         ch["loop_violation"][k] = float(np.linalg.norm(d.site_xpos[sid_r, :2] - d.site_xpos[sid_s, :2]))
         ch["energy_balance"][k] = T + V - d.act[0] + d.act[1] + d.act[2] + lock_loss[0]
+        if not ch["loop_violation"][k] <= vmax:
+            raise FloatingPointError(f"loop violation {ch['loop_violation'][k]:.3g} m exceeds {vmax:.3g} m")
 
     def step(h):
         m.opt.timestep = h
@@ -186,7 +191,8 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, c
         if (not np.all(np.isfinite(d.qpos)) or not np.all(np.isfinite(d.qvel))
                 or not np.all(np.isfinite(d.act))
                 or d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0):
-            raise FloatingPointError("non-finite state (MuJoCo bad qacc)")
+            raise FloatingPointError("non-finite state (MuJoCo bad qacc)"
+                                     + (f": {warnings[-1].strip()}" if warnings else ""))
 
     bounds = list(t_out)
     if cycle:
@@ -199,6 +205,9 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, c
     out_index = {float(t): k for k, t in enumerate(t_out)}
 
     status, t_fail, reason = "ok", None, None
+    warnings: list[str] = []
+    prev_warning = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(warnings.append)     # no stdout, no MUJOCO_LOG.TXT
     mujoco.set_mjcb_passive(passive)
     mujoco.set_mjcb_act_dyn(act_dyn)
     try:
@@ -210,7 +219,7 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, c
             while t < t1 - 1e-15:
                 nst = max(1, int(math.ceil((t1 - t) / dt - 1e-9)))
                 h = (t1 - t) / nst
-                armed = cycle and t_lock is None and t >= la - 1e-15
+                armed = cycle and t_lock is None and la - 1e-15 <= t < ra - 1e-15
                 if armed:
                     saved = np.empty(nstate)
                     mujoco.mj_getState(m, d, saved, spec)
@@ -281,6 +290,7 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, c
     finally:
         mujoco.set_mjcb_passive(None)
         mujoco.set_mjcb_act_dyn(None)
+        mujoco.set_mju_user_warning(prev_warning)
     if cycle:
         extra.setdefault("lock_time", np.array([np.nan]))
         extra.setdefault("lock_energy_loss", np.array([np.nan]))

@@ -1,0 +1,17 @@
+"""`lagrange-exact` for scenes `press` / `press-cycle`: the paper's Lagrange equations (35) with
+analytic velocity analogues ∂r/∂q and analytic A_ij,k (our addition: it isolates the
+finite-difference error of the paper's method, `press_partial`). Physics in `press.py`.
+
+Settings: integrator (see INTEGRATORS: linacc, wilson [theta], linacc-pc (the paper's printed
+predictor–corrector), linacc-fp, euler, midpoint, rk4, rk23, dopri5, dop853 (adaptive: press
+only)), dt or rtol/atol, newton_tol, max_iter, singular_tol, energy_jump, event_tol.
+"""
+from . import press
+
+DEFAULT_SETTINGS = {"integrator": "rk4", "dt": 1e-5}
+INTEGRATORS = press.INTEGRATORS
+CHANNELS = press.CHANNELS
+
+
+def simulate(params, t_out, settings=None):
+    return press.simulate("exact", DEFAULT_SETTINGS, params, t_out, settings)

@@ -34,7 +34,17 @@ def critical_speeds(solver, params, spins, lines):
         if len(idx):
             i = idx[0]
             fun = lambda s: campbell(solver, params, np.array([s]))[k][0] - s   # noqa: E731
-            out[name] = brentq(fun, spins[i], spins[i + 1], xtol=1e-12, rtol=1e-14)
+            try:
+                out[name] = brentq(fun, spins[i], spins[i + 1], xtol=1e-12, rtol=1e-14)
+            except Exception:
+                # a body-frame linearisation loses the mode exactly at the crossing (its
+                # body-frame frequency is 0 there): fit a parabola through points beside it
+                s0 = spins[i] - g[i] * (spins[i + 1] - spins[i]) / (g[i + 1] - g[i])
+                ds = 1e-3 * (spins[i + 1] - spins[i])
+                x = s0 + ds * np.array([-3.0, -2.0, 2.0, 3.0])
+                y = campbell(solver, params, x)[k] - x
+                roots = np.roots(np.polyfit(x - s0, y, 2)).real + s0
+                out[name] = float(roots[np.argmin(np.abs(roots - s0))])
     return out
 
 
@@ -49,7 +59,10 @@ def free_response_frequencies(params, time_solvers, t_end=2.0, dt=1e-3, tilt0=1e
     rows = []
     for s in time_solvers:
         leaf = s.leaf(spin_scene.name)
-        tr = solvers.simulate(spin_scene, s, p, dict(leaf.DEFAULT_SETTINGS))
+        settings = dict(leaf.DEFAULT_SETTINGS)
+        if settings.get("dt") and settings["dt"] > dt:     # fixed steps must fit the record grid
+            settings["dt"] = dt
+        tr = solvers.simulate(spin_scene, s, p, settings)
         if tr.status != "ok" or "orientation" not in tr.extra:
             rows.append({"solver": s.name, "status": tr.status, "reason": tr.reason})
             continue

@@ -69,8 +69,8 @@ NB = 8
 
 # ---- packed parameter array p -------------------------------------------------------------
 (L1, L2, L3, SIGMA, GRAV, K_S, C_S, XC0, U, MK, SK, WSYNC, DPHI, DPSI, MODE, PRESS, VREG,
- SING_TOL, E0, E_JUMP, E_LOST, E_SCALE, N_ITEMS) = range(23)
-HV = 23                       # 8 gravity "height" coefficients: V_g = g Σ HV_b · base_b
+ SING_TOL, E0, E_JUMP, E_LOST, E_SCALE, N_ITEMS, SOLVER) = range(24)
+HV = 24                       # 8 gravity "height" coefficients: V_g = g Σ HV_b · base_b
 ITEMS = HV + NB               # n_items rows of (8 coefficients, weight)
 MAX_ITEMS = 10
 P_LEN = ITEMS + MAX_ITEMS * (NB + 1)
@@ -384,18 +384,20 @@ def acc_partial(t, q, qd, p):
     return equations(q, qd, p, base, G, A, dA)
 
 
-@nb.njit(cache=True)
-def f_exact(t, y, p):
-    r = acc_exact(t, y[:2], y[2:4], p)
-    dy = np.empty(y.shape[0])
-    dy[:2] = y[2:4]
-    dy[2:] = r
-    return dy
+# One entry point for both solvers (p[SOLVER]: 0 exact, 1 partial): the shared drivers take the
+# model as a function argument, which numba neither caches nor shares between specialisations,
+# so one specialisation per driver halves the compile time of a process that runs both.
+SOLVER_IDS = {"exact": 0.0, "partial": 1.0}
 
 
 @nb.njit(cache=True)
-def f_partial(t, y, p):
-    r = acc_partial(t, y[:2], y[2:4], p)
+def acc_any(t, q, qd, p):
+    return acc_partial(t, q, qd, p) if p[SOLVER] != 0.0 else acc_exact(t, q, qd, p)
+
+
+@nb.njit(cache=True)
+def f_any(t, y, p):
+    r = acc_any(t, y[:2], y[2:4], p)
     dy = np.empty(y.shape[0])
     dy[:2] = y[2:4]
     dy[2:] = r
@@ -436,14 +438,9 @@ def _guard_common(y, p, reach):
 
 
 @nb.njit(cache=True)
-def guard_exact(t, y, p):
-    return _guard_common(y, p, 0.0)
-
-
-@nb.njit(cache=True)
-def guard_partial(t, y, p):
-    # the nested stencil reaches 2Δφ, 2Δψ: bound its change of s = sin θ2
-    reach = 2.0 * (p[L1] * p[DPHI] + p[L3] * p[DPSI]) / p[L2]
+def guard_any(t, y, p):
+    # partial: the nested stencil reaches 2Δφ, 2Δψ; bound its change of s = sin θ2
+    reach = 2.0 * (p[L1] * p[DPHI] + p[L3] * p[DPSI]) / p[L2] if p[SOLVER] != 0.0 else 0.0
     return _guard_common(y, p, reach)
 
 
@@ -576,8 +573,6 @@ REASONS = {**FAIL_REASONS, **LA_REASONS,
            FAIL_STENCIL: "singular: the finite-difference stencil of the partial systems "
                          "reaches past the double loop-closure root (rod near vertical)",
            FAIL_ENERGY: "unstable: the energy balance jumped"}
-SOLVERS = {"exact": (acc_exact, f_exact, guard_exact),
-           "partial": (acc_partial, f_partial, guard_partial)}
 
 
 def merged_params(params, cycle):
@@ -624,7 +619,7 @@ def _steps_per_output(t_out, dt):
 
 def _integrate_plain(solver, y0, p, t_out, s):
     """One idle run (scene `press`) with the shared drivers."""
-    acc, f, guard = SOLVERS[solver]
+    acc, f, guard = acc_any, f_any, guard_any
     name = s["integrator"]
     if name in ADAPTIVE_TABLEAUS:
         tb = ADAPTIVE_TABLEAUS[name]
@@ -660,7 +655,7 @@ def _integrate_cycle(solver, y0, p, par, t_out, s):
     """press-cycle: idle → lock at ψ = lock_angle (first crossing after lock_after, located by
     bisection) → locked crank–slider under the working load → release at release_after → idle.
     Returns Y, per-row mode, stats, t_fail, code, used settings, lock record."""
-    acc, f, guard = SOLVERS[solver]
+    acc, f, guard = acc_any, f_any, guard_any
     name = s["integrator"]
     if name in ADAPTIVE_TABLEAUS:
         raise ValueError(f"press-cycle runs fixed-step integrators only, got {name!r}")
@@ -703,8 +698,8 @@ def _integrate_cycle(solver, y0, p, par, t_out, s):
             if code == EVENT:
                 # plastic lock: ψ' → 0 keeping the crank's generalized momentum
                 # p_φ = A11 φ' + A12 ψ'  (A of the solver's own description)
-                A = (lagrange_exact(y[:2], p)[2] if solver == "exact"
-                     else lagrange_partial(y[:2], p)[2])
+                A = (lagrange_partial(y[:2], p)[2] if p[SOLVER] != 0.0
+                     else lagrange_exact(y[:2], p)[2])
                 T_before = energy_terms(y, p)[0]
                 lock["t_lock"], lock["rate_before"] = t, y[2]
                 y = y.copy()
@@ -721,7 +716,7 @@ def _integrate_cycle(solver, y0, p, par, t_out, s):
 
 
 def _channels(solver, Y, modes, p, t_out, e_lost_rows):
-    acc = SOLVERS[solver][0]
+    acc = acc_any
     n = len(t_out)
     ch = {k: np.full(n, np.nan) for k in CHANNELS}
     mode0 = p[MODE]
@@ -765,6 +760,7 @@ def simulate(solver, defaults, params, t_out, settings):
         raise ValueError("t_out must be an increasing grid starting at 0 with >= 2 points")
     p = pack(par, s.get("dphi_deg", 0.1), s.get("dpsi_deg", 0.1), float(s["singular_tol"]),
              float(s["energy_jump"]))
+    p[SOLVER] = SOLVER_IDS[solver]
     y0 = initial_state(par, p)
     t0 = time.perf_counter()
     extra = {}

@@ -377,11 +377,89 @@ def _release_in(y, P, m, j):
 
 
 @nb.njit(cache=True)
-def _spring_jac(dx, dy, dz, l0, c, d, hh, G):
-    """G = hh (hh K + d e eᵀ) for the spring along (dx,dy,dz) (K: its stiffness matrix)."""
+def _lengths(y, P, b, ps, pc, out):
+    """Spring lengths (inertial state y): out[j] = |x_{j+1} − x_j| (j < b), out[b] = |Q − x_b|."""
+    ox = OFF
+    for j in range(b):
+        dx = y[ox + 3 * j + 3] - y[ox + 3 * j]
+        dy = y[ox + 3 * j + 4] - y[ox + 3 * j + 1]
+        dz = y[ox + 3 * j + 5] - y[ox + 3 * j + 2]
+        out[j] = np.sqrt(dx * dx + dy * dy + dz * dz)
+    dx = P[LC] * pc - y[ox + 3 * b]
+    dy = P[LC] * ps - y[ox + 3 * b + 1]
+    dz = P[RR] - y[ox + 3 * b + 2]
+    out[b] = np.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+@nb.njit(cache=True)
+def _forces_dg(tm, Ym, P, m, b, Q0, Q1, Q2, VQ0, VQ1, p0, p1, p2, l_a, l_e, F, TR):
+    """Energy–momentum (discrete-gradient) spring forces at the step midpoint (Simo & Tarnow
+    1992 for a spring V = ½c(ℓ − l0)²): force on a = c(1 − l0/ℓ̄)(x_b − x_a)_mid with
+    ℓ̄ = (ℓ_start + ℓ_end)/2. The work over the step is exactly −ΔV (no energy pumping by the
+    unresolved longitudinal modes) and the force stays along the midpoint chord (angular
+    momentum exact under the midpoint rule). Dampers: midpoint velocities along the midpoint
+    chord. TR[j] receives the transverse stiffness c(1 − l0/ℓ̄) for the Newton matrix."""
+    n = int(P[NN])
+    c, d, l0, rw = P[CC], P[DD], P[L0], P[RR] * P[WSP]
+    ox, ov = OFF, OFF + 3 * n
+    for k in range(3 * (b + 1)):
+        F[k] = 0.0
+    diss = 0.0
+    for j in range(b):
+        dx = Ym[ox + 3 * j + 3] - Ym[ox + 3 * j]
+        dy = Ym[ox + 3 * j + 4] - Ym[ox + 3 * j + 1]
+        dz = Ym[ox + 3 * j + 5] - Ym[ox + 3 * j + 2]
+        ell = np.sqrt(dx * dx + dy * dy + dz * dz)
+        ex, ey, ez = dx / ell, dy / ell, dz / ell
+        sd = (ex * (Ym[ov + 3 * j + 3] - Ym[ov + 3 * j]) + ey * (Ym[ov + 3 * j + 4] - Ym[ov + 3 * j + 1])
+              + ez * (Ym[ov + 3 * j + 5] - Ym[ov + 3 * j + 2]))
+        kt = c * (1.0 - 2.0 * l0 / (l_a[j] + l_e[j]))
+        TR[j] = kt
+        fx = kt * dx + d * sd * ex
+        fy = kt * dy + d * sd * ey
+        fz = kt * dz + d * sd * ez
+        F[3 * j] += fx
+        F[3 * j + 1] += fy
+        F[3 * j + 2] += fz
+        F[3 * j + 3] -= fx
+        F[3 * j + 4] -= fy
+        F[3 * j + 5] -= fz
+        diss += d * sd * sd
+    dx = Q0 - Ym[ox + 3 * b]
+    dy = Q1 - Ym[ox + 3 * b + 1]
+    dz = Q2 - Ym[ox + 3 * b + 2]
+    ell = np.sqrt(dx * dx + dy * dy + dz * dz)
+    l0t = P[RR] * (P[WSP] * tm - P[DPHI] * b)
+    lbar = 0.5 * (l_a[b] + l_e[b])
+    if ell < P[EPS] or lbar < P[EPS]:
+        ex, ey, ez = -p0, -p1, -p2
+        kt = 0.0
+        fs = c * (ell - l0t)
+    else:
+        ex, ey, ez = dx / ell, dy / ell, dz / ell
+        kt = c * (1.0 - l0t / lbar)
+        fs = kt * ell
+    TR[b] = kt
+    ldot = ex * (VQ0 - Ym[ov + 3 * b]) + ey * (VQ1 - Ym[ov + 3 * b + 1]) - ez * Ym[ov + 3 * b + 2]
+    if P[QDAMP] > 0.5:
+        w = ldot + rw * (ex * p0 + ey * p1 + ez * p2)
+    else:
+        w = ldot - rw
+    f = fs + d * w
+    F[3 * b] += f * ex
+    F[3 * b + 1] += f * ey
+    F[3 * b + 2] += f * ez
+    diss += d * w * w
+    s = fs / c
+    wsp = -c * s * rw - d * w * (ldot - w)
+    return f * ex, f * ey, diss, wsp
+
+
+@nb.njit(cache=True)
+def _spring_jac(dx, dy, dz, tr, c, d, hh, G):
+    """G = hh (hh K + d e eᵀ), K = tr (I − e eᵀ) + c e eᵀ the spring's stiffness matrix."""
     ell = np.sqrt(dx * dx + dy * dy + dz * dz)
     e0, e1, e2 = dx / ell, dy / ell, dz / ell
-    tr = c * (ell - l0) / ell
     e = (e0, e1, e2)
     for a in range(3):
         for q in range(3):
@@ -392,40 +470,51 @@ def _spring_jac(dx, dy, dz, l0, c, d, hh, G):
 
 
 @nb.njit(cache=True)
-def _step_imr(t, h, y, P, m, b, tol, F, Ym, Dm, Bm, Dinv, U, R, X, G):
-    """One implicit-midpoint step of the inertial-frame model. Unknowns: midpoint velocities of
-    nodes 0..b and the midpoint hub rate. Returns (code, newton_iterations)."""
+def _step_imr(t, h, y, P, m, b, tol, F, Ym, Dm, Bm, Dinv, U, R, X, G, l_a, l_e, TR, Y1):
+    """One step of the implicit midpoint rule with energy–momentum spring forces, inertial
+    frame. Unknowns: midpoint velocities of nodes 0..b and the midpoint hub rate (Newton,
+    block-tridiagonal matrix bordered by the hub). Returns (code, newton_iterations)."""
     n = int(P[NN])
     ox, ov = OFF, OFF + 3 * n
     hh = 0.5 * h
-    c, d, l0, rw = P[CC], P[DD], P[L0], P[RR] * P[WSP]
+    c, d = P[CC], P[DD]
     J1 = 0.5 * _j_eff(P, m, b)            # one blade's share of the hub
     Nb = b + 1
     tm = t + hh
     ny = y.shape[0]
+    _lengths(y, P, b, np.sin(y[1]), np.cos(y[1]), l_a)
     for q in range(ny):
         Ym[q] = y[q]
+        Y1[q] = y[q]
     it = 0
     dprev = np.inf
+    fqx = fqy = diss = wsp = 0.0
+    dmax, vmax, dOm = 0.0, 1.0, 0.0
     for it in range(1, 40):
-        # midpoint state from the midpoint velocities
         Om = Ym[0]
         Ym[1] = y[1] + hh * Om
+        Y1[1] = y[1] + h * Om
         for k in range(3 * Nb):
             Ym[ox + k] = y[ox + k] + hh * Ym[ov + k]
+            Y1[ox + k] = y[ox + k] + h * Ym[ov + k]
+        _lengths(Y1, P, b, np.sin(Y1[1]), np.cos(Y1[1]), l_e)
         ps, pc = np.sin(Ym[1]), np.cos(Ym[1])
         Q0, Q1, Q2 = P[LC] * pc, P[LC] * ps, P[RR]
-        V0, V1 = -Om * Q1, Om * Q0
-        fqx, fqy, fqz, diss, wsp = _forces(tm, Ym, P, m, b, Q0, Q1, Q2, V0, V1, 0.0,
-                                           pc, ps, 0.0, F)
+        fqx, fqy, diss, wsp = _forces_dg(tm, Ym, P, m, b, Q0, Q1, Q2, -Om * Q1, Om * Q0,
+                                         pc, ps, 0.0, l_a, l_e, F, TR)
         w0, w1 = -Q1, Q0                        # e_z × ρ_Q
-        # residuals (sign: we solve Jac·δ = −res)
         for j in range(Nb):
             for a in range(3):
                 R[j, a] = -(m[j] * (Ym[ov + 3 * j + a] - y[ov + 3 * j + a]) - hh * F[3 * j + a])
         Mz = -(w0 * fqx + w1 * fqy)             # one blade's torque on the hub
         rho = -(J1 * (Om - y[0]) - hh * Mz)
-        # Newton matrix: block-tridiagonal nodes, bordered by the hub rate
+        if it > 1:
+            rel = max(dmax / vmax, abs(dOm) / (abs(Ym[0]) + 1e-3))
+            if rel <= tol:
+                break
+            if rel <= 1e-9 and rel >= 0.5 * dprev:   # stagnated at round-off: converged
+                break
+            dprev = rel
         for j in range(Nb):
             for a in range(3):
                 for q in range(3):
@@ -434,7 +523,7 @@ def _step_imr(t, h, y, P, m, b, tol, F, Ym, Dm, Bm, Dinv, U, R, X, G):
             dx = Ym[ox + 3 * j + 3] - Ym[ox + 3 * j]
             dy = Ym[ox + 3 * j + 4] - Ym[ox + 3 * j + 1]
             dz = Ym[ox + 3 * j + 5] - Ym[ox + 3 * j + 2]
-            _spring_jac(dx, dy, dz, l0, c, d, hh, G)
+            _spring_jac(dx, dy, dz, max(TR[j], 0.0), c, d, hh, G)
             for a in range(3):
                 for q in range(3):
                     Dm[j, a, q] += G[a, q]
@@ -443,16 +532,9 @@ def _step_imr(t, h, y, P, m, b, tol, F, Ym, Dm, Bm, Dinv, U, R, X, G):
         dx = Q0 - Ym[ox + 3 * b]
         dy = Q1 - Ym[ox + 3 * b + 1]
         dz = Q2 - Ym[ox + 3 * b + 2]
-        ell = np.sqrt(dx * dx + dy * dy + dz * dz)
-        if ell < P[EPS]:
+        if dx * dx + dy * dy + dz * dz < P[EPS] ** 2:
             dx, dy, dz = -pc, -ps, 0.0
-            ell = 1.0
-            l0t = 1.0                           # pure axial stiffness c e eᵀ
-        else:
-            l0t = P[RR] * (P[WSP] * tm - P[DPHI] * b)
-        if l0t > ell:                           # compressed: drop the (destabilising) transverse part
-            l0t = ell
-        _spring_jac(dx, dy, dz, l0t, c, d, hh, G)
+        _spring_jac(dx, dy, dz, max(TR[b], 0.0), c, d, hh, G)
         for a in range(3):
             for q in range(3):
                 Dm[b, a, q] += G[a, q]
@@ -477,31 +559,18 @@ def _step_imr(t, h, y, P, m, b, tol, F, Ym, Dm, Bm, Dinv, U, R, X, G):
                 dmax = max(dmax, abs(X[j, a]))
         if not np.isfinite(dOm) or not np.isfinite(dmax):
             return FAIL_NONFINITE, it
-        rel = max(dmax / vmax, abs(dOm) / (abs(Ym[0]) + 1e-3))
-        if rel <= tol:
-            break
-        if rel <= 1e-9 and rel >= 0.5 * dprev:   # stagnated at round-off: converged
-            break
-        dprev = rel
     else:
         return FAIL_NEWTON, it
-    # final midpoint (consistent with the converged velocities) and the step
+    # the last residual evaluation used the converged midpoint: take the step
     Om = Ym[0]
-    Ym[1] = y[1] + hh * Om
-    for k in range(3 * Nb):
-        Ym[ox + k] = y[ox + k] + hh * Ym[ov + k]
-    ps, pc = np.sin(Ym[1]), np.cos(Ym[1])
-    Q0, Q1, Q2 = P[LC] * pc, P[LC] * ps, P[RR]
-    fqx, fqy, fqz, diss, wsp = _forces(tm, Ym, P, m, b, Q0, Q1, Q2, -Om * Q1, Om * Q0, 0.0,
-                                       pc, ps, 0.0, F)
     y[0] = 2.0 * Om - y[0]
     y[1] = y[1] + h * Om
     y[2] += h * diss
     y[3] += h * wsp
     for k in range(3 * Nb):
-        y[ox + k] = 2.0 * Ym[ox + k] - y[ox + k]
+        y[ox + k] = y[ox + k] + h * Ym[ov + k]
         y[ov + k] = 2.0 * Ym[ov + k] - y[ov + k]
-    return 0, it
+    return 0, it - 1
 
 
 @nb.njit(cache=True)
@@ -520,6 +589,10 @@ def _run_imr(y0, P, m, bk_t, bk_out, bk_rel, dt, n_out, tol):
     R = np.zeros((n, 3))
     X = np.zeros((n, 3))
     G = np.empty((3, 3))
+    l_a = np.empty(n)
+    l_e = np.empty(n)
+    TR = np.empty(n)
+    Y1 = np.empty(ny)
     y = y0.copy()
     b = 0
     wrel = _release_in(y, P, m, 0)
@@ -536,7 +609,8 @@ def _run_imr(y0, P, m, bk_t, bk_out, bk_rel, dt, n_out, tol):
             h = T / ns
             for k in range(ns):
                 t = t0 + k * h
-                code, it = _step_imr(t, h, y, P, m, b, tol, F, Ym, Dm, Bm, Dinv, U, R, X, G)
+                code, it = _step_imr(t, h, y, P, m, b, tol, F, Ym, Dm, Bm, Dinv, U, R, X, G,
+                                     l_a, l_e, TR, Y1)
                 steps += 1
                 iters += it
                 if code != 0:

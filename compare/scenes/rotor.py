@@ -1,7 +1,6 @@
 """Rotor on a spherical joint spun up through resonance (seed 000; spec scene-rotor.md)."""
 import numpy as np
 
-from ..errors import BadInput
 from ..metrics import first_crossing
 from ..params import Param, positive
 from .base import Finding, Scene
@@ -35,13 +34,6 @@ def constants(p):
             "omega_tilt": np.sqrt(p["k"] / I_t),                 # the paper's 38.8 rad/s
             "omega_tilt_eff": np.sqrt(max(k_eff, 0.0) / I_t),
             "forward_critical": np.sqrt(max(k_eff, 0.0) / (I_t - I_p))}
-
-
-def _check(p):
-    c = constants(p)
-    if c["k_eff"] <= 0:
-        raise BadInput(f"k: {p['k']:g} N·m/rad cannot hold the disk up against gravity "
-                       f"(k + m·l·g_z = {c['k_eff']:g} ≤ 0)")
 
 
 def spinup_findings(p, trajectories):
@@ -117,7 +109,6 @@ SPINUP = Scene(
     tolerances={"omega_norm": 1e-4, "tilt": 1e-4, "spin_rate": 1e-4, "work": 1e-4,
                 "kinetic": 1e-4},
     key_channel="omega_norm",
-    check=_check,
     findings=spinup_findings,
     notes="Spring −kγ exactly as the paper defines it (U = ½k|γ|², γ the transverse Euler "
           "vector); a Cardan spring ½k(α²+β²) is a different model.",
@@ -138,5 +129,4 @@ WHIRL = Scene(
     ),
     energy_channel=None,
     tolerances={"frequency": 1e-6},
-    check=_check,
 )

@@ -1,0 +1,79 @@
+"""The command-line contract (contract.md): JSON shape, exit statuses, bad input, recordings."""
+import json
+
+import numpy as np
+import pytest
+
+from compare.recording import load_scalar_series
+from compare.scenes import get_scene
+from conftest import xval
+
+CHANNELS = get_scene("rotor-spinup").channels
+
+
+def test_run_json_has_every_contract_field(rotor_default_run):
+    obj, _ = rotor_default_run
+    assert obj["scene"] == "rotor-spinup"
+    assert obj["params"]["torque"] == 1.5
+    assert {r["solver"] for r in obj["runs"]} == {"euler-vector", "quaternion", "exudyn",
+                                                  "mujoco"}
+    for r in obj["runs"]:
+        assert r["status"] == "ok"
+        assert set(r["final"]) == set(CHANNELS)
+        for key in ("wall_s", "settings", "stats", "energy_residual", "invariants", "trajectory"):
+            assert key in r
+    assert obj["recording"].endswith("run.rrd")
+
+
+def test_trajectory_files_follow_the_contract(rotor_default_run):
+    obj, _ = rotor_default_run
+    grids = []
+    for r in obj["runs"]:
+        with np.load(r["trajectory"]) as z:
+            assert set(CHANNELS) <= set(z.files)
+            grids.append(z["t"])
+            assert z["omega_norm"][-1] == pytest.approx(r["final"]["omega_norm"], rel=1e-15)
+    for g in grids[1:]:
+        np.testing.assert_array_equal(g, grids[0])          # one output grid for all solvers
+    assert grids[0][1] - grids[0][0] == pytest.approx(0.01)
+
+
+def test_recording_reads_back_with_every_solver_channel(rotor_default_run):
+    obj, _ = rotor_default_run
+    for r in obj["runs"]:
+        with np.load(r["trajectory"]) as z:
+            for ch in ("omega_norm", "tilt", "energy_balance"):
+                t, v = load_scalar_series(obj["recording"], f"/{ch}/{r['solver']}")
+                np.testing.assert_allclose(t, z["t"], atol=1e-9)
+                np.testing.assert_array_equal(v, z[ch])     # scalars are stored as float64
+
+
+@pytest.mark.parametrize("setting, word", [
+    ("m=-1", "m"), ("l=0", "l"), ("k=nan", "k"), ("foo=1", "foo"), ("torque=abc", "torque"),
+    ("gravity=1,2", "gravity"), ("R", "R"),
+    ("output_dt=0.03", "output_dt")])
+def test_bad_set_exits_2_with_one_line_and_writes_nothing(tmp_path, setting, word):
+    out = tmp_path / "out"
+    rc, so, se = xval("run", "rotor-spinup", "--set", setting, "--out", str(out))
+    assert rc == 2
+    assert so == ""
+    lines = se.strip().splitlines()
+    assert len(lines) == 1 and word in lines[0]
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("args", [("run", "no-such-scene"), ("run", "rotor-spinup", "--solver",
+                                  "nope"), ("run", "rotor-spinup", "--dt", "-1"),
+                                  ("campaign", "missing-file.json"), ("modes", "rotor-spinup")])
+def test_other_bad_input_exits_2(tmp_path, args):
+    rc, so, se = xval(*args, "--out", str(tmp_path / "o"))
+    assert rc == 2 and len(se.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
+
+
+def test_list_and_show():
+    rc, so, _ = xval("list")
+    assert rc == 0 and "rotor-spinup" in so and "euler-vector" in so
+    rc, so, _ = xval("show", "rotor-spinup", "--json")
+    shown = {p["name"]: p for p in json.loads(so)["params"]}
+    assert shown["k"]["default"] == 2000.0 and shown["k"]["unit"] == "N·m/rad"

@@ -1,0 +1,130 @@
+"""Rotor spin-up: numbers from independent sources — closed forms, conservation laws, a second
+formulation, the engines, and the MuJoCo/Exudyn probes in the shared notes."""
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from compare import metrics, solvers
+from compare.identify import matrix_pencil, transverse_components
+from compare.scenes import get_scene
+from custom_models import rotation
+
+SCENE = get_scene("rotor-spinup")
+I_T = 5 * 0.25**2 / 4 + 5 * 0.5**2          # 1.328125 kg·m²
+I_P = 5 * 0.25**2 / 2
+
+
+def run(solver, settings=None, **overrides):
+    p = SCENE.resolve({k: str(v) for k, v in overrides.items()})
+    s = solvers.get_solver(solver)
+    base = solvers.resolve_settings(s.leaf(SCENE.name))
+    return solvers.simulate(SCENE, s, p, {**base, **(settings or {})})
+
+
+# --- rotation math against scipy and against its own definition ---------------------------
+
+@pytest.mark.parametrize("theta", [np.array([0.3, -1.2, 0.7]), np.array([1e-7, 2e-7, -1e-7]),
+                                   np.array([1.8, 2.4, 0.0])])
+def test_rotation_tensor_and_zhilin(theta):
+    L = rotation.rotation_tensor(theta)
+    np.testing.assert_allclose(L, Rotation.from_rotvec(theta).as_matrix(), atol=1e-15)
+    Z, Zi = rotation.zhilin(theta), rotation.zhilin_inverse(theta)
+    np.testing.assert_allclose(Z @ Zi, np.eye(3), atol=1e-14)
+    # ω = Z·θ' is the definition: ω× = L' Lᵀ, checked by central differences
+    rate, h = np.array([0.4, -0.1, 0.9]), 1e-6
+    W = (rotation.rotation_tensor(theta + h * rate) - rotation.rotation_tensor(theta - h * rate)
+         ) / (2 * h) @ L.T
+    np.testing.assert_allclose(Z @ rate, [W[2, 1], W[0, 2], W[1, 0]], atol=1e-9)
+    # the spring is conservative because γ·Z(γ) = γ (paper): check it
+    np.testing.assert_allclose(theta @ Z, theta, atol=1e-14)
+
+
+# --- the default scene: independent formulations agree, energy closes ---------------------
+
+@pytest.fixture(scope="module")
+def default_runs():
+    return {s: run(s) for s in ("euler-vector", "quaternion")}
+
+
+def test_custom_solvers_conserve_energy(default_runs):
+    for tr in default_runs.values():
+        assert tr.status == "ok"
+        assert metrics.energy_residual(tr) <= 1e-6          # issue acceptance: ≤ 1e-6 J
+    assert default_runs["quaternion"].invariants["quaternion_norm"] < 1e-10
+
+
+def test_custom_solvers_match_the_mujoco_probe(default_runs):
+    # notes/mujoco.md: cone-angle spring, gravity −z, 1.5 N·m → |ω(10 s)| = 43.310 rad/s
+    for tr in default_runs.values():
+        assert tr.final()["omega_norm"] == pytest.approx(43.310, abs=6e-4)
+    d = metrics.deviation(default_runs["euler-vector"], default_runs["quaternion"],
+                          "omega_norm", 1e-4)
+    assert d.verdict == "agree" and d.max_rel < 1e-8
+
+
+def test_all_four_solvers_agree_on_the_default_run(rotor_default_run):
+    obj, _ = rotor_default_run
+    by = {(c["a"], c["b"], c["channel"]): c for c in obj["comparisons"]}
+    pairs = {(a, b) for a, b, _ in by}
+    assert len(pairs) == 6
+    for a, b in pairs:
+        for ch in ("omega_norm", "tilt"):
+            assert by[(a, b, ch)]["max_rel"] <= 1e-4, (a, b, ch)
+    for r in obj["runs"]:
+        bound = 1e-6 if r["solver"] in ("euler-vector", "quaternion") else 1e-3
+        assert r["energy_residual"] <= bound, r["solver"]
+
+
+def test_capture_at_low_torque(default_runs):
+    tr = default_runs["euler-vector"]
+    w = tr.channels["omega_norm"]
+    # the probes: |ω| first exceeds 38.8 near t ≈ 4.2 s, then stalls (the free ramp would be
+    # M·t/I_p = 96 rad/s at 10 s) with tilt ≈ 0.4 rad at 10 s
+    t_pass = metrics.first_crossing(tr.t, w, np.sqrt(2000 / I_T))
+    assert 4.0 < t_pass < 4.4
+    assert w[-1] < 1.1 * np.sqrt((2000 - 5 * 9.81 * 0.5) / (I_T - I_P))
+    assert tr.final()["tilt"] == pytest.approx(0.4, abs=0.02)
+
+
+def test_passage_at_high_torque():
+    tr = run("quaternion", torque=3.2, t_end=5)
+    # probes: tilt peaks near t ≈ 3 s, |ω| ends near 91 rad/s; the cone spring reaches 90.84
+    peak, t_peak = metrics.peak(tr.t, tr.channels["tilt"])
+    assert 2.8 < t_peak < 3.2
+    assert tr.final()["omega_norm"] == pytest.approx(90.8, abs=0.5)
+    assert metrics.energy_residual(tr) <= 1e-6
+
+
+# --- the linear case: closed-form frequency -------------------------------------------------
+
+@pytest.mark.parametrize("solver", ["euler-vector", "quaternion"])
+def test_free_oscillation_frequency_is_sqrt_keff_over_It(solver):
+    tr = run(solver, torque=0, tilt0=1e-4, eccentricity=0, t_end=2, output_dt=0.001)
+    gx, _ = transverse_components(tr.extra["orientation"])
+    w, _ = matrix_pencil(gx, 0.001, n_modes=1)
+    k_eff = 2000 - 5 * 9.81 * 0.5
+    assert w[-1] == pytest.approx(np.sqrt(k_eff / I_T), rel=1e-6)
+
+
+# --- order of the fixed-step method and failure reporting ----------------------------------
+
+def test_rk4_shows_fourth_order():
+    ref = run("euler-vector", {"rtol": 1e-13}, t_end=2)
+    errs, dts = [], [4e-3, 2e-3, 1e-3]
+    for dt in dts:
+        tr = run("euler-vector", {"integrator": "rk4", "dt": dt}, t_end=2, output_dt=0.004)
+        errs.append(abs(tr.final()["omega_norm"] - ref.final()["omega_norm"]))
+    assert 3.6 < metrics.observed_order(dts, errs) < 4.4
+
+
+def test_unstable_step_is_reported_not_returned():
+    tr = run("euler-vector", {"integrator": "rk4", "dt": 0.05}, k=1e6, t_end=1, output_dt=0.05)
+    assert tr.status == "diverged" and 0 < tr.t_fail <= 1
+    assert np.isnan(tr.channels["omega_norm"][-1])
+
+
+def test_falling_past_tilt_pi_is_detected():
+    # k = 5 ≪ m·g·l cannot hold the disk up: it falls over towards tilt π, where both the
+    # axial/transverse split and the spring direction are undefined (denominator (θ/2)cot(θ/2))
+    tr = run("euler-vector", k=5, tilt0=0.1, torque=0, t_end=5)
+    assert tr.status == "diverged" and "tilt reached pi" in tr.reason

@@ -1,0 +1,106 @@
+"""Whirl frequencies from every solver against the closed form; mode matching; frequency
+identification from time series (issue: natural frequencies from every solver)."""
+import numpy as np
+import pytest
+
+from compare import metrics, solvers
+from compare.identify import fft_peak, matrix_pencil
+from compare.modes import campbell, critical_speeds
+from compare.scenes import get_scene
+from compare.trajectory import Modes
+
+SCENE = get_scene("rotor-whirl")
+M, R, L, K, G = 5.0, 0.25, 0.5, 2000.0, 9.81
+I_T, I_P = M * R**2 / 4 + M * L**2, M * R**2 / 2
+LINEARISING = ("euler-vector", "exudyn", "mujoco", "closed-form")
+
+
+def closed_form(spin, k_eff):
+    """Roots of I_t w² ∓ I_p Ω w − k_eff = 0 (backward, forward)."""
+    root = np.sqrt((I_P * spin) ** 2 + 4 * I_T * k_eff)
+    return (root - I_P * spin) / (2 * I_T), (root + I_P * spin) / (2 * I_T)
+
+
+@pytest.mark.parametrize("gravity, k_eff", [("0,0,-9.81", K - M * G * L), ("0,0,0", K)])
+@pytest.mark.parametrize("spin", [0.0, 20.0, 41.3, 100.0])
+def test_every_solver_matches_the_closed_form(spin, gravity, k_eff):
+    p = SCENE.resolve({"spin": str(spin), "gravity": gravity})
+    b, f = closed_form(spin, k_eff)
+    for name in LINEARISING:
+        res = solvers.modes(SCENE, solvers.get_solver(name), p)
+        assert res.status == "ok", res.reason
+        got = dict(zip(res.labels, 2 * np.pi * res.frequencies_hz))
+        assert got["backward whirl"] == pytest.approx(b, rel=1e-6), name
+        assert got["forward whirl"] == pytest.approx(f, rel=1e-6), name
+
+
+@pytest.mark.parametrize("gravity, k_eff", [("0,0,-9.81", K - M * G * L), ("0,0,0", K)])
+def test_critical_speeds_and_labels(gravity, k_eff):
+    p = SCENE.resolve({"gravity": gravity})
+    spins = np.linspace(0, 150, 60)
+    fwd_crit = np.sqrt(k_eff / (I_T - I_P))       # 41.31 rad/s with k_eff = k
+    bwd_crit = np.sqrt(k_eff / (I_T + I_P))
+    for name in ("euler-vector", "exudyn", "mujoco"):
+        s = solvers.get_solver(name)
+        lines = campbell(s, p, spins)
+        assert np.all(np.diff(lines[1]) > 0) and np.all(np.diff(lines[0]) < 0)  # fwd ↑, bwd ↓
+        crit = critical_speeds(s, p, spins, lines)
+        assert crit["forward"] == pytest.approx(fwd_crit, rel=1e-8), name
+        assert crit["backward"] == pytest.approx(bwd_crit, rel=1e-8), name
+    if gravity == "0,0,0":
+        assert fwd_crit == pytest.approx(41.31, abs=0.005)
+
+
+def test_eccentric_pair_is_split_found_and_paired_once():
+    # eccentricity e along body y couples y-tilt with the free spin: condensing the spin
+    # coordinate, w² are the eigenvalues of k·(I_O⁻¹) restricted to the tilt block
+    e = 0.005
+    rc = np.array([0, e, L])
+    I_o = np.diag([M * R**2 / 4, M * R**2 / 4, M * R**2 / 2]) + M * (rc @ rc * np.eye(3)
+                                                                     - np.outer(rc, rc))
+    expected = np.sort(np.sqrt(K * np.linalg.eigvalsh(np.linalg.inv(I_o)[:2, :2])))
+    assert expected == pytest.approx([38.8039, 38.8203], abs=1e-4)    # notes' numbers
+    p = SCENE.resolve({"eccentricity": str(e), "gravity": "0,0,0"})
+    found = {}
+    for name in ("euler-vector", "exudyn", "mujoco"):
+        res = solvers.modes(SCENE, solvers.get_solver(name), p)
+        found[name] = res
+        assert np.sort(2 * np.pi * res.frequencies_hz) == pytest.approx(expected, rel=1e-6)
+    # matching by value with the gap check: each mode paired exactly once, to its twin
+    a = Modes("x", "a", np.array(expected) / (2 * np.pi), ["", ""])
+    b = Modes("x", "b", np.array(expected[::-1]) / (2 * np.pi), ["", ""])
+    pairs = metrics.match_modes(list(a.frequencies_hz), a.labels, list(b.frequencies_hz),
+                                b.labels)
+    assert pairs == [(0, 1), (1, 0)]
+
+
+def test_matching_refuses_ambiguous_pairs():
+    # one mode of b sits between two close modes of a: it must not be claimed twice, and the
+    # ambiguous one is left unpaired rather than guessed
+    pairs = metrics.match_modes([1.00, 1.02, 5.0], ["", "", ""], [1.011, 5.0001], ["", ""])
+    assert pairs == [(2, 1)]
+    assert metrics.match_modes([1.0, 2.0], ["flap 1", "lag 1"], [2.0, 1.0],
+                               ["lag 1", "flap 1"]) == [(0, 1), (1, 0)]
+
+
+def test_identification_on_a_known_signal():
+    dt, w0, z0 = 1e-3, 38.567, 0.002
+    t = np.arange(0, 2, dt)
+    x = np.exp(-z0 * w0 * t) * np.cos(w0 * np.sqrt(1 - z0**2) * t + 0.3) + 0.2 * np.cos(3 * w0 * t)
+    w, zeta = matrix_pencil(x, dt, n_modes=2)
+    assert w[0] == pytest.approx(w0 * np.sqrt(1 - z0**2), rel=1e-9)
+    assert zeta[0] == pytest.approx(z0, rel=1e-6)
+    assert w[1] == pytest.approx(3 * w0, rel=1e-9)
+    # the FFT estimate converges as the record lengthens
+    errs = [abs(fft_peak(np.cos(w0 * t[:n]), dt) - w0) for n in (250, 500, 1000, 2000)]
+    assert errs[-1] < errs[0] and errs[-1] / w0 < 5e-3
+
+
+@pytest.mark.parametrize("solver", ["exudyn", "mujoco"])
+def test_engines_free_response_gives_the_closed_form_frequency(solver):
+    from compare.modes import free_response_frequencies
+    p = SCENE.resolve()
+    rows = free_response_frequencies(p, [solvers.get_solver(solver)])
+    k_eff = K - M * G * L
+    assert rows[0]["status"] == "ok"
+    assert rows[0]["matrix_pencil"][-1] == pytest.approx(np.sqrt(k_eff / I_T), rel=1e-4)

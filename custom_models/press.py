@@ -108,7 +108,7 @@ def _items(par):
     return items, heights
 
 
-def pack(par, dphi_deg=0.1, dpsi_deg=0.1, singular_tol=0.02, energy_jump=0.1):
+def pack(par, dphi_deg=0.1, dpsi_deg=0.1, singular_tol=0.02, energy_jump=10.0):
     """Physical parameters (+ the finite-difference steps and guard limits) as one float array."""
     for k in ("l1", "l2", "l3"):
         if not float(par[k]) > 0.0:
@@ -566,7 +566,7 @@ WILSON_INTEGRATORS = {"linacc": (1.0, MODE_NEWTON), "wilson": (None, MODE_NEWTON
 INTEGRATORS = tuple(WILSON_INTEGRATORS) + tuple(FIXED_TABLEAUS) + tuple(ADAPTIVE_TABLEAUS)
 COMMON_SETTINGS = {"theta": 1.4, "newton_tol": 1e-10, "max_iter": 30, "rtol": None,
                    "atol": None, "h_max": None, "max_steps": 10**8, "singular_tol": 0.02,
-                   "energy_jump": 0.1, "event_tol": 1e-10}
+                   "energy_jump": 10.0, "event_tol": 1e-10}
 REASONS = {**FAIL_REASONS, **LA_REASONS,
            FAIL_SINGULAR: "singular: the rod reached the vertical, where the loop-closure root "
                           "for x_B is double and the (phi, psi) chart's Jacobian is singular",

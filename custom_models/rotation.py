@@ -29,27 +29,42 @@ def _coefficients(t):
 
 
 @nb.njit(cache=True)
+def _rodrigues(t, c1, c2):
+    """E + c1·θ× + c2·(θ×)², built in place using (θ×)² = θ⊗θ − |θ|²E (one allocation)."""
+    t2 = t @ t
+    out = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = c2 * t[i] * t[j]
+        out[i, i] += 1.0 - c2 * t2
+    out[0, 1] -= c1 * t[2]
+    out[1, 0] += c1 * t[2]
+    out[0, 2] += c1 * t[1]
+    out[2, 0] -= c1 * t[1]
+    out[1, 2] -= c1 * t[0]
+    out[2, 1] += c1 * t[0]
+    return out
+
+
+@nb.njit(cache=True)
 def rotation_tensor(theta):
     """L(θ) of an Euler (rotation) vector θ."""
-    S = skew(theta)
     a, b, _, _ = _coefficients(np.sqrt(theta @ theta))
-    return np.eye(3) + a * S + b * (S @ S)
+    return _rodrigues(theta, a, b)
 
 
 @nb.njit(cache=True)
 def zhilin(theta):
     """Z(θ) with ω = Z(θ)·θ̇ (ω in the fixed frame)."""
-    S = skew(theta)
     _, b, c, _ = _coefficients(np.sqrt(theta @ theta))
-    return np.eye(3) + b * S + c * (S @ S)
+    return _rodrigues(theta, b, c)
 
 
 @nb.njit(cache=True)
 def zhilin_inverse(theta):
     """Z⁻¹(θ) = E − ½θ× + (1 − (θ/2)cot(θ/2))/θ² (θ×)²; singular at |θ| = 2π."""
-    S = skew(theta)
     _, _, _, d = _coefficients(np.sqrt(theta @ theta))
-    return np.eye(3) - 0.5 * S + d * (S @ S)
+    return _rodrigues(theta, -0.5, d)
 
 
 @nb.njit(cache=True)

@@ -141,9 +141,13 @@ def wilson_step(acc, t, q, qd, qdd, z, zd, p, h, theta, mode, tol, max_iter):
         if it > 0 and err >= 0.5 * err_prev and err <= 1e3 * tol * scale:
             code = FAIL_OK
             break
-        err_prev = err
         r = acc(t + tau, qt, qdt, p)
         evals += 1
+        if mode == MODE_NEWTON and it > 0 and err > 0.25 * err_prev:
+            # slow contraction: the step-start Jacobian is stale (strong nonlinearity), refresh
+            Jm = _jacobian(acc, t + tau, qt, qdt, p, tau, n, r)
+            evals += 2 * n
+        err_prev = err
     if code != FAIL_OK:
         return q, qd, qdd, z, zd, evals, code
     # back from t + τ to t + h along the same linear law

@@ -1,0 +1,152 @@
+"""`xval bench`: the speed/accuracy trade (work-precision) of every solver of a scene.
+
+For each solver and integrator, a ladder of steps (fixed-step methods: the default step × 4, 2,
+1, ½, snapped to divisors of the output step) or tolerances (error-controlled methods); the
+error of each run is the relative error of the key channel's final value against a reference
+(the tightest run of the first solver, confirmed by the second); the time is the median wall time
+over `repeats` runs, compile time reported apart. The summary names, for stated error levels,
+the fastest solver and every other solver's time ratio to it — all measured in this one run.
+"""
+import datetime
+from pathlib import Path
+
+import numpy as np
+
+from . import solvers
+from .atomic import write_json, write_text
+from .errors import BadInput
+from .scenes import get_scene
+
+LEVELS = (1e-3, 1e-6)
+RTOLS = (1e-5, 1e-7, 1e-9, 1e-11)
+
+
+def _snap(dt, dt_out):
+    """Largest step ≤ dt that divides the output step into whole steps."""
+    return dt_out / max(1, int(np.ceil(dt_out / dt - 1e-9)))
+
+
+def ladder(leaf, dt_out):
+    """(label, settings) pairs walking each integrator's accuracy knob."""
+    base = dict(leaf.DEFAULT_SETTINGS)
+    adaptive = tuple(getattr(leaf, "ADAPTIVE", ()))
+    out = []
+    if base.get("integrator") in adaptive:
+        # the default error-controlled method, and dopri5 where offered: at loose tolerances
+        # its 6 stages beat dop853's 12 when the output grid caps the step
+        for name in dict.fromkeys([base["integrator"]] + [a for a in adaptive if a == "dopri5"]):
+            out += [(name, {**base, "integrator": name, "rtol": r}) for r in RTOLS]
+        fixed = "rk4" if "rk4" in leaf.INTEGRATORS else None
+        dt0 = 1e-3
+    else:
+        fixed, dt0 = base.get("integrator"), base.get("dt") or 1e-3
+    if fixed:
+        out += [(fixed, {**base, "integrator": fixed, "dt": _snap(dt0 * f, dt_out)})
+                for f in (4, 2, 1, 0.5)]
+    return out
+
+
+def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print):
+    sc = get_scene(scene_name)
+    if sc.kind != "time":
+        raise BadInput(f"scene {sc.name!r}: bench sweeps time-domain scenes")
+    params = sc.resolve(overrides)
+    chosen = solvers.pick(sc, solver_names)
+    dt_out = params["output_dt"]
+    key = sc.key_channel
+
+    # reference: the tightest run of the two custom (error-controlled) solvers, cross-checked
+    refs = [s for s in solvers.solvers_for(sc.name) if getattr(s.leaf(sc.name), "ADAPTIVE", ())
+            and s.compiled][:2]
+    ref_runs = []
+    for s in refs:
+        leaf = s.leaf(sc.name)
+        tr = solvers.simulate(sc, s, params, {**leaf.DEFAULT_SETTINGS, "rtol": 1e-13})
+        ref_runs.append(tr)
+        log(f"reference {s.name}: {key}(end) = {tr.final()[key]:.15g} ({tr.status})")
+    ref = ref_runs[0].final()[key]
+    ref_check = (abs(ref_runs[1].final()[key] - ref) / abs(ref)) if len(ref_runs) > 1 else None
+
+    rows = []
+    for s in chosen:
+        leaf = s.leaf(sc.name)
+        for label, st in ladder(leaf, dt_out):
+            walls, tr = [], None
+            for _ in range(repeats):
+                tr = solvers.simulate(sc, s, params, st)
+                walls.append(tr.wall_s)
+            err = abs(tr.final()[key] - ref) / abs(ref) if tr.status == "ok" else None
+            rows.append({"solver": s.name, "method": label, "settings": tr.settings,
+                         "status": tr.status, "wall_s": float(np.median(walls)),
+                         "compile_s": tr.stats.get("compile_s"), "rel_error": err,
+                         "steps": tr.stats.get("steps")})
+            knob = st["rtol"] if label in getattr(leaf, "ADAPTIVE", ()) else st.get("dt")
+            log(f"  {s.name} {label} {knob:g}: err "
+                f"{err if err is None else f'{err:.2e}'} wall {np.median(walls):.3g} s")
+
+    summary, lines = {}, []
+    for level in LEVELS:
+        best = {}
+        for r in rows:
+            if r["rel_error"] is not None and r["rel_error"] <= level:
+                if r["solver"] not in best or r["wall_s"] < best[r["solver"]]["wall_s"]:
+                    best[r["solver"]] = r
+        if not best:
+            continue
+        fastest = min(best.values(), key=lambda r: r["wall_s"])
+        ratios = {s: r["wall_s"] / fastest["wall_s"] for s, r in best.items()}
+        summary[f"{level:g}"] = {"fastest": fastest["solver"], "method": fastest["method"],
+                                 "wall_s": fastest["wall_s"], "time_ratio": ratios,
+                                 "unreached": [s.name for s in chosen if s.name not in best]}
+        lines.append(f"error ≤ {level:g} on final {key}: fastest {fastest['solver']} "
+                     f"({fastest['method']}, {fastest['wall_s']:.3g} s); ratios "
+                     + ", ".join(f"{s} {v:.2f}×" for s, v in sorted(ratios.items(),
+                                                                   key=lambda x: x[1])))
+    stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
+    out_dir = Path(out) / "bench" / f"{sc.name}-{stamp}"
+    out_dir.mkdir(parents=True, exist_ok=True)
+    _plot(out_dir / "work_precision.png", rows, sc.name, key)
+    obj = {"scene": sc.name, "params": params, "key_channel": key,
+           "reference": {"solvers": [s.name for s in refs], "value": ref,
+                         "cross_check_rel": ref_check},
+           "repeats": repeats, "rows": rows, "summary": summary, "summary_lines": lines}
+    md = [f"# Work-precision: {sc.name}", "",
+          f"Reference: {refs[0].name} dop853 rtol 1e-13, final {key} = {ref:.15g}"
+          + (f"; {refs[1].name} agrees to {ref_check:.1e} relative" if ref_check is not None
+             else ""), "", *[f"- {x}" for x in lines], "",
+          "| solver | method | setting | rel. error | median wall [s] | compile [s] | steps |",
+          "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        knob = r["settings"].get("rtol") if "rtol" in r["settings"] and r["method"] in (
+            "dop853", "dopri5", "rk23", "ode23") else r["settings"].get("dt")
+        md.append(f"| {r['solver']} | {r['method']} | {knob} | "
+                  f"{'—' if r['rel_error'] is None else format(r['rel_error'], '.2e')} | "
+                  f"{r['wall_s']:.4g} | {r['compile_s'] or '—'} | {r['steps']} |")
+    md += ["", "![work-precision](work_precision.png)"]
+    write_text(out_dir / "report.md", "\n".join(md) + "\n")
+    write_json(out_dir / "bench.json", obj)
+    obj["report"] = str(out_dir / "report.md")
+    return obj
+
+
+def _plot(path, rows, scene, key):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for (s, m) in dict.fromkeys((r["solver"], r["method"]) for r in rows):
+        pts = [(r["wall_s"], r["rel_error"]) for r in rows
+               if r["solver"] == s and r["method"] == m and r["rel_error"]]
+        if pts:
+            x, y = zip(*sorted(pts))
+            ax.loglog(x, y, "o-", ms=4, label=f"{s} {m}")
+    for level in LEVELS:
+        ax.axhline(level, color="grey", lw=0.5, ls=":")
+    ax.set_xlabel("median wall time [s]")
+    ax.set_ylabel(f"relative error of final {key}")
+    ax.set_title(f"work-precision: {scene}")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

@@ -29,8 +29,9 @@ def deviation(a, b, channel, tolerance):
     """Deviation of two trajectories on their common output grid, with the verdict."""
     if a.status != "ok" or b.status != "ok":
         why = ", ".join(f"{t.solver} {t.status}" for t in (a, b) if t.status != "ok")
+        tol = tolerance[1] if isinstance(tolerance, tuple) else tolerance
         return Comparison(a.solver, b.solver, channel, np.nan, np.nan, np.nan, np.nan,
-                          tolerance, "skipped", f"not compared: {why}")
+                          tol, "skipped", f"not compared: {why}")
     if len(a.t) != len(b.t) or np.max(np.abs(a.t - b.t)) > 1e-9 * max(a.t[-1], 1.0):
         raise ValueError("trajectories of one run must share the output grid")
     x, y = a.channels[channel], b.channels[channel]
@@ -38,11 +39,14 @@ def deviation(a, b, channel, tolerance):
     scale = float(max(np.max(np.abs(x)), np.max(np.abs(y)), 1e-300))
     max_abs = float(np.max(d))
     rel = max_abs / scale
+    if isinstance(tolerance, tuple):          # ("abs", bound): an absolute bound in SI units
+        tolerance = tolerance[1] / scale
     verdict = "agree" if rel <= tolerance else "disagree"
     return Comparison(a.solver, b.solver, channel, max_abs, float(np.sqrt(np.mean(d**2))), rel,
                       scale, tolerance, verdict,
-                      f"max|Δ|/scale = {rel:.2e} {'≤' if verdict == 'agree' else '>'} "
-                      f"{tolerance:.0e} (at t = {a.t[np.argmax(d)]:.4g} s)")
+                      f"max|Δ| = {max_abs:.2e} = {rel:.2e} of scale "
+                      f"{'≤' if verdict == 'agree' else '>'} {tolerance:.1e} "
+                      f"(at t = {a.t[np.argmax(d)]:.4g} s)")
 
 
 def pairwise(trajectories, tolerances):

@@ -40,12 +40,24 @@ REGISTRY = {s.name: s for s in (
            {"rotor-spinup": "custom_models.rotor_quaternion"}, "numba", compiled=True),
     Solver("closed-form", "analytic whirl frequencies I_t w² ∓ I_p Ω w − k_eff = 0",
            {"rotor-whirl": "custom_models.rotor_closed_form"}, "numpy"),
+    Solver("lagrange-partial", "the paper's method (seed 003): Lagrange equations with velocity "
+           "analogues from 'partial systems' by central differences; linear-acceleration "
+           "(Wilson) or RK integration", {"press": "custom_models.press_partial",
+                                          "press-cycle": "custom_models.press_partial"},
+           "numba", compiled=True),
+    Solver("lagrange-exact", "the same Lagrange equations with analytic derivatives",
+           {"press": "custom_models.press_exact", "press-cycle": "custom_models.press_exact"},
+           "numba", compiled=True),
     Solver("exudyn", "Exudyn 1.13 reference model",
            {"rotor-spinup": "reference_models.exudyn.rotor",
-            "rotor-whirl": "reference_models.exudyn.rotor"}, "exudyn"),
+            "rotor-whirl": "reference_models.exudyn.rotor",
+            "press": "reference_models.exudyn.press",
+            "press-cycle": "reference_models.exudyn.press"}, "exudyn"),
     Solver("mujoco", "MuJoCo 4.0 reference model",
            {"rotor-spinup": "reference_models.mujoco.rotor",
-            "rotor-whirl": "reference_models.mujoco.rotor"}, "mujoco"),
+            "rotor-whirl": "reference_models.mujoco.rotor",
+            "press": "reference_models.mujoco.press",
+            "press-cycle": "reference_models.mujoco.press"}, "mujoco"),
 )}
 
 

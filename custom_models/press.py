@@ -28,7 +28,11 @@ regularised so every solver integrates the same smooth law).
 
 Energy bookkeeping: three work integrals ride along as states z = (W_motor, W_damper, W_press)
 so that E = T + V_spring + V_gravity − W_motor + W_damper + W_press (+ the loss at the lock) must
-stay constant; the guard stops a run whose balance jumps (the linear-acceleration instability).
+stay constant; the guard stops a run whose balance jumps by more than energy_jump (default 1e3)
+times the energy in play (T0 + the work terms): a blow-up, not an accuracy test. Why so large:
+a *stable* linear-acceleration run near its limit (h = 0.54·T) already shows a bounded true-energy
+error of ~25·E0 — the invariant of Newmark β = 1/6 weighs the potential by 1 − (ωh)²/12, which
+vanishes at the limit — while past the limit the error grows by ~1.5× per step.
 """
 import math
 import time
@@ -108,7 +112,7 @@ def _items(par):
     return items, heights
 
 
-def pack(par, dphi_deg=0.1, dpsi_deg=0.1, singular_tol=0.02, energy_jump=10.0):
+def pack(par, dphi_deg=0.1, dpsi_deg=0.1, singular_tol=0.02, energy_jump=1e3):
     """Physical parameters (+ the finite-difference steps and guard limits) as one float array."""
     for k in ("l1", "l2", "l3"):
         if not float(par[k]) > 0.0:
@@ -566,7 +570,7 @@ WILSON_INTEGRATORS = {"linacc": (1.0, MODE_NEWTON), "wilson": (None, MODE_NEWTON
 INTEGRATORS = tuple(WILSON_INTEGRATORS) + tuple(FIXED_TABLEAUS) + tuple(ADAPTIVE_TABLEAUS)
 COMMON_SETTINGS = {"theta": 1.4, "newton_tol": 1e-10, "max_iter": 30, "rtol": None,
                    "atol": None, "h_max": None, "max_steps": 10**8, "singular_tol": 0.02,
-                   "energy_jump": 10.0, "event_tol": 1e-10}
+                   "energy_jump": 1e3, "event_tol": 1e-10}
 REASONS = {**FAIL_REASONS, **LA_REASONS,
            FAIL_SINGULAR: "singular: the rod reached the vertical, where the loop-closure root "
                           "for x_B is double and the (phi, psi) chart's Jacobian is singular",

@@ -1,9 +1,9 @@
 """Scene registry: every scene the toolkit knows, by name. Scenes are data and import no solver."""
 from ..errors import BadInput
 from .base import Finding, Scene
-from . import rotor
+from . import press, rotor
 
-SCENES = {s.name: s for s in (rotor.SPINUP, rotor.WHIRL)}
+SCENES = {s.name: s for s in (rotor.SPINUP, rotor.WHIRL, press.PRESS, press.PRESS_CYCLE)}
 
 
 def get_scene(name):

@@ -118,6 +118,9 @@ def wilson_step(acc, t, q, qd, qdd, z, zd, p, h, theta, mode, tol, max_iter):
         evals += 2 * n
     code = FAIL_NO_CONVERGENCE
     err_prev = np.inf
+    q_scale = 0.0
+    for j in range(n):
+        q_scale = max(q_scale, abs(q[j]))
     for it in range(max_iter if mode != MODE_PC else 1):
         if not _all_finite(r):
             return q, qd, qdd, z, zd, evals, FAIL_NONFINITE
@@ -133,7 +136,11 @@ def wilson_step(acc, t, q, qd, qdd, z, zd, p, h, theta, mode, tol, max_iter):
             scale = max(scale, abs(a[j]))
             err = max(err, abs(da[j]))
         _state_at(q, qd, qdd, a, tau, qt, qdt)
-        if mode == MODE_PC or err <= tol * scale or err == 0.0:
+        # converged: relative to the accelerations, or the correction moves q by < 1e-3·tol
+        # (coordinates O(1)): the latter ends iterations on a tiny decayed motion whose
+        # accelerations sit at the model's round-off level
+        if (mode == MODE_PC or err <= tol * scale or err == 0.0
+                or tau * tau / 6.0 * err <= 1e-3 * tol * (1.0 + q_scale)):
             code = FAIL_OK
             break
         # round-off floor of the model's accelerations (finite differences inside acc): the

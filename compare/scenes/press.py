@@ -1,0 +1,73 @@
+"""Crank–rocker press with slider, idle and variable structure (seed 003; spec scene-press.md)."""
+from ..errors import BadInput
+from ..params import Param, positive
+from .base import Scene
+
+SOURCE = "seed 003 (clutchless crank press; Lagrange partial systems, linear-acceleration method)"
+
+_MECHANISM = (
+    positive("l1", 0.015, "m", "crank length O–A"),
+    positive("l2", 0.040, "m", "connecting-rod length A–B"),
+    positive("l3", 0.030, "m", "rocker length B–C"),
+    positive("m1", 4.6, "kg", "crank mass (lumped at A)"),
+    positive("m2", 20.0, "kg", "rod mass (lumped at B)"),
+    positive("m3", 18.0, "kg", "rocker mass (lumped at C)"),
+    positive("m4", 100.0, "kg", "slider mass"),
+    positive("J1", 0.034, "kg·m²", "crank moment of inertia"),
+    positive("J2", 0.036, "kg·m²", "rod moment of inertia"),
+    positive("J3", 0.0441, "kg·m²", "rocker moment of inertia"),
+    Param("phi0", -64.1, "deg", "initial crank angle", lo=-360, hi=360),
+    Param("psi0", -46.34, "deg", "initial rocker angle (direction C→B)", lo=-360, hi=360),
+    Param("omega0", 43.5, "rad/s", "initial crank rate", lo=-1e4, hi=1e4),
+    Param("rocker_rate0", 0.0, "rad/s", "initial rocker rate", lo=-1e4, hi=1e4),
+    Param("gravity", 9.81, "m/s²", "gravity along −y", lo=0.0, hi=1e3),
+    positive("slider_stiffness", 1e6, "N/m", "slider spring about its initial position",
+             hi=1e12),
+    Param("slider_damping", 0.0, "N·s/m", "slider damper", lo=0.0, hi=1e9),
+    positive("gear_ratio", 1.0, "", "motor-to-crank reduction u (u ≠ 1 adds u²·0.0033 kg·m²)",
+             hi=1e3),
+    Param("mass_model", "paper", "", "paper: masses lumped at the joints (eq. 21); midpoint: "
+          "link masses at mid-points", kind="choice", choices=("paper", "midpoint")),
+    Param("assembly", 1, "", "loop-closure root: 1 x_B > x_A, 2 the other", kind="choice",
+          choices=(1, 2)),
+)
+
+CHANNELS = ("crank_angle", "crank_rate", "crank_accel", "rocker_angle", "slider_x",
+            "loop_violation", "energy_balance")
+# the issue's acceptance numbers, as absolute bounds
+TOLERANCES = {"crank_angle": ("abs", 1e-4), "crank_rate": ("abs", 1e-3),
+              "slider_x": ("abs", 1e-7)}
+
+
+def _check(p):
+    if p["l1"] + p["l2"] + p["l3"] <= 0:
+        raise BadInput("l1: link lengths must be positive")
+
+
+PRESS = Scene(
+    name="press", title="Crank–rocker press with slider, idle run (2 DOF)", source=SOURCE,
+    kind="time",
+    params=_MECHANISM + (positive("t_end", 0.05, "s", "horizon (paper: 0.05 s)", hi=1e3),
+                         positive("output_dt", 0.00125, "s", "output grid (paper: 40 steps)")),
+    channels=CHANNELS, tolerances=TOLERANCES, key_channel="crank_rate", check=_check,
+    notes="Energy balance = kinetic + spring + gravity − motor work + damper loss.")
+
+PRESS_CYCLE = Scene(
+    name="press-cycle",
+    title="Press cycle: idle → rocker locks onto the slider → loaded stroke → release",
+    source=SOURCE, kind="time",
+    params=_MECHANISM + (
+        Param("lock_after", 0.01, "s", "earliest lock time", lo=0.0, hi=1e3),
+        Param("lock_angle", -48.0, "deg", "rocker angle at which it locks onto the slider",
+              lo=-360, hi=360),
+        Param("press_force", 2000.0, "N", "working load F resisting the slider while locked "
+              "(−F·tanh(v/press_force_vreg))", lo=0.0, hi=1e8),
+        positive("press_force_vreg", 0.01, "m/s", "velocity scale of the load's sign change"),
+        Param("release_after", 0.045, "s", "the lock opens at this time", lo=0.0, hi=1e3),
+        positive("t_end", 0.06, "s", "horizon", hi=1e3),
+        positive("output_dt", 0.00125, "s", "output grid")),
+    channels=CHANNELS, tolerances={"crank_rate": ("abs", 1e-3), "crank_angle": ("abs", 1e-4),
+                                   "slider_x": ("abs", 1e-7)},
+    key_channel="crank_rate", check=_check,
+    notes="The lock is a plastic impact located as a state event; energy_balance includes the "
+          "press work and the energy lost at the lock.")

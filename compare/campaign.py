@@ -26,6 +26,8 @@ DEFAULT_CAMPAIGN = {
         {"name": "rotor-spinup-3.2Nm", "scene": "rotor-spinup",
          "set": {"torque": "3.2", "t_end": "5"}},
         {"name": "rotor-whirl", "scene": "rotor-whirl"},
+        {"name": "press", "scene": "press"},
+        {"name": "press-cycle", "scene": "press-cycle"},
     ],
 }
 

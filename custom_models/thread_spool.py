@@ -806,6 +806,8 @@ def simulate(params, t_out, settings=None):
     s = _merge_settings(settings)
     params = {**DEFAULT_PARAMS, **params}
     t_out = np.asarray(t_out, float)
+    if t_out[0] != 0.0 or np.any(np.diff(t_out) <= 0):
+        raise ValueError("t_out must start at 0 and be strictly increasing")
     P, m, used = pack(params, s)
     n = int(P[NN])
     dt = s["dt"]

@@ -1,7 +1,9 @@
 """Crank–rocker press with slider, idle and variable structure (seed 003; spec scene-press.md)."""
+import numpy as np
+
 from ..errors import BadInput
 from ..params import Param, positive
-from .base import Scene
+from .base import Finding, Scene
 
 SOURCE = "seed 003 (clutchless crank press; Lagrange partial systems, linear-acceleration method)"
 
@@ -68,6 +70,36 @@ PRESS_CYCLE = Scene(
         positive("output_dt", 0.00125, "s", "output grid")),
     channels=CHANNELS, tolerances={"crank_rate": ("abs", 1e-3), "crank_angle": ("abs", 1e-4),
                                    "slider_x": ("abs", 1e-7)},
-    key_channel="crank_rate", check=_check,
+    key_channel="crank_rate", check=_check, findings=lambda p, trs: cycle_findings(p, trs),
     notes="The lock is a plastic impact located as a state event; energy_balance includes the "
           "press work and the energy lost at the lock.")
+
+
+def _extra_scalar(tr, *names):
+    for n in names:
+        if n in tr.extra:
+            v = float(np.ravel(tr.extra[n])[0])
+            return v if np.isfinite(v) else None
+    return None
+
+
+def cycle_findings(params, trajectories):
+    """Lock instant and energy lost at the plastic lock, per solver, with their spread."""
+    ok = [tr for tr in trajectories if tr.status == "ok"]
+    t_lock = {tr.solver: _extra_scalar(tr, "t_lock", "lock_time") for tr in ok}
+    loss = {tr.solver: _extra_scalar(tr, "lock_energy_loss") for tr in ok}
+    out = []
+    found = {s: v for s, v in t_lock.items() if v is not None}
+    if not found:
+        return [Finding("t_lock", None, "s", "no lock happened inside [lock_after, "
+                        "release_after) in any solver")]
+    spread = max(found.values()) - min(found.values())
+    out.append(Finding("t_lock", min(found.values()), "s", "lock at t = " + ", ".join(
+        f"{s} {v:.10f} s" for s, v in found.items()) + f" (spread {spread:.1e} s)"))
+    lf = {s: v for s, v in loss.items() if v is not None}
+    if lf:
+        out.append(Finding("lock_energy_loss", min(lf.values()), "J",
+                           "energy lost at the plastic lock: " + ", ".join(
+                               f"{s} {v:.8f} J" for s, v in lf.items())
+                           + f" (spread {max(lf.values()) - min(lf.values()):.1e} J)"))
+    return out

@@ -42,6 +42,10 @@ _INT = {"euler": mujoco.mjtIntegrator.mjINT_EULER, "rk4": mujoco.mjtIntegrator.m
 _FACTOR = {"euler": 2.0, "rk4": 2.785}
 
 
+def _f(x):
+    return repr(float(x))
+
+
 def build_xml(params, dt, integrator, planar=False):
     p, n, l0, m, _ = scene(params)
     Lc, r = p["L_c"], p["r"]
@@ -51,27 +55,27 @@ def build_xml(params, dt, integrator, planar=False):
     for j in range(n):
         joints = "".join(f'<joint name="n{j}_{k}" type="slide" axis="{a}"/>'
                          for k, a in enumerate(axes))
-        bodies.append(f'<body name="node{j}" pos="{Lc!r} 0 {r!r}">'
-                      f'<inertial pos="0 0 0" mass="{m[j]!r}" diaginertia="1e-12 1e-12 1e-12"/>'
+        bodies.append(f'<body name="node{j}" pos="{_f(Lc)} 0 {_f(r)}">'
+                      f'<inertial pos="0 0 0" mass="{_f(m[j])}" diaginertia="1e-12 1e-12 1e-12"/>'
                       f'{joints}<site name="n{j}" pos="0 0 0"/></body>')
-    tendons = [f'<spatial name="s{j}" stiffness="0" damping="0" springlength="{l0!r}">'
+    tendons = [f'<spatial name="s{j}" stiffness="0" damping="0" springlength="{_f(l0)}">'
                f'<site site="n{j}"/><site site="n{j + 1}"/></spatial>' for j in range(n - 1)]
     tendons += [f'<spatial name="q{j}"><site site="n{j}"/><site site="Q"/></spatial>'
                 for j in range(n)]
     acts = [f'<general name="a{j}" tendon="q{j}" dyntype="integrator" gaintype="fixed" '
             f'gainprm="0" biastype="affine" biasprm="0 0 0" ctrllimited="false" '
             f'actlimited="false"/>' for j in range(n)]
-    eqs = [f'<connect name="e{j}" site1="n{j}" site2="Q" solref="{2 * dt!r} 1"/>'
+    eqs = [f'<connect name="e{j}" site1="n{j}" site2="Q" solref="{_f(2 * dt)} 1"/>'
            for j in range(n)]
     return f"""<mujoco model="sail">
-  <option timestep="{dt!r}" integrator="{integrator}" gravity="0 0 0">
+  <option timestep="{_f(dt)}" integrator="{ {"euler": "Euler", "rk4": "RK4"}[integrator]}" gravity="0 0 0">
     <flag contact="disable" autoreset="disable"/>
   </option>
   <worldbody>
     <body name="hub">
-      <inertial pos="0 0 0" mass="1" diaginertia="{Jh!r} {Jh!r} {Jh!r}"/>
+      <inertial pos="0 0 0" mass="1" diaginertia="{_f(Jh)} {_f(Jh)} {_f(Jh)}"/>
       <joint name="hub" type="hinge" axis="0 0 1"/>
-      <site name="Q" pos="{Lc!r} 0 {r!r}"/>
+      <site name="Q" pos="{_f(Lc)} 0 {_f(r)}"/>
     </body>
     {''.join(bodies)}
   </worldbody>

@@ -231,6 +231,9 @@ COMMANDS = {"list": cmd_list, "show": cmd_show, "run": cmd_run, "modes": cmd_mod
 
 
 def main(argv=None):
+    import warnings
+    from numba.core.errors import NumbaPerformanceWarning
+    warnings.simplefilter("ignore", NumbaPerformanceWarning)   # hints for us, noise for users
     try:
         args = build_parser().parse_args(argv)
         return COMMANDS[args.command](args)

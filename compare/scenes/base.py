@@ -42,6 +42,8 @@ class Scene:
             p.check(values[p.name])
         if self.check:
             self.check(values)
+        if self.kind == "time":
+            self.output_grid(values)               # the grid must fit before anything runs
         return values
 
     def output_grid(self, params):

@@ -44,11 +44,42 @@ LA_REASONS = {FAIL_NO_CONVERGENCE: "implicit linear-acceleration step did not co
                                    "(iteration diverged: step too large for the iteration)"}
 
 
+@nb.njit(cache=True)
+def solve_small(A, b):
+    """x = A⁻¹b by Gaussian elimination with partial pivoting, for the few-DOF systems here
+    (compiles in a fraction of the time of np.linalg.solve's LAPACK binding; NaN if singular)."""
+    n = b.shape[0]
+    M = A.copy()
+    x = b.copy()
+    for k in range(n):
+        piv = k
+        for i in range(k + 1, n):
+            if abs(M[i, k]) > abs(M[piv, k]):
+                piv = i
+        if M[piv, k] == 0.0:
+            return np.full(n, np.nan)
+        if piv != k:
+            for j in range(n):
+                M[k, j], M[piv, j] = M[piv, j], M[k, j]
+            x[k], x[piv] = x[piv], x[k]
+        for i in range(k + 1, n):
+            f = M[i, k] / M[k, k]
+            for j in range(k, n):
+                M[i, j] -= f * M[k, j]
+            x[i] -= f * x[k]
+    for k in range(n - 1, -1, -1):
+        acc = x[k]
+        for j in range(k + 1, n):
+            acc -= M[k, j] * x[j]
+        x[k] = acc / M[k, k]
+    return x
+
+
 def accel_from_mass_force(mass, force):
     """acc(t, q, qd, p) = M(t, q, p)^-1 Q(t, q, qd, p) from two jitted callables."""
     @nb.njit
     def acc(t, q, qd, p):
-        return np.linalg.solve(mass(t, q, p), force(t, q, qd, p))
+        return solve_small(mass(t, q, p), force(t, q, qd, p))
     return acc
 
 
@@ -126,7 +157,7 @@ def wilson_step(acc, t, q, qd, qdd, z, zd, p, h, theta, mode, tol, max_iter):
             return q, qd, qdd, z, zd, evals, FAIL_NONFINITE
         res = a - r[:n]
         if mode == MODE_NEWTON:
-            da = np.linalg.solve(Jm, res)
+            da = solve_small(Jm, res)
         else:
             da = res
         scale = 0.0

@@ -36,7 +36,7 @@ import numpy as np
 from ..sail_common import CHANNELS, DEFAULT_PARAMS, channels, events, formula18, scene, \
     stable_dt_explicit
 
-DEFAULT_SETTINGS = {"integrator": "euler", "dt": "auto", "stretch_limit": 0.5, "planar": False}
+DEFAULT_SETTINGS = {"integrator": "euler", "dt": "auto", "stretch_limit": 0.5, "planar": True}
 INTEGRATORS = ("euler", "rk4")
 _INT = {"euler": mujoco.mjtIntegrator.mjINT_EULER, "rk4": mujoco.mjtIntegrator.mjINT_RK4}
 _FACTOR = {"euler": 2.0, "rk4": 2.785}
@@ -68,7 +68,7 @@ def build_xml(params, dt, integrator, planar=False):
     eqs = [f'<connect name="e{j}" site1="n{j}" site2="Q" solref="{_f(2 * dt)} 1"/>'
            for j in range(n)]
     return f"""<mujoco model="sail">
-  <option timestep="{_f(dt)}" integrator="{ {"euler": "Euler", "rk4": "RK4"}[integrator]}" gravity="0 0 0">
+  <option timestep="{_f(dt)}" integrator="{ {"euler": "Euler", "rk4": "RK4"}[integrator]}" gravity="0 0 0" jacobian="sparse" solver="Newton">
     <flag contact="disable" autoreset="disable"/>
   </option>
   <worldbody>

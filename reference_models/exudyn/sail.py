@@ -1,0 +1,203 @@
+"""Exudyn reference model of the heliogyro blade deployment (scene `sail-deploy`, seed 004).
+
+Inertial frame, planar (the motion stays in the plane z = r: no force has a z component), one
+blade with half the hub inertia (symmetric deployment; channels report both blades). Shared
+scene definition and release law: reference_models/sail_common.py.
+
+- Hub: NodeRigidBody2D + ObjectRigidBody2D (inertia J_hub/2), translation fixed by two
+  CoordinateConstraints: one rotational DOF. Marker Q at (L_c, 0) on the hub.
+- Nodes: NodePoint2D + MassPoint2D (reference position Q0, so the coordinates are
+  displacements from it).
+- Thread: SpringDamper (c, d, rest l0) between neighbours, switched on (`activeConnector`) when
+  the inner node is released.
+- Boundary segment node→Q: SpringDamper with a Python `springForceUserFunction`
+  f = c (L − r ω (t − t_b)) + d (L' − r ω) (the growing rest length at the solver's own stage
+  time, the damper on the true stretch rate); active only while the node is the boundary.
+- Stored nodes: RevoluteJoint2D(node, Q) constraints, switched off from the pre-step function
+  through `activeConnector` at the node's release time; the node's velocity then gets the spool
+  speed r ω along the rotated X1 axis (written into the current ODE2 velocities), as in the
+  custom solver's "conservative" release. (The pre-step function is called with the end time
+  of the coming step while the coordinates are still at its start; it works with t − h.)
+  A release happens at the first step that starts at or
+  after t_j: with the default step dt = 0.05/70 s the release times j·50/7 s of the default
+  parameters lie on the step grid exactly; otherwise a release is late by less than one step.
+
+Implicit generalized-alpha (index 3 constraints, EigenSparse), spectral radius `rho_inf`.
+"""
+from __future__ import annotations
+
+import time as _time
+
+import exudyn as exu
+import numpy as np
+from exudyn.itemInterface import (CoordinateConstraint, MarkerBodyPosition,
+                                  MarkerNodeCoordinate, MarkerNodePosition, MassPoint2D,
+                                  NodePointGround, NodePoint2D, NodeRigidBody2D,
+                                  ObjectRigidBody2D, RevoluteJoint2D, SpringDamper)
+
+from ..sail_common import CHANNELS, DEFAULT_PARAMS, channels, formula18, scene
+
+DEFAULT_SETTINGS = {"integrator": "generalized_alpha", "dt": 0.05 / 70, "rho_inf": 0.8,
+                    "newton_rel_tol": 1e-10, "newton_abs_tol": 1e-12, "verbose": 0,
+                    "fine_dt": 1e-5, "fine_window": 0.01}
+INTEGRATORS = ("generalized_alpha", "trapezoidal")
+
+
+def simulate(params, t_out, settings=None):
+    s = {**DEFAULT_SETTINGS, **(settings or {})}
+    unknown = set(s) - set(DEFAULT_SETTINGS)
+    if unknown:
+        raise ValueError(f"unknown settings {sorted(unknown)}")
+    if s["integrator"] not in INTEGRATORS:
+        raise ValueError(f"integrator must be one of {INTEGRATORS}")
+    t_out = np.asarray(t_out, float)
+    if np.any(np.diff(t_out) <= 0):
+        raise ValueError("t_out must be strictly increasing")
+    p, n, l0, m, t_rel = scene(params)
+    Lc, r, c, d = p["L_c"], p["r"], p["stiffness"], p["damping"]
+    rw = r * p["omega_spool"]
+    Om0 = p["Omega0"]
+    h = float(s["dt"])
+
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0, 0, 0]))
+    mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
+    nh = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[0, 0, 0],
+                                     initialVelocities=[0, 0, Om0]))
+    hub = mbs.AddObject(ObjectRigidBody2D(mass=1.0, inertia=0.5 * p["J_hub"], nodeNumber=nh))
+    for k in range(2):
+        mk = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nh, coordinate=k))
+        mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, mk]))
+    mQ = mbs.AddMarker(MarkerBodyPosition(bodyNumber=hub, localPosition=[Lc, 0, 0]))
+    nodes, mn = [], []
+    for j in range(n):
+        nj = mbs.AddNode(NodePoint2D(referenceCoordinates=[Lc, 0],
+                                     initialVelocities=[0, Om0 * Lc]))
+        mbs.AddObject(MassPoint2D(mass=float(m[j]), nodeNumber=nj))
+        nodes.append(nj)
+        mn.append(mbs.AddMarker(MarkerNodePosition(nodeNumber=nj)))
+    springs = [mbs.AddObject(SpringDamper(markerNumbers=[mn[j], mn[j + 1]], referenceLength=l0,
+                                          stiffness=c, damping=d, activeConnector=False))
+               for j in range(n - 1)]
+    t_b = {"t": 0.0}
+
+    def q_force(mbs_, t, itemNumber, deltaL, deltaL_t, stiffness, damping, force):
+        return c * (deltaL - rw * (t - t_b["t"])) + d * (deltaL_t - rw)
+
+    qspr = [mbs.AddObject(SpringDamper(markerNumbers=[mn[j], mQ], referenceLength=0.0,
+                                       stiffness=c, damping=d, activeConnector=False,
+                                       springForceUserFunction=q_force))
+            for j in range(n)]
+    holds = [mbs.AddObject(RevoluteJoint2D(markerNumbers=[mQ, mn[j]])) for j in range(n)]
+    mbs.Assemble()
+
+    ode2_node = [mbs.GetNodeODE2Index(nj) for nj in nodes]
+    hub_idx = mbs.GetNodeODE2Index(nh)
+    state = {"b": -1}
+    N = len(t_out)
+    psi_o, Om_o = np.full(N, np.nan), np.full(N, np.nan)
+    X_o, V_o = np.full((N, n, 3), np.nan), np.full((N, n, 3), np.nan)
+    b_o = np.full(N, -1)
+
+    def release(j, t):
+        cfg = exu.ConfigurationType.Current
+        q = mbs.systemData.GetODE2Coordinates(configuration=cfg)
+        v = mbs.systemData.GetODE2Coordinates_t(configuration=cfg)
+        psi, Om = q[hub_idx + 2], v[hub_idx + 2]
+        cp, sp = np.cos(psi), np.sin(psi)
+        i0 = ode2_node[j]
+        q[i0:i0 + 2] = [Lc * cp - Lc, Lc * sp]
+        v[i0:i0 + 2] = [-Om * Lc * sp + rw * cp, Om * Lc * cp + rw * sp]
+        mbs.systemData.SetODE2Coordinates(q, configuration=cfg)
+        mbs.systemData.SetODE2Coordinates_t(v, configuration=cfg)
+        mbs.SetObjectParameter(holds[j], "activeConnector", False)
+        mbs.SetObjectParameter(qspr[j], "activeConnector", True)
+        if j > 0:
+            mbs.SetObjectParameter(qspr[j - 1], "activeConnector", False)
+            mbs.SetObjectParameter(springs[j - 1], "activeConnector", True)
+        t_b["t"] = t_rel[j]
+        state["b"] = j
+
+    def record(io):
+        cfg = exu.ConfigurationType.Current
+        q = mbs.systemData.GetODE2Coordinates(configuration=cfg)
+        v = mbs.systemData.GetODE2Coordinates_t(configuration=cfg)
+        psi_o[io], Om_o[io] = q[hub_idx + 2], v[hub_idx + 2]
+        for j in range(n):
+            i0 = ode2_node[j]
+            X_o[io, j] = (Lc + q[i0], q[i0 + 1], r)
+            V_o[io, j] = (v[i0], v[i0 + 1], 0.0)
+        b_o[io] = state["b"]
+
+    ss = exu.SimulationSettings()
+    ss.timeIntegration.verboseMode = int(s.get("verbose", 0))
+    ss.timeIntegration.adaptiveStep = False
+    ss.timeIntegration.newton.relativeTolerance = s["newton_rel_tol"]
+    ss.timeIntegration.newton.absoluteTolerance = s["newton_abs_tol"]
+    ss.timeIntegration.generalizedAlpha.spectralRadius = s["rho_inf"]
+    ss.linearSolver.solverType = exu.LinearSolverType.EigenSparse
+    ss.solution.file.write = False
+    ss.solution.sensors.writePeriod = 1e9
+    stype = (exu.DynamicSolverType.GeneralizedAlpha if s["integrator"] == "generalized_alpha"
+             else exu.DynamicSolverType.TrapezoidalIndex2)
+    Cur, Ini = exu.ConfigurationType.Current, exu.ConfigurationType.Initial
+    sd = mbs.systemData
+
+    def solve(t0, t1, hs):
+        """Continue the solution from t0 to t1 with about step hs (state: Current)."""
+        k = max(1, int(np.ceil((t1 - t0) / hs - 1e-9)))
+        sd.SetODE2Coordinates(sd.GetODE2Coordinates(configuration=Cur), configuration=Ini)
+        sd.SetODE2Coordinates_t(sd.GetODE2Coordinates_t(configuration=Cur), configuration=Ini)
+        sd.SetAECoordinates(sd.GetAECoordinates(configuration=Cur), configuration=Ini)
+        ss.timeIntegration.startTime = t0
+        ss.timeIntegration.endTime = t1
+        ss.timeIntegration.numberOfSteps = k
+        mbs.SolveDynamic(ss, solverType=stype, storeSolver=False)
+        return k
+
+    # breakpoints: outputs and releases; after each release a window of `fine_window` s is
+    # integrated with `fine_dt` (the new boundary segment is nearly zero-length and its
+    # direction is ill-defined for Newton with the coarse step)
+    bps = sorted(set(np.round(t_out, 12)) | {float(np.round(x, 12)) for x in t_rel[1:]
+                                               if x < t_out[-1]})
+    out_index = {float(np.round(x, 12)): i for i, x in enumerate(t_out)}
+    rel_index = {float(np.round(x, 12)): j for j, x in enumerate(t_rel) if j > 0}
+    status, reason, t_fail = "ok", None, None
+    steps = 0
+    wall0 = _time.perf_counter()
+    t_last_rel = 0.0
+    t = 0.0
+    release(0, 0.0)
+    try:
+        for te in bps:
+            if te > t:
+                tf = min(te, t_last_rel + s["fine_window"])
+                if tf > t:
+                    steps += solve(t, tf, s["fine_dt"])
+                    t = tf
+                if te > t:
+                    steps += solve(t, te, h)
+                    t = te
+            if te in rel_index:
+                release(rel_index[te], te)
+                t_last_rel = te
+            if te in out_index:
+                record(out_index[te])
+    except Exception as exc:             # exu.SolverError: Newton failure etc.
+        status, reason = "diverged", f"Exudyn solver failed: {str(exc).splitlines()[0][:200]}"
+        t_fail = float(t)
+    if not np.all(np.isfinite(Om_o[np.isfinite(t_out)])) and status == "ok":
+        status, reason = "diverged", "non-finite state"
+        t_fail = float(t_out[~np.isfinite(Om_o)][0])
+    wall = _time.perf_counter() - wall0
+    if status == "ok" and not np.all(np.isfinite(Om_o)):
+        status, reason = "diverged", "non-finite state"
+        t_fail = float(t_out[~np.isfinite(Om_o)][0])
+    ch, extra = channels(p, t_out, psi_o, Om_o, X_o, V_o, b_o)
+    extra["hub_rate_formula18"] = formula18(p, t_out)
+    extra["boundary_node"] = b_o.astype(float)
+    return {"channels": ch, "status": status, "t_fail": t_fail, "reason": reason,
+            "stats": {"steps": int(steps), "rhs_evals": -1,
+                      "wall_s": wall},
+            "settings": {**s, "dt": h}, "extra": extra}

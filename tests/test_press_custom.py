@@ -1,0 +1,283 @@
+"""Custom Lagrange solvers of the press (`press_exact`, `press_partial`) and the linear-
+acceleration integrator. Every expected value comes from geometry, conservation, or the theory
+of the methods (second-order central differences; Newmark β = 1/6 stable to h = √3/π·T), never
+from a number this code printed.
+"""
+import math
+
+import numpy as np
+import numba as nb
+import pytest
+
+from custom_models import press, press_exact, press_partial
+from custom_models.integrators import accel_from_mass_force, integrate_wilson, no_guard
+
+DEFAULT = press.DEFAULT_PARAMS
+RNG = np.random.default_rng(3)
+T_OUT = np.linspace(0.0, 0.05, 41)
+LIMIT = math.sqrt(3.0) / math.pi       # 0.5513: linear-acceleration limit h/T (Newmark β = 1/6)
+
+
+def _random_states(n, par=DEFAULT):
+    """(φ, ψ) well inside the chart (|sin θ2| < 0.9), any assembly."""
+    p = press.pack(par)
+    out = []
+    while len(out) < n:
+        q = RNG.uniform(-math.pi, math.pi, 2)
+        if abs(press.rod_sine(q[0], q[1], p)) < 0.9:
+            out.append(q)
+    return p, out
+
+
+def _geometry(q, par, sigma):
+    """Independent positions straight from the scene text (not the module's formulas)."""
+    l1, l2, l3 = par["l1"], par["l2"], par["l3"]
+    A = l1 * np.array([math.cos(q[0]), math.sin(q[0])])
+    yB = l3 * math.sin(q[1])
+    xB = A[0] + sigma * math.sqrt(l2 ** 2 - (yB - A[1]) ** 2)
+    B = np.array([xB, yB])
+    C = B - l3 * np.array([math.cos(q[1]), math.sin(q[1])])
+    return A, B, C
+
+
+@pytest.mark.parametrize("assembly", [1, 2])
+def test_loop_closure_by_geometry(assembly):
+    par = dict(DEFAULT, assembly=assembly)
+    p, qs = _random_states(50, par)
+    for q in qs:
+        xA, yA, xB, yB, xC, ok = press.positions(q[0], q[1], p)
+        A, B, C = np.array([xA, yA]), np.array([xB, yB]), np.array([xC, 0.0])
+        assert ok
+        assert abs(np.linalg.norm(B - A) - par["l2"]) < 1e-15
+        assert abs(np.linalg.norm(B - C) - par["l3"]) < 1e-15
+        # ψ is the direction C→B; assembly 1 has x_B > x_A
+        assert abs(math.atan2(B[1] - C[1], B[0] - C[0]) - math.remainder(q[1], 2 * math.pi)) \
+            < 1e-12
+        assert (xB > xA) == (assembly == 1)
+
+
+def test_initial_slider_position_change_point():
+    """Scene text: with assembly 1 the start has x_C ≈ 25 mm where l1 + l2 = OC + l3."""
+    p = press.pack(DEFAULT)
+    assert abs(p[press.XC0] + DEFAULT["l3"] - DEFAULT["l1"] - DEFAULT["l2"]) < 1e-4
+
+
+def test_exact_gradients_and_hessians_against_differences_of_positions():
+    p, qs = _random_states(20)
+    h = 1e-5
+    for q in qs:
+        base, G, H = press.exact_derivatives(q[0], q[1], p)
+        for k in range(2):
+            e = np.eye(2)[k] * h
+            bp, Gp, _ = press.exact_derivatives(*(q + e), p)
+            bm, Gm, _ = press.exact_derivatives(*(q - e), p)
+            A_p, B_p, C_p = _geometry(q + e, DEFAULT, 1.0)
+            A_m, B_m, C_m = _geometry(q - e, DEFAULT, 1.0)
+            fd = np.concatenate([(A_p - A_m), (B_p - B_m), [C_p[0] - C_m[0]]]) / (2 * h)
+            assert np.allclose(G[:5, k], fd, rtol=0, atol=1e-10)
+            assert np.allclose(H[:, :, k], (Gp - Gm) / (2 * h), rtol=0, atol=1e-7)
+
+
+def test_velocity_analogues_converge_at_second_order():
+    """Partial-system central differences vs analytic ∂r/∂q: error ∝ Δ²."""
+    errs = []
+    _, qs = _random_states(10)
+    for d in (0.4, 0.2, 0.1):
+        p = press.pack(DEFAULT, dphi_deg=d, dpsi_deg=d)
+        e = 0.0
+        for q in qs:
+            P, ok = press._stencil_positions(q[0], q[1], p, 13)
+            Gfd = press.fd_gradients(P, press.NEIGH[0], p)
+            _, G, _ = press.exact_derivatives(q[0], q[1], p)
+            e = max(e, np.max(np.abs(Gfd - G)))
+        errs.append(e)
+    slopes = np.diff(np.log(errs)) / np.diff(np.log([0.4, 0.2, 0.1]))
+    assert np.all(np.abs(slopes - 2.0) < 0.1), slopes
+
+
+def test_lagrange_equations_against_independent_energy_derivation():
+    """q'' of the exact solver vs Lagrange's equations derived numerically from an independent
+    T(q, q') (lumped masses of eq. 21, velocities by differencing positions) and V."""
+    par = dict(DEFAULT)
+    p, qs = _random_states(5)
+    m1, m2, m34 = par["m1"], par["m2"], par["m3"] + par["m4"]
+    J1, J2, J3, g, k = par["J1"], par["J2"], par["J3"], par["gravity"], par["slider_stiffness"]
+    xc0 = p[press.XC0]
+
+    def T(q, qd, eps=1e-6):
+        Ap, Bp, Cp = _geometry(q + eps * qd, par, 1)
+        Am, Bm, Cm = _geometry(q - eps * qd, par, 1)
+        vA, vB, vC = (Ap - Am) / (2 * eps), (Bp - Bm) / (2 * eps), (Cp - Cm) / (2 * eps)
+        th = lambda A, B: math.atan2(B[1] - A[1], B[0] - A[0])
+        w2 = (th(Ap, Bp) - th(Am, Bm)) / (2 * eps)
+        return 0.5 * (m1 * vA @ vA + J1 * qd[0] ** 2 + m2 * vB @ vB + J2 * w2 ** 2
+                      + m34 * vC @ vC + J3 * qd[1] ** 2)
+
+    def V(q):
+        A, B, C = _geometry(q, par, 1)
+        return g * (m1 * A[1] + m2 * B[1]) + 0.5 * k * (C[0] - xc0) ** 2
+
+    for q in qs:
+        qd = RNG.uniform(-30, 30, 2)
+        h = 1.0         # T is quadratic in q': differences in q' are exact at any step
+        # M = ∂²T/∂q'² (T is quadratic in q'), p_i = ∂T/∂q'_i = (M q')_i
+        M = np.array([[(T(q, qd + h * (ei + ej)) - T(q, qd + h * (ei - ej))
+                        - T(q, qd - h * (ei - ej)) + T(q, qd - h * (ei + ej))) / (4 * h * h)
+                       for ej in np.eye(2)] for ei in np.eye(2)])
+        mom = lambda qq: np.array([(T(qq, qd + h * e) - T(qq, qd - h * e)) / (2 * h)
+                                   for e in np.eye(2)])
+        hq = 1e-5
+        dmom_dq = np.column_stack([(mom(q + hq * e) - mom(q - hq * e)) / (2 * hq)
+                                   for e in np.eye(2)])
+        dT_dq = np.array([(T(q + hq * e, qd) - T(q - hq * e, qd)) / (2 * hq) for e in np.eye(2)])
+        dV_dq = np.array([(V(q + hq * e) - V(q - hq * e)) / (2 * hq) for e in np.eye(2)])
+        s = 1 - qd[0] / press.OMEGA_SYNC
+        Q = -dV_dq + np.array([2 * press.M_K * s * press.S_K / (s * s + press.S_K ** 2), 0.0])
+        qdd_ref = np.linalg.solve(M, Q - dmom_dq @ qd + dT_dq)
+        qdd = press.acc_exact(0.0, q, qd, p)[:2]
+        assert np.allclose(qdd, qdd_ref, rtol=2e-4, atol=1e-3 * np.max(np.abs(qdd_ref))), \
+            (qdd, qdd_ref)
+
+
+def test_energy_balance_and_closure_over_the_paper_run():
+    for mod, st in ((press_exact, {"integrator": "rk4", "dt": 1e-5}),
+                    (press_partial, {"integrator": "rk4", "dt": 1e-5, "dphi_deg": 0.01,
+                                     "dpsi_deg": 0.01})):
+        r = mod.simulate({}, T_OUT, st)
+        assert r["status"] == "ok"
+        eb = r["channels"]["energy_balance"]
+        work = r["extra"]["motor_work"][-1]
+        assert work > 1.0
+        assert np.max(np.abs(eb - eb[0])) <= 1e-6 * work
+        assert np.max(r["channels"]["loop_violation"]) < 1e-15
+        assert set(r["channels"]) == set(press.CHANNELS)
+        assert all(len(v) == len(T_OUT) for v in r["channels"].values())
+
+
+def test_partial_minus_exact_is_second_order_in_the_virtual_step():
+    ref = press_exact.simulate({}, T_OUT, {"integrator": "rk4", "dt": 1e-5})
+    ds = np.array([0.2, 0.1, 0.05])
+    dev = []
+    for d in ds:
+        r = press_partial.simulate({}, T_OUT, {"integrator": "rk4", "dt": 1e-5,
+                                               "dphi_deg": d, "dpsi_deg": d})
+        dev.append(np.max(np.abs(r["channels"]["crank_rate"] - ref["channels"]["crank_rate"])))
+    slopes = np.diff(np.log(dev)) / np.diff(np.log(ds))
+    assert np.all(np.abs(slopes - 2.0) < 0.1), slopes
+
+
+def test_start_at_the_double_root_is_reported_not_nan():
+    # rod 1.7° from vertical: the partial systems' stencil crosses the root at t = 0; the exact
+    # chart runs until the rod reaches singular_tol
+    for mod in (press_partial, press_exact):
+        r = mod.simulate({"psi0": 62.0}, T_OUT, {"integrator": "rk4", "dt": 1e-5})
+        assert r["status"] == "diverged"
+        assert "singular" in r["reason"]
+        ok = np.isfinite(r["channels"]["crank_rate"])
+        assert not ok[-1]
+        assert r["t_fail"] is not None and r["t_fail"] >= 0.0
+
+
+def test_bad_settings_raise():
+    with pytest.raises(ValueError):
+        press_exact.simulate({}, T_OUT, {"integrator": "nope"})
+    with pytest.raises(ValueError):
+        press_partial.simulate({}, T_OUT, {"dphi_deg": 0.0})
+    with pytest.raises(ValueError):
+        press_exact.simulate({"assembly": 3}, T_OUT, {})
+
+
+# ---- the linear-acceleration integrator on a linear oscillator ----------------------------
+@nb.njit
+def _mass(t, q, p):
+    return np.eye(1) * p[1]
+
+
+@nb.njit
+def _force(t, q, qd, p):
+    return -p[0] * q
+
+
+_ACC = accel_from_mass_force(_mass, _force)
+
+
+def _amplitude(ratio, theta, n=300):
+    p = np.array([4 * math.pi ** 2 * 3.0, 3.0])        # ω = 2π, T = 1
+    t = np.arange(n + 1) * ratio
+    Y, steps, evals, t_fail, code = integrate_wilson(_ACC, no_guard, np.array([1.0, 0.0]), 1, p,
+                                                     t, 1, theta, 0, 1e-12, 30)
+    return np.max(np.abs(Y[-30:, 0])) if code == 0 else np.inf
+
+
+def test_linear_acceleration_stability_limit_is_0551_period():
+    assert _amplitude(0.98 * LIMIT, 1.0) <= 1.0 + 1e-9
+    assert _amplitude(1.02 * LIMIT, 1.0) > 1e3
+
+
+@pytest.mark.parametrize("ratio", [0.6, 2.0, 10.0])
+def test_wilson_theta_137_is_unconditionally_stable(ratio):
+    assert _amplitude(ratio, 1.37) <= 1.0 + 1e-9
+    assert _amplitude(ratio, 1.4) <= 1.0 + 1e-9
+
+
+# ---- slow: whole-press checks ------------------------------------------------------------
+QUIET = {"slider_stiffness": 1e9, "gravity": 0.0, "gear_ratio": 0.0, "omega0": 0.0,
+         "rocker_rate0": 0.01}      # small vibration about the start: the linearisation holds
+
+
+@pytest.mark.slow
+def test_press_linear_acceleration_threshold_from_linearised_modes():
+    w, T = press.linearised_modes(QUIET)
+    t_min = T[0]
+    for ratio, stable in ((0.54, True), (0.56, False)):
+        dt = ratio * t_min
+        t = np.arange(301) * dt
+        r = press_exact.simulate(QUIET, t, {"integrator": "linacc", "dt": dt})
+        assert (r["status"] == "ok") == stable, (ratio, r["reason"])
+        if not stable:
+            assert r["reason"].startswith("unstable")
+    t = np.arange(301) * 2.0 * t_min
+    r = press_exact.simulate(QUIET, t, {"integrator": "wilson", "theta": 1.4, "dt": 2 * t_min})
+    assert r["status"] == "ok"
+
+
+@pytest.mark.slow
+def test_press_cycle_lock_event_and_impact_loss():
+    cyc = dict(press.CYCLE_DEFAULTS)
+    t = np.arange(0, cyc["t_end"] + 1e-12, 0.00125)
+    runs = [press_exact.simulate(cyc, t, {"integrator": "rk4", "dt": dt}) for dt in (1e-4, 1e-5)]
+    for r in runs:
+        assert r["status"] == "ok"
+        eb = r["channels"]["energy_balance"]
+        assert np.max(np.abs(eb - eb[0])) < 1e-5 * (eb[0] + r["extra"]["press_work"][-1])
+    t_lock = runs[1]["extra"]["t_lock"][0]
+    assert cyc["lock_after"] < t_lock < cyc["release_after"]
+    assert abs(runs[0]["extra"]["t_lock"][0] - t_lock) < 1e-8
+    # plastic impact keeping p_φ: loss = ½ ψ'² (A22 − A12²/A11) at the lock state; the rate
+    # jump φ'+ − φ'- = (A12/A11) ψ'-; check that they are consistent with each other
+    loss = runs[1]["extra"]["lock_energy_loss"][0]
+    w_before, w_after = runs[1]["extra"]["crank_rate_at_lock"]
+    assert loss > 0.0 and w_after != w_before
+    locked = runs[1]["extra"]["locked"] == 1
+    psi = runs[1]["channels"]["rocker_angle"][locked]
+    assert np.allclose(psi, math.radians(cyc["lock_angle"]), atol=1e-7)
+
+
+@pytest.mark.slow
+def test_stiff_slider_1e9_energy():
+    r = press_exact.simulate({"slider_stiffness": 1e9}, T_OUT, {"integrator": "rk4", "dt": 1e-6})
+    eb = r["channels"]["energy_balance"]
+    assert r["status"] == "ok"
+    assert np.max(np.abs(eb - eb[0])) < 1e-6 * r["extra"]["motor_work"][-1]
+
+
+@pytest.mark.slow
+def test_hundred_crank_revolutions_energy_drift():
+    par = {"slider_stiffness": 1e8, "slider_damping": 1e5, "t_end": 6.0}
+    t = np.arange(0, 6.0 + 1e-12, 0.00125)
+    r = press_exact.simulate(par, t, {"integrator": "rk4", "dt": 1e-5})
+    c = r["channels"]
+    assert r["status"] == "ok"
+    assert (c["crank_angle"][-1] - c["crank_angle"][0]) / (2 * math.pi) > 100
+    eb = c["energy_balance"]
+    assert np.max(np.abs(eb - eb[0])) < 1e-6 * r["extra"]["motor_work"][-1]

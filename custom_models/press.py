@@ -40,6 +40,7 @@ import time
 import numba as nb
 import numpy as np
 
+from .integrators.explicit import _stages
 from .integrators import (ADAPTIVE_TABLEAUS, FAIL_REASONS, FIXED_TABLEAUS, LA_REASONS,
                           MODE_FIXED_POINT, MODE_NEWTON, MODE_PC, integrate_adaptive,
                           integrate_fixed, integrate_wilson, wilson_step)
@@ -464,15 +465,8 @@ EVENT = 50
 def _rk_step(f, t, y, p, h, A, B, C):
     n_st, ny = B.shape[0], y.shape[0]
     K = np.empty((n_st, ny))
-    ys = np.empty(ny)
     K[0] = f(t, y, p)
-    for s in range(1, n_st):
-        for j in range(ny):
-            acc = 0.0
-            for r in range(s):
-                acc += A[s, r] * K[r, j]
-            ys[j] = y[j] + h * acc
-        K[s] = f(t + C[s] * h, ys, p)
+    _stages(f, t, y, p, h, A, C, K)
     y1 = y.copy()
     for j in range(ny):
         acc = 0.0

@@ -1,0 +1,185 @@
+# Work in progress (issue 5): parked outside pytest collection until the sail models pass it.
+"""Scene sail-deploy (seed 004): thread unrolling from spools on a spinning hub.
+
+Fast tests assert laws and closed forms that do not come from the code under test:
+conservation of angular momentum, the payout kinematics, formula 18 (rigid radial blades) in the
+regime where it holds, the rotating-frame vs inertial-frame formulations of the same model, the
+engines against the custom solver, and the unstable-step detection. Long runs are marked slow.
+"""
+import numpy as np
+import pytest
+
+from custom_models import thread_spool as ts
+
+BASE = dict(ts.DEFAULT_PARAMS)
+
+
+def grid(T, dt=0.05):
+    return np.append(np.arange(0.0, T - 1e-9, dt), T)
+
+
+def rel_drift(H):
+    return np.max(np.abs(H - H[0])) / abs(H[0])
+
+
+# --- custom solver ------------------------------------------------------------------------------
+
+def test_conservative_variant_conserves_angular_momentum_over_full_fast_deployment():
+    # spool 10x faster: the whole blade (all n releases) is out in 14.3 s
+    p = {**BASE, "omega_spool": 35.0, "n": 10, "t_end": 14.2857}
+    t = grid(14.2857)
+    r = ts.simulate(p, t, {"variant": "conservative", "integrator": "imr", "dt": 1e-3})
+    assert r["status"] == "ok"
+    assert r["extra"]["boundary_node"][-1] == 9              # every node released
+    assert rel_drift(r["channels"]["angular_momentum"]) < 1e-10
+    # energy balance (T + U + D − payout work) is constant up to the integrator's error
+    E = r["channels"]["energy_balance"]
+    T0 = 0.5 * p["J_hub"] * p["Omega0"] ** 2
+    assert np.max(np.abs(E - E[0])) < 1e-5 * T0
+
+
+def test_paper_variant_does_not_conserve_angular_momentum():
+    # the stored thread is not in J and the release turns the velocity: H drifts (the
+    # conservative variant, same run otherwise, does not)
+    p = {**BASE, "omega_spool": 35.0, "n": 10}
+    t = grid(14.2857)
+    rp = ts.simulate(p, t, {"variant": "paper"})
+    rc = ts.simulate(p, t, {"variant": "conservative"})
+    assert rel_drift(rp["channels"]["angular_momentum"]) > 1e-4
+    assert rel_drift(rc["channels"]["angular_momentum"]) < 1e-10
+
+
+def test_deployed_length_follows_payout_kinematics():
+    t = grid(20.0)
+    r = ts.simulate(BASE, t, {})
+    L_kin = BASE["r"] * BASE["omega_spool"] * t
+    # the stretched polyline exceeds r*omega*t only by the elastic stretch (tension/c ~ 1e-8 m)
+    assert np.max(np.abs(r["channels"]["deployed_length"] - L_kin)) < 1e-6
+
+
+def test_rotating_frame_rk4_matches_inertial_frame_implicit_midpoint():
+    # same model, two independent formulations: rotating frame with fictitious forces (paper's
+    # eqs. 14-16, explicit RK4 at the stable step) vs inertial frame (implicit midpoint)
+    t = grid(1.0)
+    r1 = ts.simulate(BASE, t, {"integrator": "rk4", "dt": "auto"})
+    r2 = ts.simulate(BASE, t, {"integrator": "imr", "dt": 5e-5})
+    c1, c2 = r1["channels"], r2["channels"]
+    assert np.max(np.abs(c1["hub_rate"] - c2["hub_rate"]) / c1["hub_rate"]) < 1e-7
+    assert np.max(np.abs(c1["tip_angle"] - c2["tip_angle"])) < 1e-6
+
+
+def test_formula18_reduces_to_printed_form_without_Lc_and_tip():
+    p = {**BASE, "L_c": 0.0, "tip_mass": 0.0}
+    t = np.array([0.0, 50.0, 142.857])
+    ell = np.minimum(p["r"] * p["omega_spool"] * t, p["L"])
+    printed = p["J_hub"] * p["Omega0"] / (p["J_hub"] + 2.0 / 3.0 * p["rho_L"] * ell ** 3)
+    np.testing.assert_allclose(ts.formula18(p, t), printed, rtol=1e-14)
+    assert ts.formula18(BASE, [0.0])[0] == pytest.approx(BASE["Omega0"], rel=1e-15)
+
+
+def test_hub_rate_follows_rigid_blade_formula_while_spin_is_high():
+    # rigid straight radial blades with the lumped masses of the model: the flexible blade
+    # trails by ~0.23 rad, which changes the inertia by < 1e-2 in the first 30 s
+    t = grid(30.0)
+    r = ts.simulate(BASE, t, {})
+    Om = r["channels"]["hub_rate"]
+    f = ts.formula18_discrete(BASE, t)
+    assert np.max(np.abs(Om - f) / f) < 5e-3
+
+
+def test_lumping_error_of_formula18_shrinks_like_1_over_n():
+    t = np.array([0.0, 30.0])
+    devs = []
+    for n in (20, 40):
+        p = {**BASE, "n": n}
+        devs.append(abs(ts.formula18_discrete(p, t)[1] / ts.formula18(p, t)[1] - 1))
+    assert 1.7 < devs[0] / devs[1] < 2.3
+
+
+def test_unstable_explicit_step_is_reported_not_silent():
+    t = grid(0.2, 0.01)
+    dt_stable = ts.stable_dt_rk4(BASE)
+    r = ts.simulate(BASE, t, {"integrator": "rk4", "dt": 3.0 * dt_stable})
+    assert r["status"] == "diverged"
+    assert "unstable step" in r["reason"]
+    assert r["t_fail"] is not None and 0 < r["t_fail"] <= 0.2
+    assert np.all(np.isnan(r["channels"]["hub_rate"][t > r["t_fail"]]))
+    # and the automatic step is stable
+    r2 = ts.simulate(BASE, t, {"integrator": "rk4", "dt": "auto"})
+    assert r2["status"] == "ok"
+
+
+def test_stiff_springs_with_implicit_integrator():
+    # stiffness 1e9 needs ~1e-7 s explicitly; the implicit midpoint runs at 1e-3 s, conserves
+    # H and gives the same transverse motion as 1e7 (the paper's insensitivity claim)
+    t = grid(10.0)
+    r9 = ts.simulate({**BASE, "stiffness": 1e9}, t, {"dt": 1e-3})
+    r7 = ts.simulate(BASE, t, {"dt": 1e-3})
+    assert r9["status"] == "ok"
+    assert rel_drift(r9["channels"]["angular_momentum"]) < 1e-10
+    assert np.max(np.abs(r9["channels"]["tip_angle"] - r7["channels"]["tip_angle"])) < 1e-3
+
+
+def test_bad_settings_raise():
+    with pytest.raises(ValueError):
+        ts.simulate(BASE, grid(0.1), {"integrator": "nope"})
+    with pytest.raises(ValueError):
+        ts.simulate(BASE, grid(0.1), {"variant": "nope"})
+
+
+@pytest.mark.slow
+def test_full_deployment_conserves_angular_momentum_n20_n40():
+    t = grid(142.857)
+    for n in (20, 40):
+        r = ts.simulate({**BASE, "n": n}, t, {"variant": "conservative"})
+        assert r["status"] == "ok"
+        assert rel_drift(r["channels"]["angular_momentum"]) < 1e-8
+
+
+# --- engines ------------------------------------------------------------------------------------
+
+FAST_ENGINE = {**BASE, "n": 5, "omega_spool": 35.0}   # releases every 2.86 s, cheap explicit step
+
+
+def test_mujoco_matches_conservative_custom_solver():
+    ms = pytest.importorskip("reference_models.mujoco.sail")
+    t = grid(3.5)                                          # covers the release at 2.857 s
+    rm = ms.simulate(FAST_ENGINE, t, {})
+    rc = ts.simulate(FAST_ENGINE, t, {"variant": "conservative", "dt": 2.5e-4})
+    assert rm["status"] == "ok"
+    cm, cc = rm["channels"], rc["channels"]
+    assert rel_drift(cm["angular_momentum"]) < 1e-8
+    assert np.max(np.abs(cm["hub_rate"] - cc["hub_rate"]) / cc["hub_rate"]) < 1e-4
+    assert np.max(np.abs(cm["tip_angle"] - cc["tip_angle"])[t >= 0.5]) < 1e-3
+
+
+def test_mujoco_unstable_step_is_reported():
+    ms = pytest.importorskip("reference_models.mujoco.sail")
+    t = grid(0.05, 0.01)
+    dt = 3 * ms.stable_dt_explicit(FAST_ENGINE, 2.0)
+    r = ms.simulate(FAST_ENGINE, t, {"dt": dt})
+    assert r["status"] == "diverged" and r["t_fail"] is not None
+
+
+@pytest.mark.slow
+def test_mujoco_first_30s_default_scene():
+    ms = pytest.importorskip("reference_models.mujoco.sail")
+    t = grid(30.0)
+    rm = ms.simulate(BASE, t, {})
+    rc = ts.simulate(BASE, t, {"variant": "conservative", "dt": 2.5e-4})
+    cm, cc = rm["channels"], rc["channels"]
+    assert rel_drift(cm["angular_momentum"]) < 1e-8
+    assert np.max(np.abs(cm["hub_rate"] - cc["hub_rate"]) / cc["hub_rate"]) < 1e-3
+    assert np.max(np.abs(cm["tip_angle"] - cc["tip_angle"])) < 1e-3
+
+
+@pytest.mark.slow
+def test_exudyn_matches_conservative_custom_solver():
+    xs = pytest.importorskip("reference_models.exudyn.sail")
+    t = grid(3.5)
+    rx = xs.simulate(FAST_ENGINE, t, {})
+    rc = ts.simulate(FAST_ENGINE, t, {"variant": "conservative", "dt": 2.5e-4})
+    assert rx["status"] == "ok"
+    cx, cc = rx["channels"], rc["channels"]
+    assert np.max(np.abs(cx["hub_rate"] - cc["hub_rate"]) / cc["hub_rate"]) < 1e-3
+    assert np.max(np.abs(cx["tip_angle"] - cc["tip_angle"])[t >= 0.5]) < 1e-3

@@ -38,8 +38,9 @@ from exudyn.itemInterface import (CoordinateConstraint, MarkerBodyPosition,
 from ..sail_common import CHANNELS, DEFAULT_PARAMS, channels, formula18, scene
 
 DEFAULT_SETTINGS = {"integrator": "generalized_alpha", "dt": 0.05 / 70, "rho_inf": 0.8,
-                    "newton_rel_tol": 1e-10, "newton_abs_tol": 1e-12, "verbose": 0,
-                    "fine_dt": 1e-5, "fine_window": 0.01}
+                    "newton_rel_tol": 1e-8, "newton_abs_tol": 1e-10, "verbose": 0,
+                    "fine_dt": 1e-5, "fine_window": 0.05, "release_offset": 1e-9,
+                    "fine_newton_rel_tol": 1e-6}
 INTEGRATORS = ("generalized_alpha", "trapezoidal")
 
 
@@ -107,7 +108,8 @@ def simulate(params, t_out, settings=None):
         psi, Om = q[hub_idx + 2], v[hub_idx + 2]
         cp, sp = np.cos(psi), np.sin(psi)
         i0 = ode2_node[j]
-        q[i0:i0 + 2] = [Lc * cp - Lc, Lc * sp]
+        dlt = s["release_offset"]         # keeps the new boundary segment off zero length
+        q[i0:i0 + 2] = [(Lc + dlt) * cp - Lc, (Lc + dlt) * sp]
         v[i0:i0 + 2] = [-Om * Lc * sp + rw * cp, Om * Lc * cp + rw * sp]
         mbs.systemData.SetODE2Coordinates(q, configuration=cfg)
         mbs.systemData.SetODE2Coordinates_t(v, configuration=cfg)
@@ -144,9 +146,10 @@ def simulate(params, t_out, settings=None):
     Cur, Ini = exu.ConfigurationType.Current, exu.ConfigurationType.Initial
     sd = mbs.systemData
 
-    def solve(t0, t1, hs):
-        """Continue the solution from t0 to t1 with about step hs (state: Current)."""
+    def solve_once(t0, t1, hs, tol):
         k = max(1, int(np.ceil((t1 - t0) / hs - 1e-9)))
+        ss.timeIntegration.newton.relativeTolerance = tol
+        ss.timeIntegration.newton.absoluteTolerance = tol * s["newton_abs_tol"] / s["newton_rel_tol"]
         sd.SetODE2Coordinates(sd.GetODE2Coordinates(configuration=Cur), configuration=Ini)
         sd.SetODE2Coordinates_t(sd.GetODE2Coordinates_t(configuration=Cur), configuration=Ini)
         sd.SetAECoordinates(sd.GetAECoordinates(configuration=Cur), configuration=Ini)
@@ -155,6 +158,29 @@ def simulate(params, t_out, settings=None):
         ss.timeIntegration.numberOfSteps = k
         mbs.SolveDynamic(ss, solverType=stype, storeSolver=False)
         return k
+
+    def solve(t0, t1, hs, tol):
+        """Continue the solution from t0 to t1 with about step hs (state: Current). If Newton
+        fails (nearly zero-length boundary segment, stiff springs), restore the state and retry
+        with steps 4x and 16x smaller and the looser `fine_newton_rel_tol`."""
+        saved = (sd.GetODE2Coordinates(configuration=Cur), sd.GetODE2Coordinates_t(configuration=Cur),
+                 sd.GetAECoordinates(configuration=Cur))
+        last = None
+        for div, tl in ((1, tol), (4, max(tol, s["fine_newton_rel_tol"])),
+                        (16, max(tol, s["fine_newton_rel_tol"])),
+                        (64, max(tol, s["fine_newton_rel_tol"]))):
+            try:
+                k = solve_once(t0, t1, hs / div, tl)
+                retries[0] += div > 1
+                return k
+            except Exception as exc:     # exu.SolverError
+                last = exc
+                sd.SetODE2Coordinates(saved[0], configuration=Cur)
+                sd.SetODE2Coordinates_t(saved[1], configuration=Cur)
+                sd.SetAECoordinates(saved[2], configuration=Cur)
+        raise last
+
+    retries = [0]
 
     # breakpoints: outputs and releases; after each release a window of `fine_window` s is
     # integrated with `fine_dt` (the new boundary segment is nearly zero-length and its
@@ -174,10 +200,10 @@ def simulate(params, t_out, settings=None):
             if te > t:
                 tf = min(te, t_last_rel + s["fine_window"])
                 if tf > t:
-                    steps += solve(t, tf, s["fine_dt"])
+                    steps += solve(t, tf, s["fine_dt"], s["fine_newton_rel_tol"])
                     t = tf
                 if te > t:
-                    steps += solve(t, te, h)
+                    steps += solve(t, te, h, s["newton_rel_tol"])
                     t = te
             if te in rel_index:
                 release(rel_index[te], te)
@@ -198,6 +224,6 @@ def simulate(params, t_out, settings=None):
     extra["hub_rate_formula18"] = formula18(p, t_out)
     extra["boundary_node"] = b_o.astype(float)
     return {"channels": ch, "status": status, "t_fail": t_fail, "reason": reason,
-            "stats": {"steps": int(steps), "rhs_evals": -1,
+            "stats": {"steps": int(steps), "rhs_evals": -1, "segment_retries": retries[0],
                       "wall_s": wall},
             "settings": {**s, "dt": h}, "extra": extra}

@@ -65,14 +65,27 @@ Integrators
   including the hub's reduced mass at Q); a requested step above the stability limit runs and
   is caught (spring stretch beyond `stretch_limit`·l0 or non-finite state) and reported as
   status "diverged", reason "unstable step ...".
-- "imr": implicit midpoint rule in the inertial frame (A-stable, symmetric). In the inertial
-  frame the total angular momentum is a quadratic first integral of the ODE, which the implicit
-  midpoint rule conserves exactly (up to the Newton tolerance), for any step: the conservative
-  variant then conserves it to round-off over the whole deployment with steps of 1e-3 s. The
-  Newton matrix (spring stiffness + damping, bordered by the hub) is block-tridiagonal and
-  solved in O(n) (`integrators.implicit.bordered_block3_solve`). The fastest longitudinal modes
-  (1e5 rad/s) are not resolved: they are neither damped nor amplified (|R(iy)| = 1); the
-  transverse motion (what the paper studies) is resolved at dt ≤ 1e-3.
+- `dt="auto"` (default): 1e-3 s for "imr", the stability-derived step for "rk4".
+- "imr" (default): implicit midpoint rule in the inertial frame with
+  energy–momentum (discrete-gradient, Simo & Tarnow 1992) spring forces: each spring's force
+  is c(1 − l0/ℓ̄) times the midpoint chord, ℓ̄ the mean of its start and end lengths. The
+  total angular momentum is then conserved exactly (forces along the midpoint chords; the
+  hub–node pair at Q balanced), for any step; the springs' work is exactly −ΔU, so the
+  unresolved longitudinal modes (1e5 rad/s) cannot pump energy (the plain midpoint rule did:
+  at dt = 1e-3 it went unstable within 20 s). Newton on the midpoint velocities and hub rate;
+  the Newton matrix (spring stiffness + damping, bordered by the hub) is block-tridiagonal and
+  solved in O(n) (`integrators.implicit.bordered_block3_solve`). Where Newton fails (just after
+  a release the new boundary segment is nearly zero-length and its transverse stiffness T/ℓ is
+  huge) the step is retried as 2, 4, … 4096 sub-steps (stats["step_retries"]).
+
+Known limitation of the model itself (paper eq. 11 remarks on it): the new boundary segment
+starts at zero length. If the released thread trails at a large angle α from X1 (fast spool,
+light hub), the node released along X1 swings round Q on a segment of length ~ r ω (t − t_b);
+the swing frequency ~ sqrt(T/(m ℓ)) is unbounded as ℓ → 0, and the energy balance then shows
+excursions ~1e-6 J (fast spool, n = 10) that do not shrink with dt. Angular momentum is not
+affected (central forces). The paper's velocity turn (eq. 12) avoids the swing but breaks
+angular momentum.
+
 Formulation check: rk4 (rotating frame, fictitious forces) and imr (inertial frame, none) share
 only the spring law, so their agreement tests the rotating-frame equations [14-16].
 """
@@ -85,7 +98,7 @@ from .integrators.implicit import block3_tridiag_factor, bordered_block3_solve
 CHANNELS = ("hub_rate", "deployed_length", "tip_angle", "angular_momentum", "energy_balance")
 INTEGRATORS = ("rk4", "imr")
 VARIANTS = ("paper", "conservative")
-DEFAULT_SETTINGS = {"integrator": "imr", "dt": 1e-3, "variant": "conservative",
+DEFAULT_SETTINGS = {"integrator": "imr", "dt": "auto", "variant": "conservative",
                     "velocity_turn": None, "stored_in_hub": None, "q_damper": None,
                     "newton_tol": 1e-12, "stretch_limit": 0.5, "eps_fallback": 1e-10}
 DEFAULT_PARAMS = {"J_hub": 0.004, "rho_L": 0.000735, "L": 5.0, "L_c": 0.05, "r": 0.01,

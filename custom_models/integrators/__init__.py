@@ -3,15 +3,19 @@
 - `explicit`: fixed-step and adaptive embedded Runge–Kutta methods as coefficient tables
   (numba-compiled drivers; the right-hand side is a jitted `f(t, y, p)`).
 - `linear_acceleration`: the linear-acceleration (Wilson-θ) method for M(q) q'' = Q(q, q', t).
-- `implicit`: methods for stiff systems.
+- `implicit`: building blocks for stiff systems (O(n) block-tridiagonal Newton solves for
+  spring–mass chains, bordered by one extra unknown).
 """
 from .explicit import (FIXED_TABLEAUS, ADAPTIVE_TABLEAUS, FAIL_REASONS, integrate_fixed,
                        integrate_adaptive, no_guard)
 from .linear_acceleration import (integrate_wilson, wilson_step, accel_from_mass_force,
                                   as_first_order, LA_REASONS, MODE_NEWTON, MODE_FIXED_POINT,
                                   MODE_PC)
+from .implicit import (block3_tridiag_factor, block3_tridiag_solve, bordered_block3_solve,
+                       inv3)
 
 __all__ = ["FIXED_TABLEAUS", "ADAPTIVE_TABLEAUS", "FAIL_REASONS", "integrate_fixed",
            "integrate_adaptive", "no_guard",
            "integrate_wilson", "wilson_step", "accel_from_mass_force", "as_first_order",
-           "LA_REASONS", "MODE_NEWTON", "MODE_FIXED_POINT", "MODE_PC"]
+           "LA_REASONS", "MODE_NEWTON", "MODE_FIXED_POINT", "MODE_PC",
+           "block3_tridiag_factor", "block3_tridiag_solve", "bordered_block3_solve", "inv3"]

@@ -1,4 +1,3 @@
-# Work in progress (issue 5): parked outside pytest collection until the sail models pass it.
 """Scene sail-deploy (seed 004): thread unrolling from spools on a spinning hub.
 
 Fast tests assert laws and closed forms that do not come from the code under test:
@@ -32,10 +31,16 @@ def test_conservative_variant_conserves_angular_momentum_over_full_fast_deployme
     assert r["status"] == "ok"
     assert r["extra"]["boundary_node"][-1] == 9              # every node released
     assert rel_drift(r["channels"]["angular_momentum"]) < 1e-10
-    # energy balance (T + U + D − payout work) is constant up to the integrator's error
+
+
+def test_energy_balance_constant_across_a_release():
+    # T + U + D − payout work − release work: constant up to the integrator's error
+    # (default spool speed; release of node 1 at 7.14 s)
+    t = grid(10.0)
+    r = ts.simulate(BASE, t, {"dt": 1e-3})
     E = r["channels"]["energy_balance"]
-    T0 = 0.5 * p["J_hub"] * p["Omega0"] ** 2
-    assert np.max(np.abs(E - E[0])) < 1e-5 * T0
+    T0 = 0.5 * BASE["J_hub"] * BASE["Omega0"] ** 2
+    assert np.max(np.abs(E - E[0])) < 1e-6 * T0
 
 
 def test_paper_variant_does_not_conserve_angular_momentum():
@@ -99,7 +104,9 @@ def test_lumping_error_of_formula18_shrinks_like_1_over_n():
 def test_unstable_explicit_step_is_reported_not_silent():
     t = grid(0.2, 0.01)
     dt_stable = ts.stable_dt_rk4(BASE)
-    r = ts.simulate(BASE, t, {"integrator": "rk4", "dt": 3.0 * dt_stable})
+    # (the estimate uses the lightest node; with only the heavier tip out the true limit is
+    # ~5x larger, hence the factor 10)
+    r = ts.simulate(BASE, t, {"integrator": "rk4", "dt": 10.0 * dt_stable})
     assert r["status"] == "diverged"
     assert "unstable step" in r["reason"]
     assert r["t_fail"] is not None and 0 < r["t_fail"] <= 0.2
@@ -138,31 +145,36 @@ def test_full_deployment_conserves_angular_momentum_n20_n40():
 
 # --- engines ------------------------------------------------------------------------------------
 
-FAST_ENGINE = {**BASE, "n": 5, "omega_spool": 35.0}   # releases every 2.86 s, cheap explicit step
+# n = 5, spool 2x faster (release at 14.3 s), soft springs (1e5: explicit step 10x larger; the
+# transverse motion does not depend on the stiffness). In the 10x-spool extreme the solvers
+# disagree by ~5e-3 rad after a release (the new zero-length segment swings round Q: the
+# model's singular point), so that regime is not used for agreement tests.
+FAST_ENGINE = {**BASE, "n": 5, "omega_spool": 7.0, "stiffness": 1e5}
+T_ENGINE = 15.0
 
 
 def test_mujoco_matches_conservative_custom_solver():
     ms = pytest.importorskip("reference_models.mujoco.sail")
-    t = grid(3.5)                                          # covers the release at 2.857 s
+    t = grid(T_ENGINE)                                     # covers the release at 14.29 s
     rm = ms.simulate(FAST_ENGINE, t, {})
     rc = ts.simulate(FAST_ENGINE, t, {"variant": "conservative", "dt": 2.5e-4})
     assert rm["status"] == "ok"
     cm, cc = rm["channels"], rc["channels"]
     assert rel_drift(cm["angular_momentum"]) < 1e-8
     assert np.max(np.abs(cm["hub_rate"] - cc["hub_rate"]) / cc["hub_rate"]) < 1e-4
-    assert np.max(np.abs(cm["tip_angle"] - cc["tip_angle"])[t >= 0.5]) < 1e-3
+    assert np.max(np.abs(cm["tip_angle"] - cc["tip_angle"])) < 1e-5
 
 
 def test_mujoco_unstable_step_is_reported():
     ms = pytest.importorskip("reference_models.mujoco.sail")
-    t = grid(0.05, 0.01)
-    dt = 3 * ms.stable_dt_explicit(FAST_ENGINE, 2.0)
-    r = ms.simulate(FAST_ENGINE, t, {"dt": dt})
+    t = grid(0.2, 0.01)
+    dt = 10 * ms.stable_dt_explicit(BASE, 2.0)
+    r = ms.simulate(BASE, t, {"dt": dt})
     assert r["status"] == "diverged" and r["t_fail"] is not None
 
 
 @pytest.mark.slow
-def test_mujoco_first_30s_default_scene():
+def test_engines_first_30s_default_scene():
     ms = pytest.importorskip("reference_models.mujoco.sail")
     t = grid(30.0)
     rm = ms.simulate(BASE, t, {})
@@ -173,13 +185,43 @@ def test_mujoco_first_30s_default_scene():
     assert np.max(np.abs(cm["tip_angle"] - cc["tip_angle"])) < 1e-3
 
 
-@pytest.mark.slow
 def test_exudyn_matches_conservative_custom_solver():
     xs = pytest.importorskip("reference_models.exudyn.sail")
-    t = grid(3.5)
-    rx = xs.simulate(FAST_ENGINE, t, {})
+    t = grid(T_ENGINE)
+    # tight Newton tolerance (the default 1e-6 is what keeps full deployments running)
+    rx = xs.simulate(FAST_ENGINE, t, {"newton_rel_tol": 1e-8, "newton_abs_tol": 1e-10})
     rc = ts.simulate(FAST_ENGINE, t, {"variant": "conservative", "dt": 2.5e-4})
     assert rx["status"] == "ok"
     cx, cc = rx["channels"], rc["channels"]
-    assert np.max(np.abs(cx["hub_rate"] - cc["hub_rate"]) / cc["hub_rate"]) < 1e-3
-    assert np.max(np.abs(cx["tip_angle"] - cc["tip_angle"])[t >= 0.5]) < 1e-3
+    # generalized-alpha (rho_inf 0.8) is dissipative: H to 1e-5 only (measured ~5e-6 in 30 s)
+    assert rel_drift(cx["angular_momentum"]) < 1e-5
+    assert np.max(np.abs(cx["hub_rate"] - cc["hub_rate"]) / cc["hub_rate"]) < 1e-4
+    assert np.max(np.abs(cx["tip_angle"] - cc["tip_angle"])) < 1e-4
+
+
+def test_bordered_block_tridiagonal_solver_matches_dense_solve():
+    from custom_models.integrators.implicit import block3_tridiag_factor, bordered_block3_solve
+    rng = np.random.default_rng(1)
+    N = 7
+    D = np.empty((N, 3, 3))
+    B = np.empty((N, 3, 3))
+    A = np.zeros((3 * N, 3 * N))
+    for i in range(N):
+        M = rng.normal(size=(3, 3))
+        D[i] = M @ M.T + 8 * np.eye(3)
+        A[3 * i:3 * i + 3, 3 * i:3 * i + 3] = D[i]
+        if i < N - 1:
+            S = rng.normal(size=(3, 3))
+            B[i] = S + S.T
+            A[3 * i:3 * i + 3, 3 * i + 3:3 * i + 6] = B[i]
+            A[3 * i + 3:3 * i + 6, 3 * i:3 * i + 3] = B[i]
+    U = rng.normal(size=(N, 3))
+    delta = 50.0
+    r, rho = rng.normal(size=(N, 3)), 0.7
+    full = np.block([[A, U.reshape(-1, 1)], [U.reshape(1, -1), np.array([[delta]])]])
+    ref = np.linalg.solve(full, np.concatenate([r.ravel(), [rho]]))
+    Dinv = np.empty((N, 3, 3))
+    assert block3_tridiag_factor(D, B, N, Dinv)
+    x = np.empty((N, 3))
+    z = bordered_block3_solve(B, Dinv, N, U, delta, r, rho, x)
+    np.testing.assert_allclose(np.append(x.ravel(), z), ref, rtol=1e-10, atol=1e-12)

@@ -28,6 +28,9 @@ DEFAULT_CAMPAIGN = {
         {"name": "rotor-whirl", "scene": "rotor-whirl"},
         {"name": "press", "scene": "press"},
         {"name": "press-cycle", "scene": "press-cycle"},
+        {"name": "sail-deploy-full", "scene": "sail-deploy",
+         "solvers": ["thread-spool", "thread-spool-conservative"]},
+        {"name": "sail-deploy-2s", "scene": "sail-deploy", "set": {"t_end": 2}},
     ],
 }
 
@@ -56,8 +59,8 @@ def plan(camp):
         names.add(name)
         params = sc.resolve({k: str(v) for k, v in c.get("set", {}).items()})
         chosen = solvers.pick(sc, c.get("solvers"))
-        settings = {s.name: solvers.resolve_settings(
-            s.leaf(sc.name), c.get("dt"), c.get("rtol"), c.get("integrator"),
+        settings = {s.name: solvers.settings_for(
+            s, sc.name, c.get("dt"), c.get("rtol"), c.get("integrator"),
             c.get("settings", {}).get(s.name)) if sc.kind == "time" else {} for s in chosen}
         cases.append((name, sc, params, chosen))
         if sc.kind == "time":

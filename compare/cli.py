@@ -161,8 +161,8 @@ def cmd_run(args):
     params = sc.resolve(parse_sets(args.set))
     chosen = solvers.pick(sc, args.solver)
     # settings are resolved (and checked) for every solver before anything runs
-    settings = {s.name: solvers.resolve_settings(s.leaf(sc.name), args.dt, args.rtol,
-                                                 args.integrator) for s in chosen}
+    settings = {s.name: solvers.settings_for(s, sc.name, args.dt, args.rtol, args.integrator)
+                for s in chosen}
     out_dir = runner.new_run_dir(args.out, sc.name)
     with stdout_to_stderr():
         res = runner.run_scene(sc, params, chosen, lambda s: settings[s.name], out_dir,

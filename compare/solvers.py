@@ -6,7 +6,7 @@ way: settings resolution (`--dt`, `--rtol`, `--integrator`), a separate compile/
 compiled leaves, wall time, package versions, the check that no non-finite value hides behind
 status "ok", and crash capture (a failing solver never hides the others).
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 import importlib
 import importlib.metadata
 import time
@@ -25,6 +25,7 @@ class Solver:
     leaves: dict            # scene name -> leaf module
     engine: str             # the package whose version matters
     compiled: bool = False  # numba leaf: time a warm-up call separately as compile time
+    preset: dict = field(default_factory=dict)   # settings that make this solver a variant
 
     def leaf(self, scene):
         return importlib.import_module(self.leaves[scene])
@@ -48,16 +49,26 @@ REGISTRY = {s.name: s for s in (
     Solver("lagrange-exact", "the same Lagrange equations with analytic derivatives",
            {"press": "custom_models.press_exact", "press-cycle": "custom_models.press_exact"},
            "numba", compiled=True),
+    Solver("thread-spool", "the paper's spring–mass thread (seed 004) in the rotating frame: "
+           "velocity turn at release, stored thread outside J; implicit midpoint or RK4",
+           {"sail-deploy": "custom_models.thread_spool"}, "numba", compiled=True,
+           preset={"variant": "paper"}),
+    Solver("thread-spool-conservative", "thread-spool with the angular-momentum-conserving "
+           "release law the engines use (stored thread at L_c in the hub inertia)",
+           {"sail-deploy": "custom_models.thread_spool"}, "numba", compiled=True,
+           preset={"variant": "conservative"}),
     Solver("exudyn", "Exudyn 1.13 reference model",
            {"rotor-spinup": "reference_models.exudyn.rotor",
             "rotor-whirl": "reference_models.exudyn.rotor",
             "press": "reference_models.exudyn.press",
-            "press-cycle": "reference_models.exudyn.press"}, "exudyn"),
+            "press-cycle": "reference_models.exudyn.press",
+            "sail-deploy": "reference_models.exudyn.sail"}, "exudyn"),
     Solver("mujoco", "MuJoCo 4.0 reference model",
            {"rotor-spinup": "reference_models.mujoco.rotor",
             "rotor-whirl": "reference_models.mujoco.rotor",
             "press": "reference_models.mujoco.press",
-            "press-cycle": "reference_models.mujoco.press"}, "mujoco"),
+            "press-cycle": "reference_models.mujoco.press",
+            "sail-deploy": "reference_models.mujoco.sail"}, "mujoco"),
 )}
 
 
@@ -92,6 +103,12 @@ def versions(solver):
         except importlib.metadata.PackageNotFoundError:
             pass
     return out
+
+
+def settings_for(solver, scene_name, dt=None, rtol=None, integrator=None, extra=None):
+    """The settings one solver runs a scene with: its leaf's defaults, its preset, the knobs."""
+    return resolve_settings(solver.leaf(scene_name), dt, rtol, integrator,
+                            {**solver.preset, **(extra or {})})
 
 
 def resolve_settings(leaf, dt=None, rtol=None, integrator=None, extra=None):

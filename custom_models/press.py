@@ -568,6 +568,7 @@ def segment(f, acc, guard, method, y0, p, t0, t_stop, t_out, i_next, Y, h_nom, t
 WILSON_INTEGRATORS = {"linacc": (1.0, MODE_NEWTON), "wilson": (None, MODE_NEWTON),
                       "linacc-pc": (1.0, MODE_PC), "linacc-fp": (1.0, MODE_FIXED_POINT)}
 INTEGRATORS = tuple(WILSON_INTEGRATORS) + tuple(FIXED_TABLEAUS) + tuple(ADAPTIVE_TABLEAUS)
+ADAPTIVE = tuple(ADAPTIVE_TABLEAUS)
 COMMON_SETTINGS = {"theta": 1.4, "newton_tol": 1e-10, "max_iter": 30, "rtol": None,
                    "atol": None, "h_max": None, "max_steps": 10**8, "singular_tol": 0.02,
                    "energy_jump": 1e3, "event_tol": 1e-10}

@@ -10,6 +10,7 @@ from . import press
 
 DEFAULT_SETTINGS = {"integrator": "rk4", "dt": 1e-5}
 INTEGRATORS = press.INTEGRATORS
+ADAPTIVE = press.ADAPTIVE          # error-controlled (press only, not press-cycle)
 CHANNELS = press.CHANNELS
 
 

@@ -10,6 +10,7 @@ from . import press
 
 DEFAULT_SETTINGS = {"integrator": "linacc", "dt": 1e-5, "dphi_deg": 0.1, "dpsi_deg": 0.1}
 INTEGRATORS = press.INTEGRATORS
+ADAPTIVE = press.ADAPTIVE          # error-controlled (press only, not press-cycle)
 CHANNELS = press.CHANNELS
 
 

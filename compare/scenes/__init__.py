@@ -1,9 +1,10 @@
 """Scene registry: every scene the toolkit knows, by name. Scenes are data and import no solver."""
 from ..errors import BadInput
 from .base import Finding, Scene
-from . import press, rotor
+from . import press, rotor, sail
 
-SCENES = {s.name: s for s in (rotor.SPINUP, rotor.WHIRL, press.PRESS, press.PRESS_CYCLE)}
+SCENES = {s.name: s for s in (rotor.SPINUP, rotor.WHIRL, press.PRESS, press.PRESS_CYCLE,
+                                       sail.SAIL)}
 
 
 def get_scene(name):

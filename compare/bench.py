@@ -67,9 +67,10 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print):
     dt_out = params["output_dt"]
     key = sc.key_channel
 
-    # reference: the tightest run of the first solver (error-controlled at rtol 1e-13 where it
+    # reference: the tightest run of the scene's reference solver (error-controlled at rtol 1e-13 where it
     # has one, else a quarter of its finest ladder step), confirmed by the second the same way
-    refs = solvers.solvers_for(sc.name)[:2]
+    refs = ([solvers.get_solver(n) for n in sc.reference_solvers]
+            or solvers.solvers_for(sc.name)[:2])
     ref_runs = []
     for s in refs:
         tr = solvers.simulate(sc, s, params, _tightest(s, sc.name, dt_out))

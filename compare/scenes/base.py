@@ -22,6 +22,8 @@ class Scene:
     energy_channel: str | None = "energy_balance"
     # conserved quantities (channel -> reported as relative drift in `invariants`)
     invariant_channels: tuple[str, ...] = ()
+    # the bench's reference: the first runs tightest, the second confirms it (names only)
+    reference_solvers: tuple[str, ...] = ()
     check: Callable | None = None   # cross-parameter physical checks, raises BadInput
     findings: Callable | None = None  # (params, trajectories) -> list[Finding]
     notes: str = ""

@@ -52,6 +52,7 @@ PRESS = Scene(
     params=_MECHANISM + (positive("t_end", 0.05, "s", "horizon (paper: 0.05 s)", hi=1e3),
                          positive("output_dt", 0.00125, "s", "output grid (paper: 40 steps)")),
     channels=CHANNELS, tolerances=TOLERANCES, key_channel="crank_rate", check=_check,
+    reference_solvers=("lagrange-exact", "mujoco"),
     notes="Energy balance = kinetic + spring + gravity − motor work + damper loss.")
 
 PRESS_CYCLE = Scene(

@@ -109,6 +109,7 @@ SPINUP = Scene(
     tolerances={"omega_norm": 1e-4, "tilt": 1e-4, "spin_rate": 1e-4, "work": 1e-4,
                 "kinetic": 1e-4},
     key_channel="omega_norm",
+    reference_solvers=("euler-vector", "quaternion"),
     findings=spinup_findings,
     notes="Spring −kγ exactly as the paper defines it (U = ½k|γ|², γ the transverse Euler "
           "vector); a Cardan spring ½k(α²+β²) is a different model.",

@@ -53,6 +53,7 @@ SAIL = Scene(
     channels=("hub_rate", "deployed_length", "tip_angle", "angular_momentum", "energy_balance"),
     tolerances={"hub_rate": 1e-3, "tip_angle": ("abs", 1e-3), "deployed_length": 1e-6},
     key_channel="tip_angle",
+    reference_solvers=("thread-spool-conservative", "exudyn"),
     invariant_channels=("angular_momentum",),
     findings=sail_findings,
     notes="thread-spool is the paper's model (velocity turn at release, stored thread outside "

@@ -77,3 +77,29 @@ def test_list_and_show():
     rc, so, _ = xval("show", "rotor-spinup", "--json")
     shown = {p["name"]: p for p in json.loads(so)["params"]}
     assert shown["k"]["default"] == 2000.0 and shown["k"]["unit"] == "N·m/rad"
+
+
+def test_a_crashing_solver_is_recorded_and_hides_nothing(tmp_path, monkeypatch, capsys):
+    """Exit 3, the crash recorded with its message, the other solver's result intact."""
+    import sys
+    import types
+    from compare import cli, solvers
+    broken = types.ModuleType("broken_leaf")
+    broken.DEFAULT_SETTINGS, broken.INTEGRATORS = {"integrator": "x"}, ("x",)
+
+    def simulate(params, t_out, settings):
+        raise RuntimeError("model exploded")
+    broken.simulate = simulate
+    monkeypatch.setitem(sys.modules, "broken_leaf", broken)
+    monkeypatch.setitem(solvers.REGISTRY, "broken",
+                        solvers.Solver("broken", "test", {"rotor-spinup": "broken_leaf"}, "numpy"))
+    rc = cli.main(["run", "rotor-spinup", "--solver", "broken", "--solver", "quaternion",
+                   "--set", "t_end=0.5", "--json", "--no-record", "--out", str(tmp_path)])
+    obj = json.loads(capsys.readouterr().out)
+    assert rc == 3
+    runs = {r["solver"]: r for r in obj["runs"]}
+    assert runs["broken"]["status"] == "error" and "model exploded" in runs["broken"]["message"]
+    assert runs["quaternion"]["status"] == "ok"
+    # 0.5 s of free spin-up from rest: |ω| = M t / I_p while the tilt is still ~0
+    assert runs["quaternion"]["final"]["omega_norm"] == pytest.approx(1.5 * 0.5 / (5 * 0.25**2 / 2),
+                                                                      rel=1e-3)

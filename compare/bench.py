@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import solvers
+from . import metrics, solvers
 from .atomic import write_json, write_text
 from .errors import BadInput
 from .scenes import get_scene
@@ -92,6 +92,8 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print):
             rows.append({"solver": s.name, "method": label, "settings": tr.settings,
                          "status": tr.status, "wall_s": float(np.median(walls)),
                          "compile_s": tr.stats.get("compile_s"), "rel_error": err,
+                         "energy_residual": metrics.energy_residual(tr, sc.energy_channel)
+                         if sc.energy_channel else None,
                          "steps": tr.stats.get("steps")})
             knob = st["rtol"] if label in getattr(leaf, "ADAPTIVE", ()) else st.get("dt")
             log(f"  {s.name} {label} {knob}: err "
@@ -127,13 +129,14 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print):
           f"Reference: {refs[0].name} ({ref_runs[0].settings}), final {key} = {ref:.15g}"
           + (f"; {refs[1].name} agrees to {ref_check:.1e} relative" if ref_check is not None
              else ""), "", *[f"- {x}" for x in lines], "",
-          "| solver | method | setting | rel. error | median wall [s] | compile [s] | steps |",
-          "|---|---|---|---|---|---|---|"]
+          "| solver | method | setting | rel. error | energy residual [J] | median wall [s] | "
+          "compile [s] | steps |", "|---|---|---|---|---|---|---|---|"]
     for r in rows:
         knob = r["settings"].get("rtol") if "rtol" in r["settings"] and r["method"] in (
             "dop853", "dopri5", "rk23", "ode23") else r["settings"].get("dt")
         md.append(f"| {r['solver']} | {r['method']} | {knob} | "
                   f"{'—' if r['rel_error'] is None else format(r['rel_error'], '.2e')} | "
+                  f"{'—' if r['energy_residual'] is None else format(r['energy_residual'], '.2e')} | "
                   f"{r['wall_s']:.4g} | {r['compile_s'] or '—'} | {r['steps']} |")
     md += ["", "![work-precision](work_precision.png)"]
     write_text(out_dir / "report.md", "\n".join(md) + "\n")

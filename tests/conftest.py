@@ -23,3 +23,8 @@ def rotor_default_run(tmp_path_factory):
     rc, so, se = xval("run", "rotor-spinup", "--json", "--out", str(out))
     assert rc == 0, se
     return json.loads(so), out
+
+
+def pytest_addoption(parser):
+    parser.addoption("--update-golden", action="store_true",
+                     help="rewrite tests/golden/*.json from the current solvers (review the diff)")

@@ -147,6 +147,22 @@ def _first_bad_time(t, channels):
     return float(t[np.argmax(bad)]) if bad.any() else None
 
 
+def _energy_jump(t, channels, scene):
+    """First time the energy balance leaves E(0) by more than `scene.energy_bound` of the
+    energy scale (the largest |value| of the energy balance and of its kinetic, potential and
+    work terms where the scene has them)."""
+    e = channels[scene.energy_channel]
+    scale = max(float(np.max(np.abs(channels[c]))) for c in
+                (scene.energy_channel, "kinetic", "potential", "work") if c in channels)
+    drift = np.abs(e - e[0])
+    bad = np.nonzero(drift > scene.energy_bound * scale)[0]
+    if not len(bad):
+        return None, None
+    return float(t[bad[0]]), (f"unstable or too coarse: energy balance drifted by "
+                              f"{np.max(drift):.3g} J ({np.max(drift) / scale:.0%} of the energy "
+                              f"scale {scale:.3g} J)")
+
+
 def simulate(scene, solver, params, settings):
     """Run one solver on one scene; always returns a Trajectory (status tells what happened)."""
     t_out = scene.output_grid(params)
@@ -179,6 +195,10 @@ def simulate(scene, solver, params, settings):
         t_bad = _first_bad_time(t_out, channels)
         if t_bad is not None:
             status, t_fail, reason = "diverged", t_bad, "non-finite output behind status ok"
+    if status == "ok" and scene.energy_channel:
+        t_bad, why = _energy_jump(t_out, channels, scene)
+        if t_bad is not None:
+            status, t_fail, reason = "diverged", t_bad, why
     invariants = dict(res.get("invariants", {}))
     for c in scene.invariant_channels:
         x = channels[c][np.isfinite(channels[c])]

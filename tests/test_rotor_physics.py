@@ -128,3 +128,14 @@ def test_falling_past_tilt_pi_is_detected():
     # axial/transverse split and the spring direction are undefined (denominator (θ/2)cot(θ/2))
     tr = run("euler-vector", k=5, tilt0=0.1, torque=0, t_end=5)
     assert tr.status == "diverged" and "tilt reached pi" in tr.reason
+
+
+def test_stable_but_wrong_integration_is_not_reported_ok():
+    # k = 1e7: ω_n·dt = 2744·2.5e-4 = 0.69 lies inside RK4's stability interval, but RK4's
+    # damping (|R| ≈ 1 − (ωh)⁶/144 per step) eats the 500 J of spring energy within 1 s: the
+    # energy balance, not a NaN, is what must flag it; a 16× finer step conserves it
+    kw = dict(k=1e7, t_end=1, tilt0=0.01, torque=0)
+    coarse = run("quaternion", {"integrator": "rk4", "dt": 2.5e-4}, **kw)
+    assert coarse.status == "diverged" and "energy balance" in coarse.reason
+    fine = run("quaternion", {"rtol": 1e-11}, **kw)
+    assert fine.status == "ok" and metrics.energy_residual(fine) < 1e-6 * 500

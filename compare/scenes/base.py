@@ -20,6 +20,9 @@ class Scene:
     tolerances: dict = field(default_factory=dict)
     key_channel: str = ""           # the channel whose final value the benchmark measures
     energy_channel: str | None = "energy_balance"
+    # a run whose energy balance drifts by more than this fraction of the energy scale is
+    # reported `diverged` (stable-but-wrong integration must not pass as "ok")
+    energy_bound: float = 0.05
     # conserved quantities (channel -> reported as relative drift in `invariants`)
     invariant_channels: tuple[str, ...] = ()
     # the bench's reference: the first runs tightest, the second confirms it (names only)

@@ -78,7 +78,7 @@ def run_job(case, scene_name, overrides, solver_name, settings, out_dir):
     if solver_name is None:                      # a frequency case: one job for all solvers
         from .modes import run_modes
         obj, _, _ = run_modes(scene_name, None, {k: str(v) for k, v in overrides.items()},
-                              case_dir, log=lambda m: None)
+                              None, log=lambda m: None, out_dir=case_dir)
         write_json(case_dir / "modes.json", obj)
         return case, None, "ok"
     tr = solvers.simulate(sc, solvers.get_solver(solver_name), params, settings)

@@ -163,6 +163,10 @@ def cmd_run(args):
     # settings are resolved (and checked) for every solver before anything runs
     settings = {s.name: solvers.settings_for(s, sc.name, args.dt, args.rtol, args.integrator)
                 for s in chosen}
+    if args.rtol is not None:
+        for s in chosen:
+            if not getattr(s.leaf(sc.name), "ADAPTIVE", ()):
+                _log(f"{s.name}: no error-controlled integrator, --rtol ignored (fixed step kept)")
     out_dir = runner.new_run_dir(args.out, sc.name)
     with stdout_to_stderr():
         res = runner.run_scene(sc, params, chosen, lambda s: settings[s.name], out_dir,

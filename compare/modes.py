@@ -117,13 +117,14 @@ def _campbell_rrd(path, spins, lines):
 
 
 def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_sweep=True,
-              identify=True):
+              identify=True, out_dir=None):
+    """`out_dir` given: write there (a campaign case); else a new run folder under `out`."""
     sc = get_scene(scene_name)
     if sc.kind != "modes":
         raise BadInput(f"scene {sc.name!r} is a time-domain scene: use `xval run {sc.name}`")
     params = sc.resolve(overrides)
     chosen = solvers.pick(sc, solver_names)
-    out_dir = Path(new_run_dir(out, sc.name))
+    out_dir = Path(out_dir or new_run_dir(out, sc.name))
     out_dir.mkdir(parents=True, exist_ok=True)
     results = []
     for s in chosen:

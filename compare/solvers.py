@@ -134,8 +134,7 @@ def resolve_settings(leaf, dt=None, rtol=None, integrator=None, extra=None):
             s["rtol"] = rtol
             if s.get("integrator") not in adaptive and integrator is None:
                 s["integrator"] = adaptive[0]
-        else:
-            s["note"] = "no error-controlled integrator: rtol ignored, fixed step kept"
+        # else: no error-controlled integrator; its fixed step stays (the CLI says so)
     s.update(extra or {})
     return s
 

@@ -25,6 +25,20 @@ DEFAULT_PARAMS = {"J_hub": 0.004, "rho_L": 0.000735, "L": 5.0, "L_c": 0.05, "r":
                   "stiffness": 1e7, "damping": 1e-3, "t_end": 142.857, "output_dt": 0.05}
 
 
+def merge_settings(settings, defaults, integrators, t_out):
+    """Settings over the leaf's defaults, checked (unknown keys and integrators are errors)."""
+    s = {**defaults, **(settings or {})}
+    unknown = set(s) - set(defaults)
+    if unknown:
+        raise ValueError(f"unknown settings {sorted(unknown)}")
+    if s["integrator"] not in integrators:
+        raise ValueError(f"integrator must be one of {integrators}")
+    t_out = np.asarray(t_out, float)
+    if np.any(np.diff(t_out) <= 0):
+        raise ValueError("t_out must be strictly increasing")
+    return s, t_out
+
+
 def scene(params):
     p = {**DEFAULT_PARAMS, **params}
     n = int(p["n"])

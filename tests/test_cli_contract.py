@@ -103,3 +103,16 @@ def test_a_crashing_solver_is_recorded_and_hides_nothing(tmp_path, monkeypatch, 
     # 0.5 s of free spin-up from rest: |ω| = M t / I_p while the tilt is still ~0
     assert runs["quaternion"]["final"]["omega_norm"] == pytest.approx(1.5 * 0.5 / (5 * 0.25**2 / 2),
                                                                       rel=1e-3)
+
+
+def test_rtol_on_fixed_step_solvers_keeps_their_step(tmp_path):
+    """--rtol reaches only error-controlled integrators; fixed-step engines keep their step and
+    still run instead of rejecting an unknown setting."""
+    rc, so, se = xval("run", "press", "--solver", "mujoco", "--solver", "lagrange-exact",
+                      "--rtol", "1e-9", "--set", "t_end=0.005", "--json", "--no-record",
+                      "--out", str(tmp_path))
+    assert rc == 0, se
+    runs = {r["solver"]: r for r in json.loads(so)["runs"]}
+    assert "rtol" not in runs["mujoco"]["settings"] and "--rtol ignored" in se
+    assert runs["lagrange-exact"]["settings"]["rtol"] == 1e-9
+    assert all(r["status"] == "ok" for r in runs.values())

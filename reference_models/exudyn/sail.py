@@ -41,7 +41,7 @@ from exudyn.itemInterface import (CoordinateConstraint, MarkerBodyPosition,
                                   NodePointGround, NodePoint2D, NodeRigidBody2D,
                                   ObjectRigidBody2D, RevoluteJoint2D, SpringDamper)
 
-from ..sail_common import CHANNELS, DEFAULT_PARAMS, channels, formula18, scene
+from ..sail_common import CHANNELS, DEFAULT_PARAMS, channels, formula18, merge_settings, scene
 
 DEFAULT_SETTINGS = {"integrator": "generalized_alpha", "dt": 0.05 / 70, "rho_inf": 0.8,
                     "newton_rel_tol": 1e-6, "newton_abs_tol": 1e-8, "verbose": 0,
@@ -51,15 +51,7 @@ INTEGRATORS = ("generalized_alpha", "trapezoidal")
 
 
 def simulate(params, t_out, settings=None):
-    s = {**DEFAULT_SETTINGS, **(settings or {})}
-    unknown = set(s) - set(DEFAULT_SETTINGS)
-    if unknown:
-        raise ValueError(f"unknown settings {sorted(unknown)}")
-    if s["integrator"] not in INTEGRATORS:
-        raise ValueError(f"integrator must be one of {INTEGRATORS}")
-    t_out = np.asarray(t_out, float)
-    if np.any(np.diff(t_out) <= 0):
-        raise ValueError("t_out must be strictly increasing")
+    s, t_out = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS, t_out)
     p, n, l0, m, t_rel = scene(params)
     Lc, r, c, d = p["L_c"], p["r"], p["stiffness"], p["damping"]
     rw = r * p["omega_spool"]

@@ -33,8 +33,8 @@ import time as _time
 import mujoco
 import numpy as np
 
-from ..sail_common import CHANNELS, DEFAULT_PARAMS, channels, events, formula18, scene, \
-    stable_dt_explicit
+from ..sail_common import (CHANNELS, DEFAULT_PARAMS, channels, events, formula18, merge_settings,
+                           scene, stable_dt_explicit)
 
 DEFAULT_SETTINGS = {"integrator": "euler", "dt": "auto", "stretch_limit": 0.5, "planar": True}
 INTEGRATORS = ("euler", "rk4")
@@ -86,15 +86,7 @@ def build_xml(params, dt, integrator, planar=False):
 
 
 def simulate(params, t_out, settings=None):
-    s = {**DEFAULT_SETTINGS, **(settings or {})}
-    unknown = set(s) - set(DEFAULT_SETTINGS)
-    if unknown:
-        raise ValueError(f"unknown settings {sorted(unknown)}")
-    if s["integrator"] not in INTEGRATORS:
-        raise ValueError(f"integrator must be one of {INTEGRATORS}")
-    t_out = np.asarray(t_out, float)
-    if np.any(np.diff(t_out) <= 0):
-        raise ValueError("t_out must be strictly increasing")
+    s, t_out = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS, t_out)
     p, n, l0, m, t_rel = scene(params)
     dt = s["dt"]
     if dt is None or dt == "auto":

@@ -159,6 +159,30 @@ def _j_eff(P, m, b):
 
 
 @nb.njit(cache=True)
+def _segment(y, ox, ov, j):
+    """Chord node j → j+1: components, length, unit vector and stretch rate."""
+    dx = y[ox + 3 * j + 3] - y[ox + 3 * j]
+    dy = y[ox + 3 * j + 4] - y[ox + 3 * j + 1]
+    dz = y[ox + 3 * j + 5] - y[ox + 3 * j + 2]
+    ell = np.sqrt(dx * dx + dy * dy + dz * dz)
+    ex, ey, ez = dx / ell, dy / ell, dz / ell
+    sd = (ex * (y[ov + 3 * j + 3] - y[ov + 3 * j]) + ey * (y[ov + 3 * j + 4] - y[ov + 3 * j + 1])
+          + ez * (y[ov + 3 * j + 5] - y[ov + 3 * j + 2]))
+    return dx, dy, dz, ell, ex, ey, ez, sd
+
+
+@nb.njit(cache=True)
+def _push_pair(F, j, fx, fy, fz):
+    """Equal and opposite force of segment j on its two nodes."""
+    F[3 * j] += fx
+    F[3 * j + 1] += fy
+    F[3 * j + 2] += fz
+    F[3 * j + 3] -= fx
+    F[3 * j + 4] -= fy
+    F[3 * j + 5] -= fz
+
+
+@nb.njit(cache=True)
 def _forces(t, y, P, m, b, Q0, Q1, Q2, VQ0, VQ1, VQ2, p0, p1, p2, F):
     """Spring–damper forces on nodes 0..b (frame-independent law; positions/velocities from y,
     Q its position, VQ the material velocity of the hub point Q, p the payout direction, all in
@@ -171,20 +195,9 @@ def _forces(t, y, P, m, b, Q0, Q1, Q2, VQ0, VQ1, VQ2, p0, p1, p2, F):
         F[k] = 0.0
     diss = 0.0
     for j in range(b):
-        dx = y[ox + 3 * j + 3] - y[ox + 3 * j]
-        dy = y[ox + 3 * j + 4] - y[ox + 3 * j + 1]
-        dz = y[ox + 3 * j + 5] - y[ox + 3 * j + 2]
-        ell = np.sqrt(dx * dx + dy * dy + dz * dz)
-        ex, ey, ez = dx / ell, dy / ell, dz / ell
-        sd = (ex * (y[ov + 3 * j + 3] - y[ov + 3 * j]) + ey * (y[ov + 3 * j + 4] - y[ov + 3 * j + 1])
-              + ez * (y[ov + 3 * j + 5] - y[ov + 3 * j + 2]))
+        dx, dy, dz, ell, ex, ey, ez, sd = _segment(y, ox, ov, j)
         f = c * (ell - l0) + d * sd
-        F[3 * j] += f * ex
-        F[3 * j + 1] += f * ey
-        F[3 * j + 2] += f * ez
-        F[3 * j + 3] -= f * ex
-        F[3 * j + 4] -= f * ey
-        F[3 * j + 5] -= f * ez
+        _push_pair(F, j, f * ex, f * ey, f * ez)
         diss += d * sd * sd
     # boundary node b: Q-spring with variable rest length l0(t) = r(φ − Δφ b)  [7-11]
     dx = Q0 - y[ox + 3 * b]
@@ -419,24 +432,10 @@ def _forces_dg(tm, Ym, P, m, b, Q0, Q1, Q2, VQ0, VQ1, p0, p1, p2, l_a, l_e, F, T
         F[k] = 0.0
     diss = 0.0
     for j in range(b):
-        dx = Ym[ox + 3 * j + 3] - Ym[ox + 3 * j]
-        dy = Ym[ox + 3 * j + 4] - Ym[ox + 3 * j + 1]
-        dz = Ym[ox + 3 * j + 5] - Ym[ox + 3 * j + 2]
-        ell = np.sqrt(dx * dx + dy * dy + dz * dz)
-        ex, ey, ez = dx / ell, dy / ell, dz / ell
-        sd = (ex * (Ym[ov + 3 * j + 3] - Ym[ov + 3 * j]) + ey * (Ym[ov + 3 * j + 4] - Ym[ov + 3 * j + 1])
-              + ez * (Ym[ov + 3 * j + 5] - Ym[ov + 3 * j + 2]))
+        dx, dy, dz, ell, ex, ey, ez, sd = _segment(Ym, ox, ov, j)
         kt = c * (1.0 - 2.0 * l0 / (l_a[j] + l_e[j]))
         TR[j] = kt
-        fx = kt * dx + d * sd * ex
-        fy = kt * dy + d * sd * ey
-        fz = kt * dz + d * sd * ez
-        F[3 * j] += fx
-        F[3 * j + 1] += fy
-        F[3 * j + 2] += fz
-        F[3 * j + 3] -= fx
-        F[3 * j + 4] -= fy
-        F[3 * j + 5] -= fz
+        _push_pair(F, j, kt * dx + d * sd * ex, kt * dy + d * sd * ey, kt * dz + d * sd * ez)
         diss += d * sd * sd
     dx = Q0 - Ym[ox + 3 * b]
     dy = Q1 - Ym[ox + 3 * b + 1]

@@ -74,6 +74,20 @@ def merged(params: dict | None, cycle: bool = False) -> dict:
     return p
 
 
+def fixed_step_settings(settings: dict | None, defaults: dict, integrators: tuple,
+                        engine: str) -> dict:
+    """Settings over an engine's defaults, with the checks every fixed-step engine needs."""
+    s = {**defaults, **(settings or {})}
+    if s["integrator"] not in integrators:
+        raise ValueError(f"integrator must be one of {integrators}, got {s['integrator']!r}")
+    if "rtol" in (settings or {}):
+        raise ValueError(f"{engine} press runs fixed-step: give dt, not rtol")
+    s["dt"] = float(s["dt"])
+    if not s["dt"] > 0:
+        raise ValueError(f"dt must be > 0, got {s['dt']!r}")
+    return s
+
+
 def motor_torque(crank_rate: float, u: float) -> float:
     """Crank torque u·M(s), M = 2 M_k/(s/s_k + s_k/s) written as 2 M_k s s_k/(s² + s_k²) (regular at s = 0)."""
     s = 1.0 - u * crank_rate / OMEGA_SYNC

@@ -71,6 +71,13 @@ def test_other_bad_input_exits_2(tmp_path, args):
     assert not (tmp_path / "o").exists()
 
 
+def test_a_loop_that_cannot_close_is_bad_input(tmp_path):
+    # y_B − y_A = 0.03·sin(−46.34°) − 0.015·sin(−64.1°) = −0.00821 m: a 5 mm rod cannot reach
+    rc, so, se = xval("run", "press", "--set", "l2=0.005", "--out", str(tmp_path / "o"))
+    assert rc == 2 and "l2" in se and len(se.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
+
+
 def test_list_and_show():
     rc, so, _ = xval("list")
     assert rc == 0 and "rotor-spinup" in so and "euler-vector" in so

@@ -42,8 +42,12 @@ TOLERANCES = {"crank_angle": ("abs", 1e-4), "crank_rate": ("abs", 1e-3),
 
 
 def _check(p):
-    if p["l1"] + p["l2"] + p["l3"] <= 0:
-        raise BadInput("l1: link lengths must be positive")
+    """The loop must close at the start: B = C + l3(cos ψ, sin ψ) with C on the x axis needs
+    |y_B − y_A| ≤ l2 for the rod to reach from A (rejected here, before anything runs)."""
+    gap = abs(p["l3"] * np.sin(np.radians(p["psi0"])) - p["l1"] * np.sin(np.radians(p["phi0"])))
+    if gap > p["l2"]:
+        raise BadInput(f"l2: the rod ({p['l2']:g} m) cannot close the loop at phi0 = "
+                       f"{p['phi0']:g} deg, psi0 = {p['psi0']:g} deg (needs ≥ {gap:.4g} m)")
 
 
 PRESS = Scene(

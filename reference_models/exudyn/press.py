@@ -42,15 +42,7 @@ class _Diverged(Exception):
 
 
 def _check_settings(settings: dict) -> dict:
-    s = dict(DEFAULT_SETTINGS)
-    s.update(settings or {})
-    if s["integrator"] not in INTEGRATORS:
-        raise ValueError(f"integrator must be one of {INTEGRATORS}, got {s['integrator']!r}")
-    if "rtol" in (settings or {}):
-        raise ValueError("exudyn press runs fixed-step: give dt, not rtol")
-    s["dt"] = float(s["dt"])
-    if not s["dt"] > 0:
-        raise ValueError(f"dt must be > 0, got {s['dt']!r}")
+    s = pc.fixed_step_settings(settings, DEFAULT_SETTINGS, INTEGRATORS, "exudyn")
     rho = float(s["spectral_radius"])
     if not 0.0 <= rho <= 1.0:
         raise ValueError(f"spectral_radius must be in [0, 1], got {rho!r}")

@@ -36,15 +36,7 @@ _BISECT_TOL = 1e-9   # s
 
 
 def _check_settings(settings: dict) -> dict:
-    s = dict(DEFAULT_SETTINGS)
-    s.update(settings or {})
-    if s["integrator"] not in INTEGRATORS:
-        raise ValueError(f"integrator must be one of {INTEGRATORS}, got {s['integrator']!r}")
-    if "rtol" in (settings or {}):
-        raise ValueError("mujoco press runs fixed-step: give dt, not rtol")
-    s["dt"] = float(s["dt"])
-    if not s["dt"] > 0:
-        raise ValueError(f"dt must be > 0, got {s['dt']!r}")
+    s = pc.fixed_step_settings(settings, DEFAULT_SETTINGS, INTEGRATORS, "mujoco")
     s["solref_factor"] = float(s["solref_factor"])
     if not s["solref_factor"] > 0:
         raise ValueError("solref_factor must be > 0")

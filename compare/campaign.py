@@ -47,8 +47,10 @@ def load_campaign(path):
     return camp
 
 
-def plan(camp):
-    """Validate every case up front (bad input stops the campaign before anything runs)."""
+def plan(camp, timeout_s=None):
+    """Validate every case up front (bad input stops the campaign before anything runs).
+    A job is (case, scene, overrides, solver, settings, timeout_s): the case's `timeout_s`,
+    else the campaign-wide one."""
     jobs, cases = [], []
     names = set()
     for i, c in enumerate(camp["cases"]):
@@ -62,15 +64,20 @@ def plan(camp):
         settings = {s.name: solvers.settings_for(
             s, sc.name, c.get("dt"), c.get("rtol"), c.get("integrator"),
             c.get("settings", {}).get(s.name)) if sc.kind == "time" else {} for s in chosen}
+        limit = c.get("timeout_s", timeout_s)
+        if limit is not None and not (isinstance(limit, (int, float)) and limit > 0):
+            raise BadInput(f"campaign case {name!r}: timeout_s must be a positive number of "
+                           f"seconds, got {limit!r}")
         cases.append((name, sc, params, chosen))
         if sc.kind == "time":
-            jobs += [(name, sc.name, c.get("set", {}), s.name, settings[s.name]) for s in chosen]
+            jobs += [(name, sc.name, c.get("set", {}), s.name, settings[s.name], limit)
+                     for s in chosen]
         else:
-            jobs.append((name, sc.name, c.get("set", {}), None, {}))
+            jobs.append((name, sc.name, c.get("set", {}), None, {}, limit))
     return cases, jobs
 
 
-def run_job(case, scene_name, overrides, solver_name, settings, out_dir):
+def run_job(case, scene_name, overrides, solver_name, settings, timeout_s, out_dir):
     """One job in a worker: simulate (or compute modes) and write the result file atomically."""
     sc = get_scene(scene_name)
     params = sc.resolve({k: str(v) for k, v in overrides.items()})
@@ -81,14 +88,21 @@ def run_job(case, scene_name, overrides, solver_name, settings, out_dir):
                               None, log=lambda m: None, out_dir=case_dir)
         write_json(case_dir / "modes.json", obj)
         return case, None, "ok"
-    tr = solvers.simulate(sc, solvers.get_solver(solver_name), params, settings)
+    tr = solvers.simulate(sc, solvers.get_solver(solver_name), params, settings, timeout_s)
     tr.save(case_dir / f"{solver_name}.npz")
     return case, solver_name, tr.status
 
 
 def _job_file(out_dir, job):
-    case, _, _, solver_name, _ = job
+    case, _, _, solver_name, _, _ = job
     return Path(out_dir) / case / (f"{solver_name}.npz" if solver_name else "modes.json")
+
+
+def _done(out_dir, job):
+    """A job is done when its result file exists, unless it timed out (a resume with a larger
+    limit runs it again)."""
+    f = _job_file(out_dir, job)
+    return f.exists() and (job[3] is None or Trajectory.load(f).status != "timeout")
 
 
 def make_executor(kind, scheduler, workers):
@@ -106,11 +120,12 @@ def make_executor(kind, scheduler, workers):
                                mp_context=multiprocessing.get_context("spawn")), None
 
 
-def run_campaign(path, out, executor="local", scheduler=None, workers=None, log=print):
+def run_campaign(path, out, executor="local", scheduler=None, workers=None, log=print,
+                 timeout_s=None):
     camp = load_campaign(path)
-    cases, jobs = plan(camp)
+    cases, jobs = plan(camp, timeout_s)
     out_dir = Path(out) / "campaign" / camp.get("name", "campaign")
-    todo = [j for j in jobs if not _job_file(out_dir, j).exists()]
+    todo = [j for j in jobs if not _done(out_dir, j)]
     log(f"campaign {camp.get('name')}: {len(jobs)} jobs, {len(jobs) - len(todo)} already done")
     crashed = {}
     if todo:

@@ -102,6 +102,8 @@ def build_parser():
     sp.add_argument("--out", default="logs")
     sp.add_argument("--strict", action="store_true", help="exit 1 when a verdict is disagree")
     sp.add_argument("--no-record", action="store_true", help="skip the .rrd recording")
+    sp.add_argument("--timeout", type=_positive("--timeout"), metavar="S",
+                    help="wall-clock limit per solver run: status timeout")
 
     sp = sub.add_parser("modes", help="natural frequencies")
     common(sp)
@@ -115,6 +117,8 @@ def build_parser():
     sp.add_argument("--workers", type=int, default=None)
     sp.add_argument("--out", default="logs")
     sp.add_argument("--json", action="store_true")
+    sp.add_argument("--timeout", type=_positive("--timeout"), metavar="S",
+                    help="wall-clock limit per job unless its case sets timeout_s")
 
     sp = sub.add_parser("bench", help="speed/accuracy (work-precision) sweep")
     common(sp)
@@ -170,7 +174,7 @@ def cmd_run(args):
     out_dir = runner.new_run_dir(args.out, sc.name)
     with stdout_to_stderr():
         res = runner.run_scene(sc, params, chosen, lambda s: settings[s.name], out_dir,
-                               record=not args.no_record, log=_log)
+                               record=not args.no_record, log=_log, timeout_s=args.timeout)
     return _finish(args, res.as_json(), res.trajectories, res.comparisons)
 
 
@@ -206,7 +210,8 @@ def cmd_campaign(args):
     from .campaign import run_campaign
     with stdout_to_stderr():
         summary = run_campaign(args.file, args.out, executor=args.executor,
-                               scheduler=args.scheduler, workers=args.workers, log=_log)
+                               scheduler=args.scheduler, workers=args.workers, log=_log,
+                               timeout_s=args.timeout)
     if args.json:
         emit_json(summary)
     else:

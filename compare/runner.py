@@ -53,15 +53,17 @@ def new_run_dir(out, scene_name):
     return Path(out) / "runs" / f"{scene_name}-{stamp}-{os.getpid()}"
 
 
-def run_scene(scene, params, chosen, settings_for, out_dir, record=True, report=True, log=None):
-    """Simulate `scene` with each solver in `chosen`; `settings_for(solver)` gives settings."""
+def run_scene(scene, params, chosen, settings_for, out_dir, record=True, report=True, log=None,
+              timeout_s=None):
+    """Simulate `scene` with each solver in `chosen`; `settings_for(solver)` gives settings;
+    `timeout_s` bounds each solver's wall time."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     trajectories, files = [], {}
     for s in chosen:
         if log:
             log(f"{scene.name}: running {s.name} …")
-        tr = solvers.simulate(scene, s, params, settings_for(s))
+        tr = solvers.simulate(scene, s, params, settings_for(s), timeout_s)
         files[s.name] = tr.save(out_dir / f"{s.name}.npz")
         if log:
             log(f"{scene.name}: {s.name} {tr.status} in {tr.wall_s:.3g} s"

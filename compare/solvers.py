@@ -6,9 +6,12 @@ way: settings resolution (`--dt`, `--rtol`, `--integrator`), a separate compile/
 compiled leaves, wall time, package versions, the check that no non-finite value hides behind
 status "ok", and crash capture (a failing solver never hides the others).
 """
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 import importlib
 import importlib.metadata
+import signal
+import threading
 import time
 import traceback
 
@@ -162,24 +165,58 @@ def _energy_jump(t, channels, scene):
                               f"scale {scale:.3g} J)")
 
 
-def simulate(scene, solver, params, settings):
-    """Run one solver on one scene; always returns a Trajectory (status tells what happened)."""
+class _Timeout(BaseException):
+    """Raised by the wall-clock alarm inside a leaf (a BaseException, so that no leaf's
+    exception handling and not the crash capture below can swallow it)."""
+
+
+@contextmanager
+def _time_limit(seconds):
+    """Stop the enclosed call after `seconds` of wall time with _Timeout. Needs SIGALRM and the
+    main thread (true for the CLI and the process-pool workers; Dask runs tasks in threads, where
+    no limit is applied). The alarm is seen when control is back in Python: engine leaves return
+    there at every output step, the compiled kernels only at the end of the run."""
+    if not seconds or threading.current_thread() is not threading.main_thread() \
+            or not hasattr(signal, "SIGALRM"):
+        yield
+        return
+
+    def on_alarm(signum, frame):
+        raise _Timeout()
+    old = signal.signal(signal.SIGALRM, on_alarm)
+    signal.setitimer(signal.ITIMER_REAL, float(seconds))
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, old)
+
+
+def simulate(scene, solver, params, settings, timeout_s=None):
+    """Run one solver on one scene; always returns a Trajectory (status tells what happened).
+    `timeout_s` bounds the wall time of the run (compile included): status "timeout"."""
     t_out = scene.output_grid(params)
     nan = {c: np.full(len(t_out), np.nan) for c in scene.channels}
     base = dict(scene=scene.name, solver=solver.name, t=t_out, versions=versions(solver),
                 settings=dict(settings))
+    t_start = time.perf_counter()
     try:
         leaf = solver.leaf(scene.name)
         stats = {}
-        if solver.compiled:            # compile once on a two-point grid, timed on its own
+        with _time_limit(timeout_s):
+            if solver.compiled:        # compile once on a two-point grid, timed on its own
+                t0 = time.perf_counter()
+                leaf.simulate(params, t_out[:2], settings)
+                stats["compile_s"] = time.perf_counter() - t0
             t0 = time.perf_counter()
-            leaf.simulate(params, t_out[:2], settings)
-            stats["compile_s"] = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        res = leaf.simulate(params, t_out, settings)
-        wall = time.perf_counter() - t0
+            res = leaf.simulate(params, t_out, settings)
+            wall = time.perf_counter() - t0
     except ValueError as e:            # the leaf contract: bad settings
         raise BadInput(f"{solver.name}: {e}") from None
+    except _Timeout:
+        return Trajectory(channels=nan, status="timeout",
+                          wall_s=time.perf_counter() - t_start,
+                          reason=f"stopped at the wall-clock limit of {timeout_s:g} s", **base)
     except Exception as e:             # a crash is recorded, never propagated
         return Trajectory(channels=nan, status="error", wall_s=0.0,
                           reason=f"{type(e).__name__}: {e}".splitlines()[0],

@@ -101,6 +101,7 @@ VARIANTS = ("paper", "conservative")
 DEFAULT_SETTINGS = {"integrator": "imr", "dt": "auto", "variant": "conservative",
                     "velocity_turn": None, "stored_in_hub": None, "q_damper": None,
                     "newton_tol": 1e-12, "stretch_limit": 0.5, "eps_fallback": 1e-10}
+AUTO_DT = {"imr": 1e-3}      # dt="auto" for imr; rk4's auto step comes from its stability limit
 DEFAULT_PARAMS = {"J_hub": 0.004, "rho_L": 0.000735, "L": 5.0, "L_c": 0.05, "r": 0.01,
                   "Omega0": 6.0, "omega_spool": 3.5, "tip_mass": 0.0005, "n": 20,
                   "stiffness": 1e7, "damping": 1e-3, "t_end": 142.857, "output_dt": 0.05}
@@ -842,7 +843,7 @@ def simulate(params, t_out, settings=None):
     n = int(P[NN])
     dt = s["dt"]
     if dt is None or dt == "auto":
-        dt = stable_dt_rk4(params) if s["integrator"] == "rk4" else 1e-3
+        dt = stable_dt_rk4(params) if s["integrator"] == "rk4" else AUTO_DT["imr"]
     dt = float(dt)
     if not dt > 0:
         raise ValueError("dt must be > 0")

@@ -70,7 +70,7 @@ _EXPLICIT = {"velocity_verlet": (exu.DynamicSolverType.VelocityVerlet, 2.0),
              "rk44": (exu.DynamicSolverType.RK44, 2.785)}
 _IMPLICIT = {"generalized_alpha": exu.DynamicSolverType.GeneralizedAlpha,
              "trapezoidal": exu.DynamicSolverType.TrapezoidalIndex2}
-IMPLICIT_DT = 0.05 / 70
+AUTO_DT = {"generalized_alpha": 0.05 / 70, "trapezoidal": 0.05 / 70}   # explicit: stability
 
 
 def simulate(params, t_out, settings=None):
@@ -82,7 +82,7 @@ def simulate(params, t_out, settings=None):
     explicit = s["integrator"] in _EXPLICIT
     h_stable = stable_dt_explicit(p, _EXPLICIT[s["integrator"]][1]) if explicit else None
     if s["dt"] in (None, "auto"):
-        h = h_stable if explicit else IMPLICIT_DT
+        h = h_stable if explicit else AUTO_DT[s["integrator"]]
     else:
         h = float(s["dt"])
 

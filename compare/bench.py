@@ -4,7 +4,9 @@ For each solver and integrator, a ladder of steps (fixed-step methods: the defau
 1, ½, snapped to divisors of the output step) or tolerances (error-controlled methods); the
 error of each run is the relative error of the key channel's final value against a reference
 (the tightest run of the first solver, confirmed by the second); the time is the median wall time
-over `repeats` runs, compile time reported apart. The summary names, for stated error levels,
+over `repeats` runs, compile time reported apart. A step-size-bound explicit method whose step
+is picked from its stability limit ("auto") has one rung. Every run's trajectory is kept in the
+bench directory. The summary names, for stated error levels,
 the fastest solver and every other solver's time ratio to it — all measured in this one run.
 """
 import datetime
@@ -73,10 +75,14 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print):
     # has one, else a quarter of its finest ladder step), confirmed by the second the same way
     refs = ([solvers.get_solver(n) for n in sc.reference_solvers]
             or solvers.solvers_for(sc.name)[:2])
+    stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
+    out_dir = Path(out) / "bench" / f"{sc.name}-{stamp}"
+    out_dir.mkdir(parents=True, exist_ok=True)
     ref_runs, done = [], {}
     for s in refs:
         st = _tightest(s, sc.name, dt_out)
         tr = solvers.simulate(sc, s, params, st)
+        tr.save(out_dir / f"reference-{s.name}.npz")
         ref_runs.append(tr)
         done[(s.name, repr(sorted(st.items())))] = tr     # a ladder rung equal to it reuses it
         log(f"reference {s.name}: {key}(end) = {tr.final()[key]:.15g} ({tr.status}, "
@@ -87,13 +93,14 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print):
     rows = []
     for s in chosen:
         leaf = s.leaf(sc.name)
-        for label, st in ladder(leaf, dt_out, s.preset):
+        for rung, (label, st) in enumerate(ladder(leaf, dt_out, s.preset)):
             walls, tr = [], done.get((s.name, repr(sorted(st.items()))))
             if tr is not None:
                 walls.append(tr.wall_s)
             while len(walls) < repeats:
                 tr = solvers.simulate(sc, s, params, st)
                 walls.append(tr.wall_s)
+            tr.save(out_dir / f"{s.name}-{rung}-{label}.npz")     # the trajectories stay
             err = abs(tr.final()[key] - ref) / abs(ref) if tr.status == "ok" else None
             rows.append({"solver": s.name, "method": label, "settings": tr.settings,
                          "status": tr.status, "wall_s": float(np.median(walls)),
@@ -123,9 +130,6 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print):
                      f"({fastest['method']}, {fastest['wall_s']:.3g} s); ratios "
                      + ", ".join(f"{s} {v:.2f}×" for s, v in sorted(ratios.items(),
                                                                    key=lambda x: x[1])))
-    stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-    out_dir = Path(out) / "bench" / f"{sc.name}-{stamp}"
-    out_dir.mkdir(parents=True, exist_ok=True)
     _plot(out_dir / "work_precision.png", rows, sc.name, key)
     obj = {"scene": sc.name, "params": params, "key_channel": key,
            "reference": {"solvers": [s.name for s in refs], "value": ref,

@@ -198,6 +198,10 @@ def test_exudyn_matches_conservative_custom_solver():
     assert rx["status"] == "ok"
     cx, cc = rx["channels"], rc["channels"]
     assert rel_drift(cx["angular_momentum"]) < 1e-8
+    # energy balance T + U + D − W_spool − W_release closes (spool work summed at every step;
+    # the system holds ~0.07 J)
+    E = cx["energy_balance"]
+    assert np.max(np.abs(E - E[0])) < 2e-6
     assert np.max(np.abs(cx["hub_rate"] - cc["hub_rate"]) / cc["hub_rate"]) < 1e-4
     assert np.max(np.abs(cx["tip_angle"] - cc["tip_angle"])) < 1e-5
 

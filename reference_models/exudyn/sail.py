@@ -112,9 +112,14 @@ def simulate(params, t_out, settings=None):
                                           stiffness=c, damping=d, activeConnector=False))
                for j in range(n - 1)]
     t_b = {"t": 0.0}
+    work = {"t": 0.0, "W": 0.0}        # spool work on one blade, summed at every new time
 
     def q_force(mbs_, t, itemNumber, deltaL, deltaL_t, stiffness, damping, force):
-        return c * (deltaL - rw * (t - t_b["t"])) + d * (deltaL_t - rw)
+        f = c * (deltaL - rw * (t - t_b["t"])) + d * (deltaL_t - rw)
+        if t > work["t"]:              # rectangle rule at the solver's own (stage) times
+            work["W"] -= f * rw * (t - work["t"])
+            work["t"] = t
+        return f
 
     qspr = [mbs.AddObject(SpringDamper(markerNumbers=[mn[j], mQ], referenceLength=0.0,
                                        stiffness=c, damping=d, activeConnector=False,
@@ -131,6 +136,7 @@ def simulate(params, t_out, settings=None):
     psi_o, Om_o = np.full(N, np.nan), np.full(N, np.nan)
     X_o, V_o = np.full((N, n, 3), np.nan), np.full((N, n, 3), np.nan)
     b_o = np.full(N, -1)
+    W_o = np.full(N, np.nan)
 
     def release(j, t):
         cfg = exu.ConfigurationType.Current
@@ -165,6 +171,7 @@ def simulate(params, t_out, settings=None):
             X_o[io, j] = (Lc + q[i0], q[i0 + 1], r)
             V_o[io, j] = (v[i0], v[i0 + 1], 0.0)
         b_o[io] = state["b"]
+        W_o[io] = 2.0 * work["W"]         # two blades
 
     ss = exu.SimulationSettings()
     ss.timeIntegration.verboseMode = int(s.get("verbose", 0))
@@ -203,7 +210,7 @@ def simulate(params, t_out, settings=None):
         if explicit:
             return solve_once(t0, t1, hs, tol)
         saved = (sd.GetODE2Coordinates(configuration=Cur), sd.GetODE2Coordinates_t(configuration=Cur),
-                 sd.GetAECoordinates(configuration=Cur))
+                 sd.GetAECoordinates(configuration=Cur), dict(work))
         last = None
         for div, tl in ((1, tol), (4, max(tol, s["fine_newton_rel_tol"])),
                         (16, max(tol, s["fine_newton_rel_tol"])),
@@ -217,6 +224,7 @@ def simulate(params, t_out, settings=None):
                 sd.SetODE2Coordinates(saved[0], configuration=Cur)
                 sd.SetODE2Coordinates_t(saved[1], configuration=Cur)
                 sd.SetAECoordinates(saved[2], configuration=Cur)
+                work.update(saved[3])
         raise last
 
     retries = [0]
@@ -259,7 +267,7 @@ def simulate(params, t_out, settings=None):
     if status == "ok" and not np.all(np.isfinite(Om_o)):
         status, reason = "diverged", "non-finite state"
         t_fail = float(t_out[~np.isfinite(Om_o)][0])
-    ch, extra = channels(p, t_out, psi_o, Om_o, X_o, V_o, b_o)
+    ch, extra = channels(p, t_out, psi_o, Om_o, X_o, V_o, b_o, W_o)
     extra["hub_rate_formula18"] = formula18(p, t_out)
     extra["boundary_node"] = b_o.astype(float)
     return {"channels": ch, "status": status, "t_fail": t_fail, "reason": reason,

@@ -98,6 +98,7 @@ from .integrators.implicit import block3_tridiag_factor, bordered_block3_solve
 CHANNELS = ("hub_rate", "deployed_length", "tip_angle", "angular_momentum", "energy_balance")
 INTEGRATORS = ("rk4", "imr")
 VARIANTS = ("paper", "conservative")
+LAST_NODE = ("attached", "released")
 DEFAULT_SETTINGS = {"integrator": "imr", "dt": "auto", "variant": "conservative",
                     "velocity_turn": None, "stored_in_hub": None, "q_damper": None,
                     "newton_tol": 1e-12, "stretch_limit": 0.5, "eps_fallback": 1e-10}
@@ -107,8 +108,9 @@ DEFAULT_PARAMS = {"J_hub": 0.004, "rho_L": 0.000735, "L": 5.0, "L_c": 0.05, "r":
                   "stiffness": 1e7, "damping": 1e-3, "t_end": 142.857, "output_dt": 0.05}
 
 # packed parameter array
-(JH, RHO, LL, LC, RR, OM0, WSP, MK, NN, CC, DD, L0, DPHI, STORED, TURN, QDAMP, EPS, SLIM) = range(18)
-NP = 18
+(JH, RHO, LL, LC, RR, OM0, WSP, MK, NN, CC, DD, L0, DPHI, STORED, TURN, QDAMP, EPS, SLIM,
+ ENDREL) = range(19)
+NP = 19
 # state layout: [Omega, psi, D (dissipated, one blade), W (payout work, one blade), x(3n), v(3n)]
 OFF = 4
 
@@ -142,6 +144,10 @@ def pack(params, settings):
     P[CC], P[DD], P[L0], P[DPHI] = params["stiffness"], params["damping"], l0, l0 / r
     P[STORED], P[TURN], P[QDAMP] = float(stored), float(turn), 1.0 if qd == "paper" else 0.0
     P[EPS], P[SLIM] = settings["eps_fallback"], settings["stretch_limit"]
+    last = params.get("last_node", "attached")
+    if last not in LAST_NODE:
+        raise ValueError(f"last_node must be one of {LAST_NODE}")
+    P[ENDREL] = float(last == "released")
     m = np.full(n, params["rho_L"] * l0)
     m[0] += params["tip_mass"]
     return P, m, {"velocity_turn": turn, "stored_in_hub": stored, "q_damper": qd}
@@ -157,6 +163,18 @@ def _j_eff(P, m, b):
             s += m[j]
         J += 2.0 * P[LC] ** 2 * s
     return J
+
+
+@nb.njit(cache=True)
+def _payout(t, P):
+    """(paid-out length, payout speed, Q-spring on) at time t. The spool pays out r·ω·t until the
+    whole blade is out at t_full = L/(r ω); then it stops and the last node stays tied to Q by a
+    spring of rest length l0 ("attached"), or leaves Q altogether ("released": the blade flies
+    free and the hub spins on at constant rate)."""
+    rw = P[RR] * P[WSP]
+    if rw * t < P[LL]:
+        return rw * t, rw, True
+    return P[LL], 0.0, P[ENDREL] < 0.5
 
 
 @nb.njit(cache=True)
@@ -190,7 +208,7 @@ def _forces(t, y, P, m, b, Q0, Q1, Q2, VQ0, VQ1, VQ2, p0, p1, p2, F):
     the frame of y). Fills F[0..3b+2]. Returns (F_Q on node b: fx, fy, fz, dissipation rate,
     payout power), one blade."""
     n = int(P[NN])
-    c, d, l0, rw = P[CC], P[DD], P[L0], P[RR] * P[WSP]
+    c, d, l0 = P[CC], P[DD], P[L0]
     ox, ov = OFF, OFF + 3 * n
     for k in range(3 * (b + 1)):
         F[k] = 0.0
@@ -201,6 +219,9 @@ def _forces(t, y, P, m, b, Q0, Q1, Q2, VQ0, VQ1, VQ2, p0, p1, p2, F):
         _push_pair(F, j, f * ex, f * ey, f * ez)
         diss += d * sd * sd
     # boundary node b: Q-spring with variable rest length l0(t) = r(φ − Δφ b)  [7-11]
+    paid, rw, q_on = _payout(t, P)
+    if not q_on:
+        return 0.0, 0.0, 0.0, diss, 0.0
     dx = Q0 - y[ox + 3 * b]
     dy = Q1 - y[ox + 3 * b + 1]
     dz = Q2 - y[ox + 3 * b + 2]
@@ -209,7 +230,7 @@ def _forces(t, y, P, m, b, Q0, Q1, Q2, VQ0, VQ1, VQ2, p0, p1, p2, F):
         ex, ey, ez = -p0, -p1, -p2
     else:
         ex, ey, ez = dx / ell, dy / ell, dz / ell
-    l0t = P[RR] * (P[WSP] * t - P[DPHI] * b)
+    l0t = paid - l0 * b
     s = ell - l0t
     ldot = (ex * (VQ0 - y[ov + 3 * b]) + ey * (VQ1 - y[ov + 3 * b + 1])
             + ez * (VQ2 - y[ov + 3 * b + 2]))
@@ -276,6 +297,9 @@ def _max_stretch(y, P, b, t, frame_inertial):
         s = abs(np.sqrt(dx * dx + dy * dy + dz * dz) - l0) / l0
         if s > worst:
             worst = s
+    paid, rw, q_on = _payout(t, P)
+    if not q_on:
+        return worst
     if frame_inertial:
         ps, pc = np.sin(y[1]), np.cos(y[1])
         Q0, Q1, Q2 = P[LC] * pc, P[LC] * ps, P[RR]
@@ -284,7 +308,7 @@ def _max_stretch(y, P, b, t, frame_inertial):
     dx = Q0 - y[ox + 3 * b]
     dy = Q1 - y[ox + 3 * b + 1]
     dz = Q2 - y[ox + 3 * b + 2]
-    s = abs(np.sqrt(dx * dx + dy * dy + dz * dz) - P[RR] * (P[WSP] * t - P[DPHI] * b)) / l0
+    s = abs(np.sqrt(dx * dx + dy * dy + dz * dz) - (paid - l0 * b)) / l0
     if s > worst:
         worst = s
     return worst
@@ -427,7 +451,7 @@ def _forces_dg(tm, Ym, P, m, b, Q0, Q1, Q2, VQ0, VQ1, p0, p1, p2, l_a, l_e, F, T
     momentum exact under the midpoint rule). Dampers: midpoint velocities along the midpoint
     chord. TR[j] receives the transverse stiffness c(1 − l0/ℓ̄) for the Newton matrix."""
     n = int(P[NN])
-    c, d, l0, rw = P[CC], P[DD], P[L0], P[RR] * P[WSP]
+    c, d, l0 = P[CC], P[DD], P[L0]
     ox, ov = OFF, OFF + 3 * n
     for k in range(3 * (b + 1)):
         F[k] = 0.0
@@ -438,11 +462,15 @@ def _forces_dg(tm, Ym, P, m, b, Q0, Q1, Q2, VQ0, VQ1, p0, p1, p2, l_a, l_e, F, T
         TR[j] = kt
         _push_pair(F, j, kt * dx + d * sd * ex, kt * dy + d * sd * ey, kt * dz + d * sd * ez)
         diss += d * sd * sd
+    paid, rw, q_on = _payout(tm, P)
+    if not q_on:
+        TR[b] = 0.0
+        return 0.0, 0.0, diss, 0.0
     dx = Q0 - Ym[ox + 3 * b]
     dy = Q1 - Ym[ox + 3 * b + 1]
     dz = Q2 - Ym[ox + 3 * b + 2]
     ell = np.sqrt(dx * dx + dy * dy + dz * dz)
-    l0t = P[RR] * (P[WSP] * tm - P[DPHI] * b)
+    l0t = paid - l0 * b
     lbar = 0.5 * (l_a[b] + l_e[b])
     if ell < P[EPS] or lbar < P[EPS]:
         ex, ey, ez = -p0, -p1, -p2
@@ -503,6 +531,7 @@ def _step_imr(t, h, y, P, m, b, tol, F, Ym, Dm, Bm, Dinv, U, R, X, G, l_a, l_e, 
     dprev = np.inf
     fqx = fqy = diss = wsp = 0.0
     dmax, vmax, dOm = 0.0, 1.0, 0.0
+    q_on = _payout(tm, P)[2]
     for it in range(1, 40):
         Om = Ym[0]
         Ym[1] = y[1] + hh * Om
@@ -547,7 +576,10 @@ def _step_imr(t, h, y, P, m, b, tol, F, Ym, Dm, Bm, Dinv, U, R, X, G, l_a, l_e, 
         dz = Q2 - Ym[ox + 3 * b + 2]
         if dx * dx + dy * dy + dz * dz < P[EPS] ** 2:
             dx, dy, dz = -pc, -ps, 0.0
-        _spring_jac(dx, dy, dz, max(TR[b], 0.0), c, d, hh, G)
+        if q_on:
+            _spring_jac(dx, dy, dz, max(TR[b], 0.0), c, d, hh, G)
+        else:                                   # last node released: no Q-spring
+            G[:, :] = 0.0
         for a in range(3):
             for q in range(3):
                 Dm[b, a, q] += G[a, q]
@@ -681,7 +713,7 @@ def inertial_to_body(Y, n, L_c):
     return Z
 
 
-def channels_from_body(Y, b_out, wrel, P, m):
+def channels_from_body(Y, b_out, wrel, P, m, t):
     """Scene channels from body-frame states (see the module docstring for the definitions)."""
     n = int(P[NN])
     Lc, r, c, l0, rw = P[LC], P[RR], P[CC], P[L0], P[RR] * P[WSP]
@@ -709,10 +741,10 @@ def channels_from_body(Y, b_out, wrel, P, m):
         dq = x[b] - np.array([0.0, 0.0, r])
         lq = np.sqrt(dq @ dq)
         t_l0 = None
-        U = 0.5 * c * np.sum((lens - l0) ** 2)
+        U = c * np.sum((lens - l0) ** 2)           # two blades
         out["hub_rate"][i] = Om
         out["angular_momentum"][i] = H
-        out["deployed_length"][i] = lens.sum() + lq
+        out["deployed_length"][i] = lens.sum() + (lq if _payout(t[i], P)[2] else 0.0)
         tip = x[0] - np.array([0.0, 0.0, r])
         nt = np.sqrt(tip @ tip)
         out["tip_angle"][i] = np.arccos(np.clip(tip[0] / nt, -1, 1)) if nt > 0 else 0.0
@@ -731,8 +763,9 @@ def _q_spring_energy(Y, b_out, t, P):
         b = int(b_out[i])
         xb = Y[i, OFF + 3 * b:OFF + 3 * b + 3]
         lq = np.sqrt(xb[0]**2 + xb[1]**2 + (xb[2] - r)**2)
-        s = lq - r * (P[WSP] * t[i] - P[DPHI] * b)
-        e[i] = 0.5 * c * s * s
+        paid, rw, q_on = _payout(t[i], P)
+        s = lq - (paid - P[L0] * b)
+        e[i] = 0.5 * c * s * s if q_on else 0.0
     return e
 
 
@@ -747,22 +780,27 @@ def stable_dt_rk4(params, safety=0.8):
 
 
 def _breakpoints(t_out, P):
+    """Merged step breakpoints: (times, output index or −1, node released or −1). Outputs,
+    releases t_j = j Δφ/ω (j ≥ 1) and the end of payout t_full = L/(r ω), where the payout
+    speed drops to 0, so that no step straddles a kink."""
     n = int(P[NN])
-    t_rel = P[DPHI] * np.arange(1, n) / P[WSP]
     t_end = t_out[-1]
-    t_rel = t_rel[t_rel < t_end - 1e-12]
-    bt, bo, br = [], [], []
-    io, ir = 0, 0
-    while io < len(t_out) or ir < len(t_rel):
-        to = t_out[io] if io < len(t_out) else np.inf
-        tr = t_rel[ir] if ir < len(t_rel) else np.inf
-        if abs(to - tr) <= 1e-10 * max(1.0, abs(to)):
-            bt.append(to); bo.append(io); br.append(ir + 1); io += 1; ir += 1
-        elif to < tr:
-            bt.append(to); bo.append(io); br.append(-1); io += 1
+    ev = {}
+    for i, t in enumerate(t_out):
+        ev[round(float(t), 10)] = [float(t), i, -1]
+    t_full = P[LL] / (P[RR] * P[WSP])
+    extra = [(P[DPHI] * j / P[WSP], j) for j in range(1, n)] + [(t_full, -1)]
+    for t, j in extra:
+        if t >= t_end - 1e-12:
+            continue
+        key = round(float(t), 10)
+        if key in ev:
+            ev[key][2] = max(ev[key][2], j)
         else:
-            bt.append(tr); bo.append(-1); br.append(ir + 1); ir += 1
-    return np.array(bt), np.array(bo, np.int64), np.array(br, np.int64)
+            ev[key] = [float(t), -1, j]
+    rows = sorted(ev.values())
+    return (np.array([r[0] for r in rows]), np.array([r[1] for r in rows], np.int64),
+            np.array([r[2] for r in rows], np.int64))
 
 
 def formula18(params, t, printed=False):
@@ -867,7 +905,7 @@ def simulate(params, t_out, settings=None):
                                                               len(t_out))
         Yb = Y
     wall = time.perf_counter() - w0
-    ch, signed, kin = channels_from_body(Yb, b_out, wrel, P, m)
+    ch, signed, kin = channels_from_body(Yb, b_out, wrel, P, m, t_out)
     eq = _q_spring_energy(Yb, b_out, t_out, P)
     ch["energy_balance"] = (ch["energy_balance"] + 2 * eq + 2 * Yb[:, 2] - 2 * Yb[:, 3]
                             - 2 * wrel)

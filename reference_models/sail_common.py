@@ -22,7 +22,8 @@ CHANNELS = ("hub_rate", "deployed_length", "tip_angle", "angular_momentum", "ene
 
 DEFAULT_PARAMS = {"J_hub": 0.004, "rho_L": 0.000735, "L": 5.0, "L_c": 0.05, "r": 0.01,
                   "Omega0": 6.0, "omega_spool": 3.5, "tip_mass": 0.0005, "n": 20,
-                  "stiffness": 1e7, "damping": 1e-3, "t_end": 142.857, "output_dt": 0.05}
+                  "stiffness": 1e7, "damping": 1e-3, "last_node": "attached", "t_end": 142.857,
+                  "output_dt": 0.05}
 
 
 def merge_settings(settings, defaults, integrators, t_out):
@@ -39,8 +40,24 @@ def merge_settings(settings, defaults, integrators, t_out):
     return s, t_out
 
 
+def payout(p, t):
+    """(paid-out length, payout speed, Q-spring on) at time t: r ω t until the whole blade is
+    out at t_full = L/(r ω); then the spool stops and the last node stays tied to Q at rest
+    length l0 (last_node "attached") or leaves it ("released"). As custom_models.thread_spool."""
+    rw = p["r"] * p["omega_spool"]
+    if rw * t < p["L"]:
+        return rw * t, rw, True
+    return p["L"], 0.0, p["last_node"] == "attached"
+
+
+def t_full(p):
+    return p["L"] / (p["r"] * p["omega_spool"])
+
+
 def scene(params):
     p = {**DEFAULT_PARAMS, **params}
+    if p["last_node"] not in ("attached", "released"):
+        raise ValueError("last_node must be 'attached' or 'released'")
     n = int(p["n"])
     l0 = p["L"] / n
     m = np.full(n, p["rho_L"] * l0)
@@ -58,10 +75,13 @@ def stable_dt_explicit(params, factor=2.0, safety=0.8):
     return safety * factor / lam
 
 
-def events(t_out, t_rel, t_end):
-    """Merged breakpoints: list of (time, output index or -1, node released or -1)."""
+def events(t_out, t_rel, t_end, t_stop=None):
+    """Merged breakpoints: list of (time, output index or -1, node released or -1); the end of
+    payout `t_stop` (if before t_end) as (t_stop, -1, -1)."""
     ev = [(t, i, -1) for i, t in enumerate(t_out)]
     ev += [(t, -1, j) for j, t in enumerate(t_rel) if 0 < t < t_end - 1e-12]
+    if t_stop is not None and t_stop < t_end - 1e-12:
+        ev.append((t_stop, -1, -1))
     ev.sort(key=lambda e: (e[0], -e[2]))          # release before output at equal times
     return ev
 
@@ -107,16 +127,17 @@ def channels(params, t, psi, Om, X, V, b_out, spool_work=None):
         lq = np.sqrt(dq @ dq)
         eq = dq / lq if lq > 1e-10 else -np.array([cp, sp, 0.0])
         ldot = eq @ (VQ - v[b])
-        w = ldot - rw
-        s = lq - rw * (t[i] - b * l0 / rw)
-        U = 0.5 * c * (np.sum((lens - l0) ** 2) + s * s)
+        paid, rate, q_on = payout(p, t[i])
+        w = (ldot - rate) if q_on else 0.0
+        s = (lq - (paid - b * l0)) if q_on else 0.0
+        U = c * (np.sum((lens - l0) ** 2) + s * s)            # two blades
         rate_D[i] = 2 * d * (np.sum(sd**2) + w * w)
-        rate_W[i] = -2 * (c * s + d * w) * rw
+        rate_W[i] = -2 * (c * s + d * w) * rate
         TU[i] = T + U
         wrel[i] = np.sum(m[:b + 1]) * rw**2          # 2 blades x ½ m (rω)²
         out["hub_rate"][i] = Om[i]
         out["angular_momentum"][i] = H
-        out["deployed_length"][i] = lens.sum() + lq
+        out["deployed_length"][i] = lens.sum() + (lq if q_on else 0.0)
         # Δu [19]: angle at Q between the tip and the X1 axis (body frame)
         tip = x[0] - Q
         tb = np.array([cp * tip[0] + sp * tip[1], -sp * tip[0] + cp * tip[1], tip[2]])

@@ -47,6 +47,9 @@ SAIL = Scene(
         Param("n", 20, "", "nodes per blade (paper: 20 and 40)", kind="int", lo=2, hi=2000),
         positive("stiffness", 1e7, "N/m", "thread spring stiffness (paper: 1e7…1e9)", hi=1e13),
         Param("damping", 1e-3, "N·s/m", "thread damping (paper: 1e-6…1)", lo=0.0, hi=1e6),
+        Param("last_node", "attached", "", "at full payout t = L/(r·ω) the spool stops and the "
+              "last node stays tied to the spool (attached) or leaves it (released: the blade "
+              "flies free)", kind="choice", choices=("attached", "released")),
         positive("t_end", 142.9, "s", "horizon (full deployment L/(r·ω) = 142.857 s)", hi=1e5),
         positive("output_dt", 0.05, "s", "output grid"),
     ),

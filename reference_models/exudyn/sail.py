@@ -58,7 +58,8 @@ from exudyn.itemInterface import (CoordinateConstraint, MarkerBodyPosition,
                                   NodePointGround, NodePoint2D, NodeRigidBody2D,
                                   ObjectRigidBody2D, RevoluteJoint2D, SpringDamper)
 
-from ..sail_common import channels, formula18, merge_settings, scene, stable_dt_explicit
+from ..sail_common import (channels, formula18, merge_settings, payout, scene,
+                           stable_dt_explicit, t_full)
 
 DEFAULT_SETTINGS = {"integrator": "velocity_verlet", "dt": "auto", "rho_inf": 0.8,
                     "newton_rel_tol": 1e-6, "newton_abs_tol": 1e-8, "modified_newton": True,
@@ -111,13 +112,16 @@ def simulate(params, t_out, settings=None):
     springs = [mbs.AddObject(SpringDamper(markerNumbers=[mn[j], mn[j + 1]], referenceLength=l0,
                                           stiffness=c, damping=d, activeConnector=False))
                for j in range(n - 1)]
-    t_b = {"t": 0.0}
     work = {"t": 0.0, "W": 0.0}        # spool work on one blade, summed at every new time
+    state = {"b": -1}
 
     def q_force(mbs_, t, itemNumber, deltaL, deltaL_t, stiffness, damping, force):
-        f = c * (deltaL - rw * (t - t_b["t"])) + d * (deltaL_t - rw)
+        paid, rate, q_on = payout(p, t)
+        if not q_on:                   # last node released at full payout
+            return 0.0
+        f = c * (deltaL - (paid - l0 * state["b"])) + d * (deltaL_t - rate)
         if t > work["t"]:              # rectangle rule at the solver's own (stage) times
-            work["W"] -= f * rw * (t - work["t"])
+            work["W"] -= f * rate * (t - work["t"])
             work["t"] = t
         return f
 
@@ -131,7 +135,6 @@ def simulate(params, t_out, settings=None):
 
     ode2_node = [mbs.GetNodeODE2Index(nj) for nj in nodes]
     hub_idx = mbs.GetNodeODE2Index(nh)
-    state = {"b": -1}
     N = len(t_out)
     psi_o, Om_o = np.full(N, np.nan), np.full(N, np.nan)
     X_o, V_o = np.full((N, n, 3), np.nan), np.full((N, n, 3), np.nan)
@@ -158,7 +161,6 @@ def simulate(params, t_out, settings=None):
         if j > 0:
             mbs.SetObjectParameter(qspr[j - 1], "activeConnector", False)
             mbs.SetObjectParameter(springs[j - 1], "activeConnector", True)
-        t_b["t"] = t_rel[j]
         state["b"] = j
 
     def record(io):
@@ -232,8 +234,8 @@ def simulate(params, t_out, settings=None):
     # breakpoints: outputs and releases; implicit: after each release a window of `fine_window`
     # s is integrated with `fine_dt` (the new boundary segment is nearly zero-length and its
     # direction is ill-defined for Newton with the coarse step)
-    bps = sorted(set(np.round(t_out, 12)) | {float(np.round(x, 12)) for x in t_rel[1:]
-                                               if x < t_out[-1]})
+    bps = sorted(set(np.round(t_out, 12)) | {float(np.round(x, 12)) for x in
+                                               [*t_rel[1:], t_full(p)] if x < t_out[-1]})
     out_index = {float(np.round(x, 12)): i for i, x in enumerate(t_out)}
     rel_index = {float(np.round(x, 12)): j for j, x in enumerate(t_rel) if j > 0}
     fine_window = 0.0 if explicit else s["fine_window"]

@@ -62,11 +62,37 @@ def _tightest(solver, scene_name, dt_out):
     return {**base, "dt": min(steps) / 4} if steps else base
 
 
-def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print):
+def _rungs(sc, solver, overrides, params, dt_out, vary):
+    """(label, settings, params) per run: the accuracy-knob ladder, or with `vary` = (NAME,
+    values) the solver's default settings at each value of that model parameter (e.g. the
+    paper's advice to lower the thread stiffness for design runs)."""
+    if vary is None:
+        return [(label, st, params) for label, st in
+                ladder(solver.leaf(sc.name), dt_out, solver.preset)]
+    name, values = vary
+    st = solvers.settings_for(solver, sc.name)
+    return [(f"{name}={v}", st, sc.resolve({**overrides, name: v})) for v in values]
+
+
+def parse_vary(text, sc):
+    """NAME=v1,v2,... → (NAME, [v1, v2, ...]), checked against the scene's parameters."""
+    name, sep, values = (text or "").partition("=")
+    vals = [v.strip() for v in values.split(",") if v.strip()]
+    if not sep or not vals:
+        raise BadInput(f"--vary {text!r}: expected NAME=V1,V2,...")
+    if name in ("t_end", "output_dt"):
+        raise BadInput(f"--vary {name}: the output grid must stay the reference's")
+    for v in vals:
+        sc.resolve({name.strip(): v})          # one-line error for an unknown name or bad value
+    return name.strip(), vals
+
+
+def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, vary=None):
     sc = get_scene(scene_name)
     if sc.kind != "time":
         raise BadInput(f"scene {sc.name!r}: bench sweeps time-domain scenes")
     params = sc.resolve(overrides)
+    vary = parse_vary(vary, sc) if vary is not None else None
     chosen = solvers.pick(sc, solver_names)
     dt_out = params["output_dt"]
     key = sc.key_channel
@@ -93,12 +119,13 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print):
     rows = []
     for s in chosen:
         leaf = s.leaf(sc.name)
-        for rung, (label, st) in enumerate(ladder(leaf, dt_out, s.preset)):
-            walls, tr = [], done.get((s.name, repr(sorted(st.items()))))
+        for rung, (label, st, p) in enumerate(_rungs(sc, s, overrides, params, dt_out, vary)):
+            walls, tr = [], (done.get((s.name, repr(sorted(st.items())))) if p == params
+                             else None)
             if tr is not None:
                 walls.append(tr.wall_s)
             while len(walls) < repeats:
-                tr = solvers.simulate(sc, s, params, st)
+                tr = solvers.simulate(sc, s, p, st)
                 walls.append(tr.wall_s)
             tr.save(out_dir / f"{s.name}-{rung}-{label}.npz")     # the trajectories stay
             err = abs(tr.final()[key] - ref) / abs(ref) if tr.status == "ok" else None
@@ -107,7 +134,8 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print):
                          "compile_s": tr.stats.get("compile_s"), "rel_error": err,
                          "energy_residual": metrics.energy_residual(tr, sc.energy_channel)
                          if sc.energy_channel else None,
-                         "steps": tr.stats.get("steps")})
+                         "steps": tr.stats.get("steps"),
+                         **({"vary": {vary[0]: p[vary[0]]}} if vary else {})})
             knob = st["rtol"] if label in getattr(leaf, "ADAPTIVE", ()) else st.get("dt")
             log(f"  {s.name} {label} {knob}: err "
                 f"{err if err is None else f'{err:.2e}'} wall {np.median(walls):.3g} s")
@@ -132,6 +160,7 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print):
                                                                    key=lambda x: x[1])))
     _plot(out_dir / "work_precision.png", rows, sc.name, key)
     obj = {"scene": sc.name, "params": params, "key_channel": key,
+           "vary": vary and {"name": vary[0], "values": vary[1]},
            "reference": {"solvers": [s.name for s in refs], "value": ref,
                          "cross_check_rel": ref_check},
            "repeats": repeats, "rows": rows, "summary": summary, "summary_lines": lines}

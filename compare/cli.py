@@ -123,6 +123,10 @@ def build_parser():
     sp = sub.add_parser("bench", help="speed/accuracy (work-precision) sweep")
     common(sp)
     sp.add_argument("--repeats", type=int, default=3)
+    sp.add_argument("--vary", metavar="NAME=V1,V2,...",
+                    help="trade a model parameter instead of the step: each solver's default "
+                         "settings at each value, errors against the reference at the --set "
+                         "value (e.g. --vary stiffness=1e5,1e6)")
     sp.add_argument("--out", default="logs")
     return p
 
@@ -225,7 +229,7 @@ def cmd_bench(args):
     from .bench import run_bench
     with stdout_to_stderr():
         obj = run_bench(args.scene, args.solver, parse_sets(args.set), args.out,
-                        repeats=args.repeats, log=_log)
+                        repeats=args.repeats, log=_log, vary=args.vary)
     if args.json:
         emit_json(obj)
     else:

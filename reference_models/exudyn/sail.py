@@ -275,4 +275,4 @@ def simulate(params, t_out, settings=None):
     return {"channels": ch, "status": status, "t_fail": t_fail, "reason": reason,
             "stats": {"steps": int(steps), "rhs_evals": -1, "segment_retries": retries[0],
                       "wall_s": wall},
-            "settings": {**s, "dt": h}, "extra": extra}
+            "settings": {**s, "dt": float(h)}, "extra": extra}

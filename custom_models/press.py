@@ -38,9 +38,11 @@ import math
 import time
 
 import numba as nb
+from numba import types as nt
 import numpy as np
 
-from .integrators.explicit import _stages
+from .integrators.explicit import GUARD, RHS, _MAT, _VEC, _stages
+from .integrators.linear_acceleration import ACC
 from .integrators import (ADAPTIVE_TABLEAUS, FAIL_REASONS, FIXED_TABLEAUS, LA_REASONS,
                           MODE_FIXED_POINT, MODE_NEWTON, MODE_PC, integrate_adaptive,
                           integrate_fixed, integrate_wilson, wilson_step)
@@ -476,7 +478,10 @@ def _rk_step(f, t, y, p, h, A, B, C):
     return y1
 
 
-@nb.njit
+@nb.njit(nt.Tuple((nt.int64, nt.float64, _VEC, nt.int64, nt.int64, nt.int64))(
+    RHS, ACC, GUARD, nt.int64, _VEC, _VEC, nt.float64, nt.float64, _VEC, nt.int64, _MAT,
+    nt.float64, _MAT, _VEC, _VEC, nt.float64, nt.int64, nt.float64, nt.int64, nt.boolean,
+    nt.float64, nt.float64), cache=True)
 def segment(f, acc, guard, method, y0, p, t0, t_stop, t_out, i_next, Y, h_nom, tA, tB, tC,
             theta, la_mode, tol, max_iter, ev_on, psi_target, t_tol):
     """Fixed-step integration from (t0, y0) to t_stop, filling Y at the output times in

@@ -9,12 +9,14 @@ diverged run can never look like a finite result.
 Steps always land on the output times (the adaptive driver shortens a step to hit the next output
 instead of interpolating), so outputs carry the integrator's own accuracy.
 
-Why function arguments: one compiled driver serves every model. Specialisations on a function
-argument are not cached by numba, so each process pays ~1 s compile once; callers report that
-as compile time, separately from the run.
+Why function arguments: one compiled driver serves every model. The drivers are compiled for
+first-class function types (`RHS`, `GUARD`: fixed signatures, called through a pointer), which
+numba caches on disk like any other type — a specialisation on a particular jitted function
+would not be cached, and every process paid ~8 s to compile it again.
 """
 import numpy as np
 import numba as nb
+from numba import types as nt
 from scipy.integrate._ivp import dop853_coefficients as _dop853
 from scipy.integrate._ivp.rk import RK23 as _RK23, RK45 as _RK45
 
@@ -32,10 +34,10 @@ def _square(a, n):
 
 def _tableau(A, B, C, E=None, E3=None, order=0, err_order=0):
     n = len(B)
-    return {"A": _square(np.asarray(A, float), n), "B": np.asarray(B, float),
-            "C": np.asarray(C[:n], float),
-            "E": np.zeros(0) if E is None else np.asarray(E, float),
-            "E3": np.zeros(0) if E3 is None else np.asarray(E3, float),
+    vec = np.ascontiguousarray
+    return {"A": _square(np.asarray(A, float), n), "B": vec(B, float), "C": vec(C[:n], float),
+            "E": np.zeros(0) if E is None else vec(E, float),
+            "E3": np.zeros(0) if E3 is None else vec(E3, float),
             "order": order, "err_order": err_order}
 
 
@@ -56,12 +58,17 @@ ADAPTIVE_TABLEAUS = {
 }
 
 
+_VEC, _MAT = nt.float64[::1], nt.float64[:, ::1]       # C-contiguous: models reshape slices
+RHS = nt.FunctionType(_VEC(nt.float64, _VEC, _VEC))          # f(t, y, p) -> dy
+GUARD = nt.FunctionType(nt.int64(nt.float64, _VEC, _VEC))    # guard(t, y, p) -> code
+
+
 @nb.njit(cache=True)
 def no_guard(t, y, p):
     return 0
 
 
-@nb.njit
+@nb.njit(cache=True)
 def _stages(f, t, y, p, h, A, C, K):
     """Fill K[0..s-1] with the stage derivatives (K[0] must hold f(t, y) already)."""
     n_st = A.shape[0]
@@ -76,7 +83,8 @@ def _stages(f, t, y, p, h, A, C, K):
         K[s] = f(t + C[s] * h, ys, p)
 
 
-@nb.njit
+@nb.njit(nt.Tuple((_MAT, nt.int64, nt.int64, nt.float64, nt.int64))(
+    RHS, GUARD, _VEC, _VEC, _VEC, nt.int64, _MAT, _VEC, _VEC), cache=True)
 def integrate_fixed(f, guard, y0, p, t_out, substeps, A, B, C):
     """Fixed step h = (t_out[i+1] - t_out[i]) / substeps.
 
@@ -110,7 +118,7 @@ def integrate_fixed(f, guard, y0, p, t_out, substeps, A, B, C):
     return Y, steps, evals, np.nan, FAIL_OK
 
 
-@nb.njit
+@nb.njit(cache=True)
 def _error_norm(K, h, scale, E, E3):
     ny = scale.shape[0]
     e5 = 0.0
@@ -132,7 +140,9 @@ def _error_norm(K, h, scale, E, E3):
     return abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * ny)
 
 
-@nb.njit
+@nb.njit(nt.Tuple((_MAT, nt.int64, nt.int64, nt.int64, nt.float64, nt.int64))(
+    RHS, GUARD, _VEC, _VEC, _VEC, nt.float64, nt.float64, nt.float64, nt.int64,
+    _MAT, _VEC, _VEC, _VEC, _VEC, nt.int64), cache=True)
 def integrate_adaptive(f, guard, y0, p, t_out, rtol, atol, h_max, max_steps,
                        A, B, C, E, E3, err_order):
     """Error-controlled embedded RK (FSAL), steps clipped to land on every output time.

@@ -35,8 +35,13 @@ failure, plus (steps, rhs_evals, t_fail, code).
 """
 import numpy as np
 import numba as nb
+from numba import types as nt
 
-from .explicit import FAIL_OK, FAIL_NONFINITE
+from .explicit import FAIL_OK, FAIL_NONFINITE, GUARD, _MAT, _VEC
+
+# acc(t, q, q', p) -> [q'', z'] as a first-class function type: the drivers are compiled (and
+# cached on disk) once for every model, as the explicit ones (q, q' may be slices: layout 'A')
+ACC = nt.FunctionType(_VEC(nt.float64, nt.float64[:], nt.float64[:], _VEC))
 
 FAIL_NO_CONVERGENCE = 4
 MODE_NEWTON, MODE_FIXED_POINT, MODE_PC = 0, 1, 2
@@ -96,7 +101,7 @@ def as_first_order(acc, n):
     return f
 
 
-@nb.njit
+@nb.njit(cache=True)
 def _all_finite(x):
     for v in x:
         if not np.isfinite(v):
@@ -104,7 +109,7 @@ def _all_finite(x):
     return True
 
 
-@nb.njit
+@nb.njit(cache=True)
 def _state_at(q, qd, qdd, a, tau, qt, qdt):
     """q, q' at t + τ from the linear acceleration law, given a = q''(t + τ)."""
     for j in range(q.shape[0]):
@@ -112,7 +117,7 @@ def _state_at(q, qd, qdd, a, tau, qt, qdt):
         qdt[j] = qd[j] + 0.5 * tau * (qdd[j] + a[j])
 
 
-@nb.njit
+@nb.njit(cache=True)
 def _jacobian(acc, t, qt, qdt, p, tau, n, f0):
     """I − (τ²/6) ∂f/∂q − (τ/2) ∂f/∂q' by forward differences (2n evaluations)."""
     Jm = np.eye(n)
@@ -130,7 +135,7 @@ def _jacobian(acc, t, qt, qdt, p, tau, n, f0):
     return Jm
 
 
-@nb.njit
+@nb.njit(cache=True)
 def wilson_step(acc, t, q, qd, qdd, z, zd, p, h, theta, mode, tol, max_iter):
     """One step from (q, q', q'', z, z') at t. Returns (q1, qd1, qdd1, z1, zd1, evals, code);
     qdd1 is the method's own end acceleration (for θ = 1 it satisfies the equations)."""
@@ -214,7 +219,9 @@ def wilson_step(acc, t, q, qd, qdd, z, zd, p, h, theta, mode, tol, max_iter):
     return q1, qd1, qdd1, z1, zd1, evals, FAIL_OK
 
 
-@nb.njit
+@nb.njit(nt.Tuple((_MAT, nt.int64, nt.int64, nt.float64, nt.int64))(
+    ACC, GUARD, _VEC, nt.int64, _VEC, _VEC, nt.int64, nt.float64, nt.int64, nt.float64,
+    nt.int64), cache=True)
 def integrate_wilson(acc, guard, y0, n, p, t_out, substeps, theta, mode, tol, max_iter):
     """Fixed step h = (t_out[i+1] − t_out[i]) / substeps; y = [q (n), q' (n), z].
 

@@ -8,6 +8,8 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
+from .report import analytic_curve
+
 PALETTE = [(31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189),
            (140, 86, 75), (227, 119, 194), (127, 127, 127)]
 
@@ -65,6 +67,14 @@ def write_run_recording(path, result):
                                      columns=rr.Scalars.columns(scalars=v[ok]))
             if draw and tr.status in ("ok", "diverged"):
                 draw(rec, result.params, tr, np.array([1.0 * i, 0.0, 0.0]))
+        for ch in scene.channels:
+            curve = analytic_curve(result, ch)
+            if curve is not None:
+                t, v, label = curve
+                ent = f"{ch}/{label}"
+                rec.log(ent, rr.SeriesLines(names=label, colors=[[0, 0, 0]], widths=1.0),
+                        static=True)
+                rec.send_columns(ent, indexes=_time(t), columns=rr.Scalars.columns(scalars=v))
         rec.log("summary", rr.TextDocument(summary_markdown(result),
                                            media_type=rr.MediaType.MARKDOWN), static=True)
     return path

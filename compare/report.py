@@ -21,6 +21,17 @@ def _savefig(fig, path):
     return Path(path).name
 
 
+def analytic_curve(result, ch):
+    """(t, values, label) of the scene's closed form for `ch`, from the first trajectory that
+    carries it, or None."""
+    key = result.scene.analytic.get(ch)
+    for tr in result.trajectories if key else ():
+        v = tr.extra.get(key[0])
+        if v is not None and len(v) == len(tr.t):
+            return tr.t, np.asarray(v, float), key[1]
+    return None
+
+
 def plot_channels(result, path):
     plt = _plt()
     chs = result.scene.channels
@@ -30,6 +41,10 @@ def plot_channels(result, path):
     for ax, ch in zip(axes.flat, chs):
         for tr in result.trajectories:
             ax.plot(tr.t, tr.channels[ch], lw=1, label=tr.solver)
+        curve = analytic_curve(result, ch)
+        if curve is not None:
+            ax.plot(curve[0], curve[1], "k--", lw=1, label=curve[2])
+            ax.legend(fontsize=7)
         ax.set_ylabel(ch)
         ax.grid(alpha=0.3)
     for ax in axes.flat[len(chs):]:

@@ -375,3 +375,21 @@ def test_scene_runs_both_custom_variants_through_the_compare_layer():
                                    p["r"] * p["omega_spool"] * out[name].t, atol=1e-6)
     assert out["thread-spool-conservative"].invariants["angular_momentum"] < 1e-8
     assert 1e-5 < out["thread-spool"].invariants["angular_momentum"] < 1e-2
+
+
+def test_report_and_recording_carry_formula18(tmp_path):
+    """`xval run` draws the rebuilt formula 18 next to the solvers' hub rate (PNG and rerun
+    entity hub_rate/formula18); its values are the rigid-blade closed form, computed here."""
+    import json
+    from compare.recording import load_scalar_series
+    from conftest import xval
+    rc, so, se = xval("run", "sail-deploy", "--solver", "thread-spool-conservative", "--set",
+                      "t_end=2", "--json", "--out", str(tmp_path))
+    assert rc == 0, se
+    t, v = load_scalar_series(json.loads(so)["recording"], "hub_rate/formula18")
+    J, rho, L, Lc, mk, Om0 = 0.004, 0.000735, 5.0, 0.05, 0.0005, 6.0
+    ell = 0.01 * 3.5 * t
+    I0 = J + 2 * (rho * L + mk) * Lc**2
+    I = J + 2 * (rho * (L - ell) * Lc**2 + rho * ((Lc + ell)**3 - Lc**3) / 3 + mk * (Lc + ell)**2)
+    np.testing.assert_allclose(v, I0 * Om0 / I, rtol=1e-12)
+    assert len(t) == 41

@@ -25,6 +25,9 @@ class Scene:
     energy_bound: float = 0.05
     # conserved quantities (channel -> reported as relative drift in `invariants`)
     invariant_channels: tuple[str, ...] = ()
+    # closed forms drawn with a channel: channel -> (trajectory extra key, label); plotted in
+    # the report and recorded as `<channel>/<label>` next to the solvers
+    analytic: dict = field(default_factory=dict)
     # the bench's reference: the first runs tightest, the second confirms it (names only)
     reference_solvers: tuple[str, ...] = ()
     check: Callable | None = None   # cross-parameter physical checks, raises BadInput

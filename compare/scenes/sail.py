@@ -58,6 +58,7 @@ SAIL = Scene(
     key_channel="tip_angle",
     reference_solvers=("thread-spool-conservative", "exudyn"),
     invariant_channels=("angular_momentum",),
+    analytic={"hub_rate": ("hub_rate_formula18", "formula18")},
     findings=sail_findings,
     notes="thread-spool is the paper's model (velocity turn at release, stored thread outside "
           "the hub inertia: not exactly conservative); thread-spool-conservative and the engines "

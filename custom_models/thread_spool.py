@@ -339,6 +339,22 @@ def _release_rot(y, P, m, j):
 
 
 @nb.njit(cache=True)
+def _split(T, dt):
+    """Equal steps no longer than dt over a breakpoint interval T: (count ≥ 1, step)."""
+    ns = max(1, int(np.ceil(T / dt - 1e-9)))
+    return ns, T / ns
+
+
+@nb.njit(cache=True)
+def _store(io, y, b, wrel, Y, b_out, wrel_out):
+    """Record the state at output row io (skipped for io < 0: a release-only breakpoint)."""
+    if io >= 0:
+        Y[io] = y
+        b_out[io] = b
+        wrel_out[io] = wrel
+
+
+@nb.njit(cache=True)
 def _run_rk4(y0, P, m, bk_t, bk_out, bk_rel, dt, n_out):
     """Fixed-step RK4 in the rotating frame; steps land on every breakpoint (outputs, releases).
     Returns (Y, b_out, wrel_out, steps, evals, t_fail, code)."""
@@ -361,11 +377,7 @@ def _run_rk4(y0, P, m, bk_t, bk_out, bk_rel, dt, n_out):
     for ib in range(bk_t.shape[0]):
         if ib > 0:
             t0 = bk_t[ib - 1]
-            T = bk_t[ib] - t0
-            ns = int(np.ceil(T / dt - 1e-9))
-            if ns < 1:
-                ns = 1
-            h = T / ns
+            ns, h = _split(bk_t[ib] - t0, dt)
             for k in range(ns):
                 t = t0 + k * h
                 _rhs_rot(t, y, P, m, b, F, k1)
@@ -389,11 +401,7 @@ def _run_rk4(y0, P, m, bk_t, bk_out, bk_rel, dt, n_out):
         if j > 0:
             b = j
             wrel += _release_rot(y, P, m, j)
-        io = bk_out[ib]
-        if io >= 0:
-            Y[io] = y
-            b_out[io] = b
-            wrel_out[io] = wrel
+        _store(bk_out[ib], y, b, wrel, Y, b_out, wrel_out)
     return Y, b_out, wrel_out, steps, 4 * steps, np.nan, 0
 
 
@@ -649,11 +657,7 @@ def _run_imr(y0, P, m, bk_t, bk_out, bk_rel, dt, n_out, tol):
     for ib in range(bk_t.shape[0]):
         if ib > 0:
             t0 = bk_t[ib - 1]
-            T = bk_t[ib] - t0
-            ns = int(np.ceil(T / dt - 1e-9))
-            if ns < 1:
-                ns = 1
-            h = T / ns
+            ns, h = _split(bk_t[ib] - t0, dt)
             for k in range(ns):
                 t = t0 + k * h
                 # Newton may fail where the boundary segment is nearly zero-length (just after
@@ -684,11 +688,7 @@ def _run_imr(y0, P, m, bk_t, bk_out, bk_rel, dt, n_out, tol):
         if j > 0:
             b = j
             wrel += _release_in(y, P, m, j)
-        io = bk_out[ib]
-        if io >= 0:
-            Y[io] = y
-            b_out[io] = b
-            wrel_out[io] = wrel
+        _store(bk_out[ib], y, b, wrel, Y, b_out, wrel_out)
     return Y, b_out, wrel_out, steps, iters + 1000000000 * retries, np.nan, 0
 
 

@@ -151,3 +151,18 @@ def output_grid_check(t_out: np.ndarray, dt: float) -> np.ndarray:
     if not (dt > 0.0):
         raise ValueError(f"dt must be > 0, got {dt!r}")
     return t_out
+
+
+CYCLE_KEYS = ("lock_after", "lock_angle", "press_force", "release_after")
+
+
+def prepare(params, t_out, settings, check_settings, cycle=None):
+    """The shared start of an engine leaf: the scene (press-cycle when any cycle parameter is
+    given, or cycle=True), the leaf's checked settings, the checked output grid and the
+    consistent initial state. Returns (cycle, p, s, t_out, state)."""
+    if cycle is None:
+        cycle = any(k in (params or {}) for k in CYCLE_KEYS)
+    p = merged(params, cycle=cycle)
+    s = check_settings(settings)
+    t_out = output_grid_check(t_out, s["dt"])
+    return cycle, p, s, t_out, initial_state(p)

@@ -299,13 +299,8 @@ def _hermite(rec_rates, t):
 def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, cycle: bool | None = None) -> dict:
     """Run the press (idle) scene; with lock_after/lock_angle/press_force/release_after in params
     (or cycle=True) the press-cycle scene."""
-    if cycle is None:
-        cycle = any(k in (params or {}) for k in ("lock_after", "lock_angle", "press_force", "release_after"))
-    p = pc.merged(params, cycle=cycle)
-    s = _check_settings(settings)
+    cycle, p, s, t_out, st = pc.prepare(params, t_out, settings, _check_settings, cycle)
     dt = s["dt"]
-    t_out = pc.output_grid_check(t_out, dt)
-    st = pc.initial_state(p)
     n = len(t_out)
     ch = {k: np.full(n, np.nan) for k in pc.CHANNELS}
     extra = {}

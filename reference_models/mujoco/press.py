@@ -113,13 +113,8 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, c
     """Run the press (idle) scene; with lock_after/lock_angle/press_force/release_after in params
     (or cycle=True) the press-cycle scene."""
     import mujoco
-    if cycle is None:
-        cycle = any(k in (params or {}) for k in ("lock_after", "lock_angle", "press_force", "release_after"))
-    p = pc.merged(params, cycle=cycle)
-    s = _check_settings(settings)
+    cycle, p, s, t_out, st = pc.prepare(params, t_out, settings, _check_settings, cycle)
     dt = s["dt"]
-    t_out = pc.output_grid_check(t_out, dt)
-    st = pc.initial_state(p)
     m = mujoco.MjModel.from_xml_string(_xml(p, st, s, cycle))
     d = mujoco.MjData(m)
     u = float(p["gear_ratio"])

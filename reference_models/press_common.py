@@ -166,3 +166,19 @@ def prepare(params, t_out, settings, check_settings, cycle=None):
     s = check_settings(settings)
     t_out = output_grid_check(t_out, s["dt"])
     return cycle, p, s, t_out, initial_state(p)
+
+
+def breakpoints(p, t_out, cycle):
+    """Segment ends of an engine run: the output times plus, for press-cycle, lock_after and
+    release_after. Returns (bounds, output index by time, (lock_after, release_after,
+    lock angle in rad) or None)."""
+    bounds = list(t_out)
+    events = None
+    if cycle:
+        la, ra = float(p["lock_after"]), float(p["release_after"])
+        events = (la, ra, math.radians(float(p["lock_angle"])))
+        for tb in (la, ra):
+            if 0.0 < tb < t_out[-1] and not np.any(np.isclose(t_out, tb, rtol=0, atol=1e-12)):
+                bounds.append(tb)
+        bounds = sorted(bounds)
+    return bounds, {float(t): k for k, t in enumerate(t_out)}, events

@@ -328,15 +328,8 @@ def _run(p, s, st, t_out, cycle, ch, extra):
         ch["energy_balance"][k] = obs["T"] + obs["V"] - work[0] + work[1] + work[2] + lock_loss
 
     # segment boundaries
-    bounds = list(t_out)
-    if cycle:
-        la, ra = float(p["lock_after"]), float(p["release_after"])
-        psiL = math.radians(float(p["lock_angle"]))
-        for tb in (la, ra):
-            if 0.0 < tb < t_out[-1] and not np.any(np.isclose(t_out, tb, rtol=0, atol=1e-12)):
-                bounds.append(tb)
-        bounds = sorted(bounds)
-    out_index = {float(t): k for k, t in enumerate(t_out)}
+    bounds, out_index, events = pc.breakpoints(p, t_out, cycle)
+    la, ra, psiL = events if cycle else (None, None, None)
 
     q0, v0, a0 = model.state()
     store(0, model.observe(q0, v0, a0))

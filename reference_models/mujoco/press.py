@@ -181,15 +181,8 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, c
             raise FloatingPointError("non-finite state (MuJoCo bad qacc)"
                                      + (f": {warnings[-1].strip()}" if warnings else ""))
 
-    bounds = list(t_out)
-    if cycle:
-        la, ra = float(p["lock_after"]), float(p["release_after"])
-        psiL = math.radians(float(p["lock_angle"]))
-        for tb in (la, ra):
-            if 0.0 < tb < t_out[-1] and not np.any(np.isclose(t_out, tb, rtol=0, atol=1e-12)):
-                bounds.append(tb)
-        bounds = sorted(bounds)
-    out_index = {float(t): k for k, t in enumerate(t_out)}
+    bounds, out_index, events = pc.breakpoints(p, t_out, cycle)
+    la, ra, psiL = events if cycle else (None, None, None)
 
     status, t_fail, reason = "ok", None, None
     warnings: list[str] = []

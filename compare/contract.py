@@ -1,0 +1,133 @@
+"""The leaf contract as code: what a leaf model receives and returns, one settings merge, one
+spelling per integrator.
+
+Leaves (`custom_models/`, `reference_models/`) may import this module and `compare.physics`
+(both numpy only) — nothing else from `compare` (tests/test_layers.py enforces it). The adapter
+in `compare/solvers.py` validates every result a leaf returns.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+# One spelling per integrator; the old spellings of earlier leaves are still accepted.
+ALIASES = {"rk44": "rk4", "generalized-alpha": "generalized_alpha",
+           "trapezoidal-index2": "trapezoidal", "ode23": "rk23", "velocityverlet": "velocity_verlet",
+           "velocity-verlet": "velocity_verlet", "semi-implicit-euler": "euler"}
+# One spelling per setting key (old spellings of earlier leaves still accepted).
+KEY_ALIASES = {"rho_inf": "spectral_radius", "newton_tol": "newton_tol",
+               "newton_tolerance": "newton_tol"}
+
+
+def canonical_integrator(name: str) -> str:
+    return ALIASES.get(str(name).lower(), str(name).lower())
+
+
+def merge_settings(settings: dict | None, defaults: dict, integrators: tuple,
+                   extra_keys: tuple = ()) -> dict:
+    """The caller's settings over a leaf's defaults, checked the same way for every leaf:
+    unknown keys and integrators raise ValueError with one line; integrator names and key
+    spellings are normalised. `extra_keys` are accepted without a default (e.g. presets)."""
+    s = dict(defaults)
+    for k, v in (settings or {}).items():
+        k = KEY_ALIASES.get(k, k)
+        if v is None and k in s:
+            continue                         # "not given": keep the default
+        s[k] = v
+    unknown = sorted(set(s) - set(defaults) - set(extra_keys))
+    if unknown:
+        raise ValueError(f"unknown settings {unknown} (known: {sorted(defaults)})")
+    if "integrator" in s:
+        name = canonical_integrator(s["integrator"])
+        allowed = tuple(canonical_integrator(i) for i in integrators)
+        if name not in allowed:
+            raise ValueError(f"integrator {s['integrator']!r} is not offered "
+                             f"(choose: {', '.join(allowed)})")
+        s["integrator"] = name
+    return s
+
+
+@dataclass
+class LeafResult:
+    """What `simulate(params, t_out, settings)` returns.
+
+    channels: exactly the scene's channels, float arrays on t_out, SI, NaN after a failure.
+    status: "ok" or "diverged" (with t_fail and reason: NaN, energy jump, bound, singularity).
+    stats: "steps", "rhs_evals" (-1 where an engine does not tell), optional "rejected",
+    "newton_iters", "retries", "integrate_s" — one meaning per key.
+    settings: the settings actually used. extra: auxiliary arrays (e.g. "orientation" (n, 4)
+    w, x, y, z). invariants: conserved quantity -> largest relative drift the leaf measured.
+    """
+    channels: dict
+    status: str = "ok"
+    t_fail: float | None = None
+    reason: str | None = None
+    stats: dict = field(default_factory=dict)
+    settings: dict = field(default_factory=dict)
+    extra: dict = field(default_factory=dict)
+    invariants: dict = field(default_factory=dict)
+
+    STATUSES = ("ok", "diverged", "unstable", "singular")
+
+    @classmethod
+    def coerce(cls, res) -> "LeafResult":
+        """A leaf's return value as a LeafResult (earlier leaves return a plain dict)."""
+        if isinstance(res, cls):
+            return res
+        if not isinstance(res, dict) or "channels" not in res:
+            raise TypeError(f"leaf returned {type(res).__name__}, not a LeafResult")
+        known = {k: res[k] for k in ("channels", "status", "t_fail", "reason", "stats",
+                                     "settings", "extra", "invariants") if k in res}
+        return cls(**known)
+
+    def validate(self, channels: tuple, n: int) -> str | None:
+        """Why this result breaks the contract, or None."""
+        missing = [c for c in channels if c not in self.channels]
+        if missing:
+            return f"leaf did not return channels {missing}"
+        for c in channels:
+            a = np.asarray(self.channels[c])
+            if a.shape != (n,):
+                return f"channel {c!r} has shape {a.shape}, expected ({n},)"
+        if self.status not in self.STATUSES:
+            return f"unknown status {self.status!r}"
+        if self.status != "ok" and self.t_fail is None:
+            return f"status {self.status!r} without t_fail"
+        for k, v in self.stats.items():
+            if not isinstance(v, (int, float, np.integer, np.floating)):
+                return f"stats[{k!r}] is not a number"
+        return None
+
+
+@dataclass
+class ModesResult:
+    """What `modes(params, settings)` returns: frequencies in Hz (ascending), one label each
+    ("flap 1", "forward whirl", …), optional damping ratios, optional mode shapes (any array
+    with one row per mode, used for tracking modes across a sweep by MAC), and notes (e.g.
+    "approximate: eccentric rotor at spin ≠ 0")."""
+    frequencies_hz: np.ndarray
+    labels: list
+    damping: np.ndarray | None = None
+    shapes: np.ndarray | None = None
+    settings: dict = field(default_factory=dict)
+    notes: list = field(default_factory=list)
+    extra: dict = field(default_factory=dict)
+
+    @classmethod
+    def coerce(cls, res) -> "ModesResult":
+        if isinstance(res, cls):
+            return res
+        if not isinstance(res, dict) or "frequencies_hz" not in res:
+            raise TypeError(f"leaf returned {type(res).__name__}, not a ModesResult")
+        known = {k: res[k] for k in ("frequencies_hz", "labels", "damping", "shapes",
+                                     "settings", "notes", "extra") if k in res}
+        return cls(**known)
+
+    def validate(self) -> str | None:
+        f = np.asarray(self.frequencies_hz, float)
+        if f.ndim != 1 or len(self.labels) != len(f):
+            return f"{len(f)} frequencies but {len(self.labels)} labels"
+        if not np.all(np.isfinite(f)):
+            return "non-finite frequency"
+        return None

@@ -1,0 +1,82 @@
+"""Closed forms shared by every solver of the MSTMM scenes (seed 002: Yao, Rui, Wang 2021).
+
+One implementation each, numpy only: cantilever roots, the isotropic spinning shaft's
+ω* = λᵢ² ± Ω*, the blade's section properties from the scene parameters.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+TORSION_BETA = 0.333   # the paper's β for a thin rectangle (h/b ≫ 10): J = β·(long)·(short)³
+
+
+def cantilever_roots(n: int) -> np.ndarray:
+    """The first n roots λᵢ of cos λ cosh λ = −1 (1.8751, 4.6941, 7.8548, …).
+
+    Solved as cos λ + 1/cosh λ = 0 (bounded for large λ) by Newton from the asymptote
+    (2i−1)π/2."""
+    lam = (2 * np.arange(1, n + 1) - 1) * np.pi / 2
+    lam[0] = 1.8751
+    for _ in range(50):
+        f = np.cos(lam) + 1 / np.cosh(lam)
+        df = -np.sin(lam) - np.tanh(lam) / np.cosh(lam)
+        step = f / df
+        lam = lam - step
+        if np.all(np.abs(step) < 1e-15 * lam):
+            break
+    return lam
+
+
+def spinning_shaft_omega0(EI: float, m: float, L: float) -> float:
+    """ω₀ = √(EI/(m L⁴)) [rad/s], the shaft's frequency scale (Table 2's ω* = ω/ω₀)."""
+    return float(np.sqrt(EI / (m * L**4)))
+
+
+def spinning_shaft_star(n_modes: int, spin_ratio: float) -> np.ndarray:
+    """Nondimensional frequencies ω* of an isotropic cantilever Euler–Bernoulli shaft spinning
+    at Ω* = Ω/ω₀, ascending: the pairs λᵢ² − |Ω*| (backward) and λᵢ² + |Ω*| (forward).
+
+    Exact: with w = u + iv the shaft equation EI w'''' + m(ẅ − 2iΩẇ − Ω²w) = 0 (rotating frame)
+    has the non-rotating cantilever shapes with (ω ± Ω)² = ω_i²; the Ω² term cancels."""
+    lam2 = cantilever_roots((n_modes + 1) // 2 + 1) ** 2
+    w = np.concatenate([np.abs(lam2 - abs(spin_ratio)), lam2 + abs(spin_ratio)])
+    return np.sort(w)[:n_modes]
+
+
+def blade_section(chord: float, thickness: float, rho: float, E: float, G: float) -> dict:
+    """Section properties of the rectangular blade (chord b in the rotor plane, thickness h).
+
+    A = b h; I_flap = b h³/12 (bending out of the rotor plane); I_lag = h b³/12 (in plane);
+    J = β b h³ with β = 0.333 (the paper's It = βhb³ names the long side h); polar mass
+    moment per length I_α = ρ (I_flap + I_lag); line mass m̄ = ρ A."""
+    A = chord * thickness
+    I_flap = chord * thickness**3 / 12
+    I_lag = thickness * chord**3 / 12
+    J = TORSION_BETA * chord * thickness**3
+    return {"A": A, "m": rho * A, "I_flap": I_flap, "I_lag": I_lag, "J": J,
+            "EI_flap": E * I_flap, "EI_lag": E * I_lag, "GJ": G * J,
+            "I_alpha": rho * (I_flap + I_lag)}
+
+
+def blade_section_from(params: dict, prefix: str = "") -> dict:
+    """blade_section from a resolved scene dict (keys chord/thickness/rho/E/G, optionally with
+    a prefix such as 'blade_')."""
+    return blade_section(*(params[prefix + k] for k in ("chord", "thickness", "rho", "E", "G")))
+
+
+def nonrotating_blade_hz(params: dict, n: int = 3, prefix: str = "") -> dict:
+    """Cantilever blade at rest: flap/lag λᵢ² √(EI/(m̄L⁴))/2π and torsion (2i−1)π/(2L)·√(GJ/I_α)
+    /2π, in Hz."""
+    s = blade_section_from(params, prefix)
+    L = params[prefix + "L"]
+    lam2 = cantilever_roots(n) ** 2
+    k = 2 * np.arange(1, n + 1) - 1
+    return {"flap": lam2 * np.sqrt(s["EI_flap"] / (s["m"] * L**4)) / (2 * np.pi),
+            "lag": lam2 * np.sqrt(s["EI_lag"] / (s["m"] * L**4)) / (2 * np.pi),
+            "torsion": k * np.pi / (2 * L) * np.sqrt(s["GJ"] / s["I_alpha"]) / (2 * np.pi)}
+
+
+def torsion_rotating_hz(f0_hz: np.ndarray, speed: float) -> np.ndarray:
+    """Torsion of the paper's eq. 30, (GJφ')' − I_α(φ̈ + Ω²φ) = 0: ω² = ω₀² + Ω² exactly
+    (uniform blade, any boundary conditions)."""
+    return np.sqrt(np.asarray(f0_hz) ** 2 + (speed / (2 * np.pi)) ** 2)

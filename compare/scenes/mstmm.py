@@ -1,0 +1,147 @@
+"""Helicopter rotor/fuselage frequencies by the transfer matrix method for multibody systems
+(seed 002; spec scene-mstmm.md): a rotating blade, a spinning shaft, the helicopter with the
+tail clamped and hovering free.
+
+Unit slips of the paper (moduli printed in MPa) are resolved here, in the defaults; the
+evidence is in custom_models/mstmm/helicopter.py and the spec.
+"""
+from ..params import Param, positive
+from .base import Scene
+
+SOURCE = ("seed 002: Yao Song, Rui Xiaoting, Wang Jinghong, 'Calculation of helicopter "
+          "vibration in hovering state', Journal of Harbin Institute of Technology 53(6) "
+          "104-111, 2021 (DOI 10.11918/201908100); Table 2 reference: Banerjee & Su, "
+          "Computers & Structures 82 (2004) 2189")
+
+# mstmm vs fem agreement measured on the defaults (tests/test_mstmm.py); the verdict window
+FREQUENCY_TOLERANCE = 1e-4
+
+
+def n_modes(default):
+    return Param("n_modes", default, "", "number of natural frequencies reported", kind="int",
+                 lo=1, hi=200)
+
+
+BLADE_DOC = "rectangular blade, chord in the rotor plane, thickness out of it"
+
+ROTATING_BEAM = Scene(
+    name="rotating-beam",
+    title="Rotating cantilever blade: flap, lag and torsion frequencies (Table 1)",
+    source=SOURCE,
+    kind="modes",
+    params=(
+        positive("L", 6.0, "m", "blade length"),
+        positive("chord", 0.5, "m", "chord b (in the rotor plane)"),
+        positive("thickness", 0.04, "m", "thickness h (out of the rotor plane)"),
+        positive("rho", 334.0, "kg/m³", "density"),
+        positive("E", 7.1e9, "Pa", "Young's modulus (the paper prints MPa; only GPa reproduces "
+                 "its 0.827 Hz)"),
+        positive("G", 2.7308e9, "Pa", "shear modulus (paper: 'MPa', see E)"),
+        Param("hub_radius", 0.0, "m", "root offset r_H from the rotation axis (Table 1: 0)",
+              lo=0.0, hi=1e3),
+        Param("speed", 0.0, "rad/s", "rotor speed Ω", lo=0.0, hi=1e4),
+        n_modes(5),
+    ),
+    energy_channel=None,
+    tolerances={"frequency": FREQUENCY_TOLERANCE},
+    notes=BLADE_DOC + "; torsion (GJφ')' − I_α(φ̈ + Ω²φ) = 0 as the paper's eq. 30.",
+)
+
+SPINNING_SHAFT = Scene(
+    name="spinning-shaft",
+    title="Spinning cantilever shaft: forward/backward whirl (Table 2)",
+    source=SOURCE,
+    kind="modes",
+    params=(
+        positive("L", 1.29, "m", "shaft length"),
+        positive("EI_xx", 582.996, "N·m²", "bending stiffness in the YZ plane (v)"),
+        positive("EI_yy", 582.996, "N·m²", "bending stiffness in the XZ plane (u)"),
+        positive("m", 2.87, "kg/m", "mass per length"),
+        Param("spin_ratio", 0.0, "", "Ω* = Ω/ω₀, ω₀ = √(EI_xx/(m L⁴))", lo=0.0, hi=1e3),
+        n_modes(6),
+    ),
+    energy_channel=None,
+    tolerances={"frequency": FREQUENCY_TOLERANCE},
+    notes="frequencies_hz dimensional; extra['omega_star'] = ω/ω₀ (Table 2's 'Hz' is ω*).",
+)
+
+
+def helicopter_params(n_default):
+    return (
+        Param("speed", 36.6519, "rad/s", "rotor (and drive shaft) speed Ω", lo=0.0, hi=1e4),
+        n_modes(n_default),
+        Param("hub_radius", 0.25, "m", "blade root offset r_H from the shaft axis (hub "
+              "half-width)", lo=0.0, hi=1e3),
+        positive("blade_L", 6.0, "m", "blade length"),
+        positive("blade_chord", 0.5, "m", "blade chord (in the rotor plane)"),
+        positive("blade_thickness", 0.04, "m", "blade thickness"),
+        positive("blade_rho", 334.0, "kg/m³", "blade density"),
+        positive("blade_E", 7.1e9, "Pa", "blade Young's modulus (paper: 'MPa')"),
+        positive("blade_G", 2.7308e9, "Pa", "blade shear modulus (paper: 'MPa')"),
+        positive("hub_rho", 7850.0, "kg/m³", "hub density (rigid box)"),
+        positive("hub_length", 0.5, "m", "hub side along the rotor plane"),
+        positive("hub_width", 0.5, "m", "hub side along the rotor plane"),
+        positive("hub_height", 0.3, "m", "hub height along the shaft"),
+        positive("shaft_rho", 7850.0, "kg/m³", "drive shaft density"),
+        positive("shaft_diameter", 0.16, "m", "drive shaft diameter (solid)"),
+        positive("shaft_L", 1.0, "m", "drive shaft length"),
+        positive("shaft_E", 2.5e11, "Pa", "drive shaft Young's modulus (paper: '2.5 MPa')"),
+        positive("shaft_G", 9.6154e10, "Pa", "drive shaft shear modulus (paper: '9.6154 MPa')"),
+        positive("fuselage_rho", 170.0, "kg/m³", "fuselage density (rigid box)"),
+        positive("fuselage_length", 3.0, "m", "fuselage length along X"),
+        positive("fuselage_width", 1.8, "m", "fuselage width along Y"),
+        positive("fuselage_height", 1.6, "m", "fuselage height along the shaft"),
+        Param("fuselage_cm_offset", 0.4, "m", "centre of mass from the shaft attachment, "
+              "along X", lo=-1e3, hi=1e3),
+        positive("tail_rho", 140.0, "kg/m³", "tail boom density"),
+        positive("tail_width", 0.8, "m", "tail boom section width"),
+        positive("tail_height", 0.8, "m", "tail boom section height"),
+        positive("tail_L", 4.0, "m", "tail boom length"),
+        positive("tail_E", 2e10, "Pa", "tail boom Young's modulus (paper: '2 MPa')"),
+        positive("tail_G", 7.6923e9, "Pa", "tail boom shear modulus (paper: '7.6923 MPa')"),
+    )
+
+
+HELICOPTER_CLAMPED = Scene(
+    name="helicopter-clamped",
+    title="Helicopter, 4 blades + hub + drive shaft + fuselage + tail, tail end clamped "
+          "(Table 3)",
+    source=SOURCE,
+    kind="modes",
+    params=helicopter_params(13),
+    energy_channel=None,
+    tolerances={"frequency": FREQUENCY_TOLERANCE},
+)
+
+HELICOPTER_HOVER = Scene(
+    name="helicopter-hover",
+    title="Hovering helicopter, whole aircraft free: first flexible frequencies (Table 4)",
+    source=SOURCE,
+    kind="modes",
+    params=helicopter_params(8),
+    energy_channel=None,
+    tolerances={"frequency": FREQUENCY_TOLERANCE},
+)
+
+SCENES = (ROTATING_BEAM, SPINNING_SHAFT, HELICOPTER_CLAMPED, HELICOPTER_HOVER)
+
+# Campbell sweep per scene (to become a Scene hook): (parameter, low, high)
+CAMPBELL = {
+    "rotating-beam": ("speed", 0.0, 40.0),
+    "spinning-shaft": ("spin_ratio", 0.0, 12.0),
+    "helicopter-clamped": ("speed", 0.0, 50.0),
+    "helicopter-hover": ("speed", 0.0, 50.0),
+}
+
+# Mode-label vocabulary per scene (labels are "<kind> <n>", e.g. "flap 2"; blade families of
+# the helicopter carry a rotor-symmetry suffix: "flap 1 collective", "lag 1 cyclic",
+# "flap 2 differential"; whole-aircraft modes "fuselage" / "tail"; rigid-body modes are not
+# reported for the hovering aircraft)
+MODE_LABELS = {
+    "rotating-beam": ("flap", "lag", "torsion"),
+    "spinning-shaft": ("backward whirl", "forward whirl", "whirl"),
+    "helicopter-clamped": ("flap", "lag", "torsion", "collective", "cyclic", "differential",
+                           "shaft", "fuselage", "tail"),
+    "helicopter-hover": ("flap", "lag", "torsion", "collective", "cyclic", "differential",
+                         "shaft", "fuselage", "tail"),
+}

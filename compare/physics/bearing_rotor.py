@@ -1,0 +1,304 @@
+"""Two-bearing rotor with a bearing defect (scene `bearing-rotor`, seed 001): the ONE
+implementation of the force laws, the spin angle and every observable. Numpy + numba only.
+
+Frames and conventions (every solver of the scene uses these):
+- fixed frame: bearings centred on the z axis at z = +l/2 (a) and z = −l/2 (b);
+- body frame: shaft axis e3 = body z, journal a at body z = +l/2, b at −l/2, centre of mass at 0;
+- quaternions are (w, x, y, z) and rotate body vectors into the fixed frame;
+- angular velocity `omega` is given in the FIXED frame; the spin rate is ω_z = ω·e3 with
+  e3 = R·(0, 0, 1) the shaft axis in the fixed frame; motor and friction moments act about e3.
+
+Force laws (spec scene-bearing-rotor.md):
+- radial bearing force at j ∈ {a, b}: F_j = −k_b (δ_j − d_j) − c_b δ̇_j, δ_j the (x, y) offset
+  of the journal point from its bearing centre; axial spring −k_axial (z_a − l/2) on journal a;
+- defect lift d_a = h(x)·(−ĝ), ĝ the unit projection of gravity on the bearing (x, y) plane
+  (−y when gravity has no radial part, so the defect stays defined), x the wrapped angle between
+  the bump (body angle defect_angle + twist) and ĝ, h(x) = H (1 − (x/w)²)² for |x| < w; d_b = 0;
+- motor M_F = stall (1 − ω_z/ω_0); friction −(drag ω_z + μ r_j (|F_a| + |F_b|) tanh(ω_z/0.1)),
+  |F_j| the norm of the full radial force (spring with lift + damper).
+
+Energy balance E = T + V_g + V_b − W_motor + D, constant in time, with V_g = −m g·r_cm,
+V_b = ½k_b|δ_a − d_a|² + ½k_b|δ_b|² + ½k_axial (z_a − l/2)², Ẇ_motor = M_F ω_z and
+Ḋ = c_b(|δ̇_a|² + |δ̇_b|²) − M_friction ω_z + k_b (δ_a − d_a)·ḋ_a.
+The last term is the work of the prescribed lift: the bump moves the spring's anchor but the
+force law puts no reaction moment on the shaft, so the lift is not conservative; its work is
+booked in D ("dissipated" = dampers + friction + defect lift) so the balance closes exactly.
+Solvers integrate Ẇ_motor and Ḋ (from `powers`) along with their state.
+"""
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+OMEGA_SMOOTH = 0.1     # rad/s, the tanh width of the friction moment's sign (spec)
+
+# Layout of the packed parameter array (pack()).
+I_M, I_L, I_JT, I_JP = 0, 1, 2, 3
+I_KB, I_CB, I_KAX = 4, 5, 6
+I_GX, I_GY, I_GZ = 7, 8, 9
+I_H, I_W, I_ANG = 10, 11, 12          # defect height, half width (rad), body angle
+I_STALL, I_NOLOAD = 13, 14
+I_DRAG, I_MU, I_RJ = 15, 16, 17
+I_LX, I_LY, I_LANG = 18, 19, 20       # loaded direction ĝ (unit, x-y plane) and its angle
+N_PACK = 21
+
+
+def pack(params: dict) -> np.ndarray:
+    """The scene's resolved parameters as a float64 array for the numba kernels."""
+    g = np.asarray(params["gravity"], float)
+    g_radial = np.hypot(g[0], g[1])
+    ld = g[:2] / g_radial if g_radial > 0 else np.array([0.0, -1.0])
+    p = np.zeros(N_PACK)
+    p[I_M], p[I_L], p[I_JT], p[I_JP] = params["m"], params["l"], params["J_t"], params["J_p"]
+    p[I_KB], p[I_CB], p[I_KAX] = params["k_b"], params["c_b"], params["k_axial"]
+    p[I_GX], p[I_GY], p[I_GZ] = g
+    p[I_H], p[I_W], p[I_ANG] = (params["defect_height"], params["defect_width"],
+                                params["defect_angle"])
+    p[I_STALL], p[I_NOLOAD] = params["motor_stall_torque"], params["motor_no_load_speed"]
+    p[I_DRAG], p[I_MU], p[I_RJ] = params["bearing_drag"], params["mu"], params["r_j"]
+    p[I_LX], p[I_LY], p[I_LANG] = ld[0], ld[1], np.arctan2(ld[1], ld[0])
+    return p
+
+
+# ---------------------------------------------------------------- rotation and spin angle
+@nb.njit(cache=True)
+def quat_matrix(q):
+    """Rotation matrix of a quaternion (w, x, y, z), normalised on the fly."""
+    w, x, y, z = q / np.sqrt(q @ q)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+@nb.njit(cache=True)
+def wrap(a):
+    """Angle wrapped into [−π, π)."""
+    return (a + np.pi) % (2.0 * np.pi) - np.pi
+
+
+@nb.njit(cache=True)
+def twist_angle(q) -> float:
+    """Twist about the body z axis of the swing–twist split q = q_swing ⊗ q_twist (wrapped).
+
+    With q_twist = (cos φ/2, 0, 0, sin φ/2) and a swing without z part, the product has
+    w = c·cos φ/2 and z = c·sin φ/2, so φ = 2 atan2(z, w) for any norm and sign of q."""
+    return wrap(2.0 * np.arctan2(q[3], q[0]))
+
+
+@nb.njit(cache=True)
+def twist_rate(q, omega):
+    """dφ/dt of twist_angle for q' = ½ (0, ω) ⊗ q, ω in the fixed frame."""
+    w, x, y, z = q
+    dw = -0.5 * (omega[0] * x + omega[1] * y + omega[2] * z)
+    dz = 0.5 * (w * omega[2] + omega[0] * y - omega[1] * x)
+    return 2.0 * (w * dz - z * dw) / (w * w + z * z)
+
+
+def spin_angle(quats: np.ndarray, t: np.ndarray | None = None,
+               spin_rate: np.ndarray | None = None) -> np.ndarray:
+    """Unwrapped spin angle of a quaternion series (n, 4).
+
+    Without rates, consecutive samples must differ by less than π (np.unwrap). With `t` and
+    `spin_rate` the 2π branch is the one nearest the trapezoidal prediction, so a coarse output
+    grid (many radians per sample) still unwraps correctly."""
+    phi = np.array([twist_angle(np.asarray(q, float)) for q in quats])
+    if t is None or spin_rate is None:
+        return np.unwrap(phi)
+    out = np.empty_like(phi)
+    out[0] = phi[0]
+    for i in range(1, len(phi)):
+        pred = out[i - 1] + 0.5 * (spin_rate[i] + spin_rate[i - 1]) * (t[i] - t[i - 1])
+        out[i] = phi[i] + 2.0 * np.pi * np.round((pred - phi[i]) / (2.0 * np.pi))
+    return out
+
+
+# ---------------------------------------------------------------- force laws
+@nb.njit(cache=True)
+def defect_lift(twist, p) -> float:
+    """h(x) of the journal-a defect, x the wrapped angle from ĝ to the bump."""
+    u = wrap(p[I_ANG] + twist - p[I_LANG]) / p[I_W]
+    if abs(u) >= 1.0:
+        return 0.0
+    s = 1.0 - u * u
+    return p[I_H] * s * s
+
+
+@nb.njit(cache=True)
+def defect_lift_slope(twist, p) -> float:
+    """dh/dx at the bump's current angle (for the lift's work, ḋ_a = h'(x)·φ̇·(−ĝ))."""
+    u = wrap(p[I_ANG] + twist - p[I_LANG]) / p[I_W]
+    if abs(u) >= 1.0:
+        return 0.0
+    return -4.0 * p[I_H] * u * (1.0 - u * u) / p[I_W]
+
+
+@nb.njit(cache=True)
+def bearing_forces(r_a, v_a, r_b, v_b, twist, p):
+    """Forces (fixed frame) on journals a and b: radial spring–dampers toward the bearing
+    centres minus the lift at a, and the axial spring on z of journal a."""
+    h = defect_lift(twist, p)
+    k, c = p[I_KB], p[I_CB]
+    F_a = np.empty(3)
+    F_b = np.empty(3)
+    F_a[0] = -k * (r_a[0] + h * p[I_LX]) - c * v_a[0]      # d_a = −h ĝ
+    F_a[1] = -k * (r_a[1] + h * p[I_LY]) - c * v_a[1]
+    F_a[2] = -p[I_KAX] * (r_a[2] - 0.5 * p[I_L])
+    F_b[0] = -k * r_b[0] - c * v_b[0]
+    F_b[1] = -k * r_b[1] - c * v_b[1]
+    F_b[2] = 0.0
+    return F_a, F_b
+
+
+@nb.njit(cache=True)
+def shaft_torques(omega_z, Fa_radial_norm, Fb_radial_norm, p):
+    """(motor, friction) moments about the shaft axis e3."""
+    motor = p[I_STALL] * (1.0 - omega_z / p[I_NOLOAD])
+    friction = -(p[I_DRAG] * omega_z + p[I_MU] * p[I_RJ] * (Fa_radial_norm + Fb_radial_norm)
+                 * np.tanh(omega_z / OMEGA_SMOOTH))
+    return motor, friction
+
+
+@nb.njit(cache=True)
+def journals(r_cm, v_cm, R, omega, p):
+    """Positions and velocities (fixed frame) of journals a (+l/2 e3) and b (−l/2 e3)."""
+    arm = 0.5 * p[I_L] * R[:, 2]
+    w_arm = np.cross(omega, arm)
+    return r_cm + arm, v_cm + w_arm, r_cm - arm, v_cm - w_arm
+
+
+@nb.njit(cache=True)
+def body_loads(r_cm, q, v_cm, omega, p):
+    """Everything but gravity acting on the shaft, reduced to the centre of mass (fixed frame):
+    (force (3,), moment (3,), motor power Ẇ, dissipation power Ḋ). ω in the fixed frame."""
+    R = quat_matrix(q)
+    e3 = np.ascontiguousarray(R[:, 2])
+    r_a, v_a, r_b, v_b = journals(r_cm, v_cm, R, omega, p)
+    phi = twist_angle(q)
+    F_a, F_b = bearing_forces(r_a, v_a, r_b, v_b, phi, p)
+    na = np.sqrt(F_a[0] ** 2 + F_a[1] ** 2)
+    nb_ = np.sqrt(F_b[0] ** 2 + F_b[1] ** 2)
+    w_z = omega @ e3
+    motor, friction = shaft_torques(w_z, na, nb_, p)
+    force = F_a + F_b
+    moment = np.cross(r_a - r_cm, F_a) + np.cross(r_b - r_cm, F_b) + (motor + friction) * e3
+    # Ḋ: dampers + friction + the lift's work k_b (δ_a − d_a)·ḋ_a (see module docstring)
+    h = defect_lift(phi, p)
+    dh = defect_lift_slope(phi, p) * twist_rate(q, omega)
+    lift_power = -p[I_KB] * ((r_a[0] + h * p[I_LX]) * p[I_LX]
+                             + (r_a[1] + h * p[I_LY]) * p[I_LY]) * dh
+    damp = p[I_CB] * (v_a[0] ** 2 + v_a[1] ** 2 + v_b[0] ** 2 + v_b[1] ** 2)
+    return force, moment, motor * w_z, damp - friction * w_z + lift_power
+
+
+def powers(r_cm, q, v_cm, omega, p):
+    """(Ẇ_motor, Ḋ) — the integrands of the work channels (see body_loads)."""
+    _, _, pw, pd = body_loads(r_cm, q, v_cm, omega, p)
+    return pw, pd
+
+
+# ---------------------------------------------------------------- energy
+@nb.njit(cache=True)
+def kinetic_energy(v_cm, omega, R, p) -> float:
+    """½ m |v|² + ½ ω·(R J Rᵀ)ω, ω in the fixed frame."""
+    wb = R.T @ omega
+    return 0.5 * p[I_M] * (v_cm @ v_cm) + 0.5 * (p[I_JT] * (wb[0] ** 2 + wb[1] ** 2)
+                                                 + p[I_JP] * wb[2] ** 2)
+
+
+@nb.njit(cache=True)
+def gravity_potential(r_cm, p) -> float:
+    return -p[I_M] * (p[I_GX] * r_cm[0] + p[I_GY] * r_cm[1] + p[I_GZ] * r_cm[2])
+
+
+@nb.njit(cache=True)
+def bearing_potential(r_a, r_b, twist, p) -> float:
+    """½k_b|δ_a − d_a|² + ½k_b|δ_b|² + ½k_axial (z_a − l/2)²."""
+    h = defect_lift(twist, p)
+    ax, ay = r_a[0] + h * p[I_LX], r_a[1] + h * p[I_LY]
+    za = r_a[2] - 0.5 * p[I_L]
+    return 0.5 * p[I_KB] * (ax * ax + ay * ay + r_b[0] ** 2 + r_b[1] ** 2) \
+        + 0.5 * p[I_KAX] * za * za
+
+
+# ---------------------------------------------------------------- observables
+@nb.njit(cache=True)
+def _observables(r_cm, v_cm, quats, omega, p):
+    n = r_cm.shape[0]
+    out = np.empty((n, 9))   # spin_rate, twist, a_x, a_y, b_x, b_y, kinetic, V_g, V_b
+    for i in range(n):
+        R = quat_matrix(quats[i])
+        r_a, _, r_b, _ = journals(r_cm[i], v_cm[i], R, omega[i], p)
+        phi = twist_angle(quats[i])
+        out[i, 0] = omega[i, 0] * R[0, 2] + omega[i, 1] * R[1, 2] + omega[i, 2] * R[2, 2]
+        out[i, 1] = phi
+        out[i, 2], out[i, 3], out[i, 4], out[i, 5] = r_a[0], r_a[1], r_b[0], r_b[1]
+        out[i, 6] = kinetic_energy(v_cm[i], omega[i], R, p)
+        out[i, 7] = gravity_potential(r_cm[i], p)
+        out[i, 8] = bearing_potential(r_a, r_b, phi, p)
+    return out
+
+
+def channels(params: dict, t: np.ndarray, r_cm: np.ndarray, v_cm: np.ndarray,
+             quats: np.ndarray, omega: np.ndarray, motor_work: np.ndarray,
+             dissipated: np.ndarray) -> dict:
+    """The scene's channels from a solver's kinematic output on the grid t: centre of mass
+    position/velocity (n, 3), quaternions (n, 4) w, x, y, z, angular velocity (n, 3) in the
+    FIXED frame, and the integrated motor work and dissipated work (n,) (Ẇ, Ḋ from `powers`)."""
+    p = pack(params)
+    f = np.ascontiguousarray
+    o = _observables(f(r_cm, float), f(v_cm, float), f(quats, float), f(omega, float), p)
+    motor_work = np.asarray(motor_work, float)
+    dissipated = np.asarray(dissipated, float)
+    potential = o[:, 7] + o[:, 8]
+    return {"spin_rate": o[:, 0],
+            "spin_angle": spin_angle(quats, t, o[:, 0]),
+            "journal_a_x": o[:, 2], "journal_a_y": o[:, 3],
+            "journal_b_x": o[:, 4], "journal_b_y": o[:, 5],
+            "kinetic": o[:, 6], "potential": potential,
+            "motor_work": motor_work, "dissipated": dissipated,
+            "energy_balance": o[:, 6] + potential - motor_work + dissipated}
+
+
+def journal_positions(params: dict, r_cm: np.ndarray, quats: np.ndarray):
+    """(n, 3) positions of journals a and b (for the 3D recording)."""
+    p = pack(params)
+    half = 0.5 * p[I_L]
+    axes = np.array([quat_matrix(np.asarray(q, float))[:, 2] for q in quats])
+    return r_cm + half * axes, r_cm - half * axes
+
+
+# ---------------------------------------------------------------- closed forms, start
+def static_sag(params: dict) -> np.ndarray:
+    """Offset (3,) of each journal (and the centre of mass) from its bearing centre at rest
+    without the defect: radial m g/(2 k_b) per journal, axial m g_z / k_axial (journal a's
+    spring carries the whole axial load)."""
+    g = np.asarray(params["gravity"], float)
+    m = params["m"]
+    return np.array([m * g[0] / (2 * params["k_b"]), m * g[1] / (2 * params["k_b"]),
+                     m * g[2] / params["k_axial"]])
+
+
+def initial_state(params: dict):
+    """The common start: (r_cm, q, v_cm, ω) — static sag, unrotated, at rest."""
+    return static_sag(params), np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), np.zeros(3)
+
+
+def steady_spin_rate(params: dict) -> float:
+    """Spin rate of the defect-free shaft where motor and friction balance (|F_a| + |F_b| =
+    m |g_radial| at rest in the bearings), by bisection."""
+    g = np.asarray(params["gravity"], float)
+    load = params["m"] * np.hypot(g[0], g[1])
+
+    def net(w):
+        return (params["motor_stall_torque"] * (1 - w / params["motor_no_load_speed"])
+                - params["bearing_drag"] * w
+                - params["mu"] * params["r_j"] * load * np.tanh(w / OMEGA_SMOOTH))
+
+    lo, hi = 0.0, abs(params["motor_no_load_speed"])
+    if net(lo) * net(hi) > 0:
+        return 0.0 if net(lo) <= 0 else hi
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if net(lo) * net(mid) > 0 else (lo, mid)
+    return 0.5 * (lo + hi)

@@ -1,23 +1,30 @@
-"""The solver registry — the only place that knows which leaf model serves which scene — and
-the adapter that turns a leaf's plain dict into a `Trajectory` or `Modes`.
+"""The solvers — what each one is — and the adapter that runs a leaf and turns what it returns
+into a `Trajectory` or `Modes`. Which leaf serves which scene is the scene's `leaves` (the
+scene is the single source); this module names no scene.
 
-Leaves follow `reference_models/README.md`. The adapter adds what every solver needs the same
-way: settings resolution (`--dt`, `--rtol`, `--integrator`), a separate compile/warm-up call for
-compiled leaves, wall time, package versions, the check that no non-finite value hides behind
-status "ok", and crash capture (a failing solver never hides the others).
+Leaves follow `compare/contract.py`. The adapter adds what every solver needs the same way:
+settings resolution (`--dt`, `--rtol`, `--integrator`) checked for every solver before any
+runs, a separate compile/warm-up call for compiled leaves, wall time, package versions, the
+contract check of the result, one energy-divergence rule, and crash capture (a failing solver
+is recorded as `error` and never hides the others).
 """
-from contextlib import contextmanager
-from dataclasses import dataclass, field
+from __future__ import annotations
+
 import importlib
 import importlib.metadata
 import signal
 import threading
 import time
 import traceback
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from types import ModuleType
 
 import numpy as np
 
+from .contract import LeafResult, ModesResult, canonical_integrator, merge_settings
 from .errors import BadInput
+from .scenes import SCENES, Scene, get_scene
 from .trajectory import Modes, Trajectory
 
 
@@ -25,74 +32,67 @@ from .trajectory import Modes, Trajectory
 class Solver:
     name: str
     doc: str
-    leaves: dict            # scene name -> leaf module
     engine: str             # the package whose version matters
     compiled: bool = False  # numba leaf: time a warm-up call separately as compile time
     preset: dict = field(default_factory=dict)   # settings that make this solver a variant
 
-    def leaf(self, scene):
-        return importlib.import_module(self.leaves[scene])
+    def leaf(self, scene: Scene | str) -> ModuleType:
+        sc = get_scene(scene) if isinstance(scene, str) else scene
+        return importlib.import_module(sc.leaves[self.name])
+
+    @property
+    def leaves(self) -> dict:
+        """scene name -> leaf module, gathered from the scenes."""
+        return {sc.name: sc.leaves[self.name] for sc in SCENES.values() if self.name in sc.leaves}
 
 
 REGISTRY = {s.name: s for s in (
     Solver("euler-vector", "the paper's axial+transverse Euler-vector formulation with the "
            "Zhilin tensor (seed 000); numba; dop853/dopri5/rk23 adaptive, rk4/midpoint/euler fixed",
-           {"rotor-spinup": "custom_models.rotor_euler",
-            "rotor-whirl": "custom_models.rotor_whirl"}, "numba", compiled=True),
-    Solver("quaternion", "independent formulation: unit quaternion + body-frame Euler equations "
-           "(cf. seed 001); numba; same integrators",
-           {"rotor-spinup": "custom_models.rotor_quaternion"}, "numba", compiled=True),
-    Solver("closed-form", "analytic whirl frequencies I_t w² ∓ I_p Ω w − k_eff = 0",
-           {"rotor-whirl": "custom_models.rotor_closed_form"}, "numpy"),
+           "numba", compiled=True),
+    Solver("quaternion", "unit quaternion formulations: the rotor's body-frame Euler equations "
+           "(cf. seed 001); the bearing rotor in the paper's second-order fixed-frame form; numba",
+           "numba", compiled=True),
+    Solver("closed-form", "analytic frequencies (whirl: I_t w² ∓ I_p Ω w − k_eff = 0)", "numpy"),
     Solver("lagrange-partial", "the paper's method (seed 003): Lagrange equations with velocity "
            "analogues from 'partial systems' by central differences; linear-acceleration "
-           "(Wilson) or RK integration", {"press": "custom_models.press_partial",
-                                          "press-cycle": "custom_models.press_partial"},
-           "numba", compiled=True),
-    Solver("lagrange-exact", "the same Lagrange equations with analytic derivatives",
-           {"press": "custom_models.press_exact", "press-cycle": "custom_models.press_exact"},
-           "numba", compiled=True),
+           "(Wilson) or RK integration", "numba", compiled=True),
+    Solver("lagrange-exact", "the same Lagrange equations with analytic derivatives", "numba",
+           compiled=True),
     Solver("thread-spool", "the paper's spring–mass thread (seed 004) in the rotating frame: "
            "velocity turn at release, stored thread outside J; implicit midpoint or RK4",
-           {"sail-deploy": "custom_models.thread_spool"}, "numba", compiled=True,
-           preset={"variant": "paper"}),
+           "numba", compiled=True, preset={"variant": "paper"}),
     Solver("thread-spool-conservative", "thread-spool with the angular-momentum-conserving "
-           "release law the engines use (stored thread at L_c in the hub inertia)",
-           {"sail-deploy": "custom_models.thread_spool"}, "numba", compiled=True,
-           preset={"variant": "conservative"}),
-    Solver("exudyn", "Exudyn 1.13 reference model",
-           {"rotor-spinup": "reference_models.exudyn.rotor",
-            "rotor-whirl": "reference_models.exudyn.rotor",
-            "press": "reference_models.exudyn.press",
-            "press-cycle": "reference_models.exudyn.press",
-            "sail-deploy": "reference_models.exudyn.sail"}, "exudyn"),
-    Solver("mujoco", "MuJoCo 4.0 reference model",
-           {"rotor-spinup": "reference_models.mujoco.rotor",
-            "rotor-whirl": "reference_models.mujoco.rotor",
-            "press": "reference_models.mujoco.press",
-            "press-cycle": "reference_models.mujoco.press",
-            "sail-deploy": "reference_models.mujoco.sail"}, "mujoco"),
+           "release law the engines use (stored thread at L_c in the hub inertia)", "numba",
+           compiled=True, preset={"variant": "conservative"}),
+    Solver("mstmm", "transfer matrix method for multibody systems (seed 002): element transfer "
+           "matrices, tree assembly, root search on the characteristic function", "numba",
+           compiled=True),
+    Solver("fem", "Hermite beam finite elements with centrifugal stiffening, gyroscopic terms "
+           "and lumped rigid bodies (independent check of mstmm)", "scipy"),
+    Solver("exudyn", "Exudyn 1.13 reference model", "exudyn"),
+    Solver("mujoco", "MuJoCo 4.0 reference model", "mujoco"),
 )}
 
 
-def get_solver(name):
+def get_solver(name: str) -> Solver:
     try:
         return REGISTRY[name]
     except KeyError:
         raise BadInput(f"unknown solver {name!r} (known: {', '.join(REGISTRY)})") from None
 
 
-def solvers_for(scene_name):
-    return [s for s in REGISTRY.values() if scene_name in s.leaves]
+def solvers_for(scene_name: str) -> list[Solver]:
+    return [REGISTRY[n] for n in get_scene(scene_name).leaves]
 
 
-def pick(scene, names):
+def pick(scene: Scene, names: list[str] | None) -> list[Solver]:
     """Solvers named on the command line (all that serve the scene when none are named)."""
     if not names:
         return solvers_for(scene.name)
     chosen = [get_solver(n) for n in names]
     for s in chosen:
-        if scene.name not in s.leaves:
+        if s.name not in scene.leaves:
             raise BadInput(f"solver {s.name!r} does not support scene {scene.name!r} "
                            f"(it serves: {', '.join(s.leaves)})")
     return chosen
@@ -108,10 +108,28 @@ def versions(solver):
     return out
 
 
-def settings_for(solver, scene_name, dt=None, rtol=None, integrator=None, extra=None):
-    """The settings one solver runs a scene with: its leaf's defaults, its preset, the knobs."""
-    return resolve_settings(solver.leaf(scene_name), dt, rtol, integrator,
-                            {**solver.preset, **(extra or {})})
+def settings_for(solver: Solver, scene_name: str, dt: float | None = None,
+                 rtol: float | None = None, integrator: str | None = None,
+                 extra: dict | None = None, t_out: np.ndarray | None = None) -> dict:
+    """The settings one solver runs a scene with — its leaf's defaults, its preset, the knobs —
+    checked by the leaf (`check_settings(settings, t_out)` where it has one, else the shared
+    merge) before anything runs: bad settings raise BadInput naming the solver."""
+    leaf = solver.leaf(scene_name)
+    try:
+        s = resolve_settings(leaf, dt, rtol, integrator, {**solver.preset, **(extra or {})})
+        check_settings(leaf, s, t_out)
+    except ValueError as e:
+        raise BadInput(f"{solver.name}: {str(e).splitlines()[0]}") from None
+    return s
+
+
+def check_settings(leaf: ModuleType, settings: dict, t_out: np.ndarray | None) -> dict:
+    """The leaf's own check where it has one, else the shared merge (unknown keys, integrator)."""
+    if hasattr(leaf, "check_settings"):
+        return leaf.check_settings(settings, t_out)
+    if hasattr(leaf, "DEFAULT_SETTINGS"):
+        return merge_settings(settings, leaf.DEFAULT_SETTINGS, leaf.INTEGRATORS)
+    return merge_settings(settings, getattr(leaf, "MODES_SETTINGS", {}), ())
 
 
 def resolve_settings(leaf, dt=None, rtol=None, integrator=None, extra=None):
@@ -124,10 +142,11 @@ def resolve_settings(leaf, dt=None, rtol=None, integrator=None, extra=None):
     adaptive = tuple(getattr(leaf, "ADAPTIVE", ()))
     fixed = [i for i in leaf.INTEGRATORS if i not in adaptive]
     if integrator is not None:
-        if integrator not in leaf.INTEGRATORS:
+        offered = [canonical_integrator(i) for i in leaf.INTEGRATORS]
+        if canonical_integrator(integrator) not in offered:
             raise BadInput(f"integrator: {integrator!r} is not offered by this solver "
-                           f"(choose: {', '.join(leaf.INTEGRATORS)})")
-        s["integrator"] = integrator
+                           f"(choose: {', '.join(offered)})")
+        s["integrator"] = leaf.INTEGRATORS[offered.index(canonical_integrator(integrator))]
     if dt is not None:
         s["dt"] = dt
         if s.get("integrator") in adaptive and integrator is None and fixed:
@@ -150,12 +169,12 @@ def _first_bad_time(t, channels):
 
 
 def _energy_jump(t, channels, scene):
-    """First time the energy balance leaves E(0) by more than `scene.energy_bound` of the
-    energy scale (the largest |value| of the energy balance and of its kinetic, potential and
-    work terms where the scene has them)."""
+    """The one energy-divergence rule: first time the energy balance leaves E(0) by more than
+    `scene.energy_bound` of the energy scale (the largest |value| of the energy balance and of
+    the scene's `energy_scale_channels`)."""
     e = channels[scene.energy_channel]
     scale = max(float(np.max(np.abs(channels[c]))) for c in
-                (scene.energy_channel, "kinetic", "potential", "work") if c in channels)
+                (scene.energy_channel, *scene.energy_scale_channels))
     drift = np.abs(e - e[0])
     bad = np.nonzero(drift > scene.energy_bound * scale)[0]
     if not len(bad):
@@ -192,16 +211,18 @@ def _time_limit(seconds):
         signal.signal(signal.SIGALRM, old)
 
 
-def simulate(scene, solver, params, settings, timeout_s=None):
+def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
+             timeout_s: float | None = None) -> Trajectory:
     """Run one solver on one scene; always returns a Trajectory (status tells what happened).
-    `timeout_s` bounds the wall time of the run (compile included): status "timeout"."""
+    `timeout_s` bounds the wall time of the run (compile included): status "timeout". Settings
+    were checked before (`settings_for`); anything a leaf raises now is recorded as `error`."""
     t_out = scene.output_grid(params)
     nan = {c: np.full(len(t_out), np.nan) for c in scene.channels}
     base = dict(scene=scene.name, solver=solver.name, t=t_out, versions=versions(solver),
                 settings=dict(settings))
     t_start = time.perf_counter()
     try:
-        leaf = solver.leaf(scene.name)
+        leaf = solver.leaf(scene)
         stats = {}
         with _time_limit(timeout_s):
             if solver.compiled:        # compile once on a two-point grid, timed on its own
@@ -209,10 +230,9 @@ def simulate(scene, solver, params, settings, timeout_s=None):
                 leaf.simulate(params, t_out[:2], settings)
                 stats["compile_s"] = time.perf_counter() - t0
             t0 = time.perf_counter()
-            res = leaf.simulate(params, t_out, settings)
+            res = LeafResult.coerce(leaf.simulate(params, t_out, settings))
             wall = time.perf_counter() - t0
-    except ValueError as e:            # the leaf contract: bad settings
-        raise BadInput(f"{solver.name}: {e}") from None
+        broken = res.validate(scene.channels, len(t_out))
     except _Timeout:
         return Trajectory(channels=nan, status="timeout",
                           wall_s=time.perf_counter() - t_start,
@@ -221,12 +241,11 @@ def simulate(scene, solver, params, settings, timeout_s=None):
         return Trajectory(channels=nan, status="error", wall_s=0.0,
                           reason=f"{type(e).__name__}: {e}".splitlines()[0],
                           stats={"traceback": traceback.format_exc(limit=4)}, **base)
-    missing = [c for c in scene.channels if c not in res["channels"]]
-    if missing:
+    if broken:
         return Trajectory(channels=nan, status="error", wall_s=wall,
-                          reason=f"leaf did not return channels {missing}", **base)
-    channels = {c: np.asarray(res["channels"][c], float) for c in scene.channels}
-    status, t_fail, reason = res.get("status", "ok"), res.get("t_fail"), res.get("reason")
+                          reason=f"leaf broke the contract: {broken}", **base)
+    channels = {c: np.asarray(res.channels[c], float) for c in scene.channels}
+    status, t_fail, reason = res.status, res.t_fail, res.reason
     if status == "ok":                 # silent garbage is the one forbidden outcome
         t_bad = _first_bad_time(t_out, channels)
         if t_bad is not None:
@@ -235,31 +254,36 @@ def simulate(scene, solver, params, settings, timeout_s=None):
         t_bad, why = _energy_jump(t_out, channels, scene)
         if t_bad is not None:
             status, t_fail, reason = "diverged", t_bad, why
-    invariants = dict(res.get("invariants", {}))
+            for v in channels.values():          # nothing after a failure is a result
+                v[t_out > t_fail] = np.nan
+    invariants = dict(res.invariants)
     for c in scene.invariant_channels:
         x = channels[c][np.isfinite(channels[c])]
         if len(x):
             invariants[c] = float(np.max(np.abs(x - x[0])) / max(abs(x[0]), 1e-300))
-    base["settings"] = res.get("settings", settings)
+    base["settings"] = res.settings or settings
     return Trajectory(channels=channels, status=status, t_fail=t_fail, reason=reason,
-                      stats={**stats, **res.get("stats", {})}, wall_s=wall,
-                      invariants=invariants, extra=res.get("extra", {}), **base)
+                      stats={**stats, **res.stats}, wall_s=wall, invariants=invariants,
+                      extra=res.extra, **base)
 
 
-def modes(scene, solver, params, settings=None):
-    """Natural frequencies from one solver; always returns a Modes (status tells)."""
+def modes(scene: Scene, solver: Solver, params: dict, settings: dict | None = None) -> Modes:
+    """Natural frequencies from one solver; always returns a Modes (status tells). A leaf that
+    cannot linearise here raises; that is recorded as `error` with its message."""
     base = dict(scene=scene.name, solver=solver.name, versions=versions(solver))
     try:
-        leaf = solver.leaf(scene.name)
-        s = dict(getattr(leaf, "MODES_SETTINGS", {}), **(settings or {}))
+        leaf = solver.leaf(scene)
+        s = {**solver.preset, **(settings or {})}
         t0 = time.perf_counter()
-        res = leaf.modes(params, s)
+        res = ModesResult.coerce(leaf.modes(params, s))
         wall = time.perf_counter() - t0
-    except ValueError as e:
-        raise BadInput(f"{solver.name}: {e}") from None
+        broken = res.validate()
     except Exception as e:
         return Modes(frequencies_hz=np.array([]), labels=[], status="error",
                      reason=f"{type(e).__name__}: {e}".splitlines()[0], **base)
-    return Modes(frequencies_hz=np.asarray(res["frequencies_hz"], float),
-                 labels=list(res["labels"]), damping=res.get("damping"),
-                 settings=res.get("settings", s), wall_s=wall, **base)
+    if broken:
+        return Modes(frequencies_hz=np.array([]), labels=[], status="error",
+                     reason=f"leaf broke the contract: {broken}", **base)
+    return Modes(frequencies_hz=np.asarray(res.frequencies_hz, float), labels=list(res.labels),
+                 damping=res.damping, shapes=res.shapes, notes=list(res.notes),
+                 extra=res.extra, settings=res.settings or s, wall_s=wall, **base)

@@ -58,6 +58,9 @@ class Modes:
     frequencies_hz: np.ndarray
     labels: list
     damping: np.ndarray | None = None
+    shapes: np.ndarray | None = None       # one row per mode (for MAC tracking across a sweep)
+    notes: list = field(default_factory=list)   # e.g. "approximate: …"
+    extra: dict = field(default_factory=dict)
     status: str = "ok"
     reason: str | None = None
     settings: dict = field(default_factory=dict)

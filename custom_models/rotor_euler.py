@@ -13,7 +13,7 @@ import numpy as np
 import numba as nb
 
 from . import rotor
-from .rotor import DEFAULT_SETTINGS, INTEGRATORS, ADAPTIVE, K_, M_, TORQUE, G, RC0, I0INV  # noqa: F401
+from .rotor import DEFAULT_SETTINGS, INTEGRATORS, ADAPTIVE, check_settings, K_, M_, TORQUE, G, RC0, I0INV  # noqa: F401
 from .rotation import rotation_tensor, rotation_z, zhilin_inverse, transverse_vector
 
 E_Z = np.array([0.0, 0.0, 1.0])
@@ -70,5 +70,5 @@ def simulate(params, t_out, settings):
     Y, stats, t_fail, reason, used = rotor.integrate(rhs, guard, initial_state(params, p), p,
                                                      t_out, settings)
     gamma_axial = np.nanmax(np.abs(Y[:, 5]))
-    return rotor.result(t_out, Y, stats, t_fail, reason, used, motion, p,
+    return rotor.result(params, t_out, Y, stats, t_fail, reason, used, motion, p,
                         {"gamma_axial": float(gamma_axial)})

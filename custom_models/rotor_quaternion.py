@@ -10,7 +10,7 @@ import numpy as np
 import numba as nb
 
 from . import rotor
-from .rotor import DEFAULT_SETTINGS, INTEGRATORS, ADAPTIVE, M_, TORQUE, G, RC0, I0, I0INV  # noqa: F401
+from .rotor import DEFAULT_SETTINGS, INTEGRATORS, ADAPTIVE, check_settings, M_, TORQUE, G, RC0, I0, I0INV  # noqa: F401
 from .rotation import quat_to_matrix, quat_times_vector, matrix_to_quat
 
 
@@ -49,5 +49,5 @@ def simulate(params, t_out, settings):
     Y, stats, t_fail, reason, used = rotor.integrate(rhs, guard, initial_state(params, p), p,
                                                      t_out, settings)
     qn = np.linalg.norm(Y[:, 0:4], axis=1)
-    return rotor.result(t_out, Y, stats, t_fail, reason, used, motion, p,
+    return rotor.result(params, t_out, Y, stats, t_fail, reason, used, motion, p,
                         {"quaternion_norm": float(np.nanmax(np.abs(qn - 1.0)))})

@@ -8,6 +8,8 @@ are the whirl frequencies; the rotation sense of the tilt in the eigenvector tel
 """
 import numpy as np
 
+from compare.contract import ModesResult, merge_settings
+
 from . import rotor
 from .rotor_euler import rhs
 
@@ -30,10 +32,8 @@ def _reduced_jacobian(p, K0, h):
 
 
 def whirl(params, spin, h=1e-6):
-    """(backward, forward) whirl frequencies in rad/s at spin Ω."""
-    if spin != 0 and params.get("eccentricity", 0.0) != 0:
-        raise ValueError("eccentricity: steady spin is no equilibrium of an eccentric rotor; "
-                         "linearise at eccentricity 0 (or spin 0)")
+    """(backward, forward) whirl frequencies in rad/s at spin Ω. For an eccentric rotor at
+    Ω ≠ 0 steady spin is no equilibrium: the linearisation about it is only approximate."""
     p = rotor.pack(dict(params, torque=0.0))
     I0 = p[rotor.I0].reshape(3, 3)
     lam, V = np.linalg.eig(_reduced_jacobian(p, I0 @ np.array([0.0, 0.0, spin]), h))
@@ -57,6 +57,9 @@ def whirl_sweep(params, spins):
 
 
 def modes(params, settings):
-    b, f = whirl(params, params["spin"], settings.get("fd_step", 1e-6))
-    return {"frequencies_hz": [b / (2 * np.pi), f / (2 * np.pi)],
-            "labels": ["backward whirl", "forward whirl"], "settings": dict(settings)}
+    s = merge_settings(settings, MODES_SETTINGS, ())
+    b, f = whirl(params, params["spin"], s["fd_step"])
+    notes = (["approximate: steady spin is no equilibrium of an eccentric rotor"]
+             if params["spin"] != 0 and params["eccentricity"] != 0 else [])
+    return ModesResult(frequencies_hz=np.array([b, f]) / (2 * np.pi),
+                       labels=["backward whirl", "forward whirl"], settings=s, notes=notes)

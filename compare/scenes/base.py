@@ -1,11 +1,32 @@
-"""The Scene type: a frozen, validated parameter set plus what to compare and how strictly."""
+"""The Scene type: the single source of a scene's parameters, defaults, channels, closed forms,
+which leaf serves it for each solver, and its hooks (Campbell sweep, 3D drawing, default
+campaign cases, findings). Nothing in `compare/` outside `compare/scenes/` names a scene."""
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
 from ..errors import BadInput
 from ..params import Param
+
+
+@dataclass(frozen=True)
+class Campbell:
+    """A frequency scene's sweep: `parameter` from `lo` to `hi` in `n` points (each a number or
+    the name of a scene parameter that holds it). `excitation_hz(params, value)` gives the
+    frequency [Hz] of the 1× excitation line at a sweep value (a rotor speed in rad/s gives
+    value/2π); critical speeds are where a mode line crosses `orders` × that line."""
+    parameter: str
+    lo: float | str
+    hi: float | str
+    n: int | str
+    excitation_hz: Callable | None = None
+    orders: tuple = (1,)
+    unit: str = "rad/s"
+
+    def values(self, params):
+        get = lambda v: params[v] if isinstance(v, str) else v     # noqa: E731
+        return np.linspace(float(get(self.lo)), float(get(self.hi)), int(get(self.n)))
 
 
 @dataclass(frozen=True)
@@ -15,14 +36,18 @@ class Scene:
     source: str                     # the paper / spec it comes from
     kind: str                       # "time" (xval run) or "modes" (xval modes)
     params: tuple[Param, ...]
+    # solver name -> leaf module serving this scene (the registry line of each solver)
+    leaves: dict = field(default_factory=dict)
     channels: tuple[str, ...] = ()
     # per-channel verdict tolerance, relative to the channel's scale (max |value| of the pair)
     tolerances: dict = field(default_factory=dict)
     key_channel: str = ""           # the channel whose final value the benchmark measures
     energy_channel: str | None = "energy_balance"
     # a run whose energy balance drifts by more than this fraction of the energy scale is
-    # reported `diverged` (stable-but-wrong integration must not pass as "ok")
+    # reported `diverged` (stable-but-wrong integration must not pass as "ok"); the scale is the
+    # largest |value| of the energy channel and of `energy_scale_channels`
     energy_bound: float = 0.05
+    energy_scale_channels: tuple[str, ...] = ()
     # conserved quantities (channel -> reported as relative drift in `invariants`)
     invariant_channels: tuple[str, ...] = ()
     # closed forms drawn with a channel: channel -> (trajectory extra key, label); plotted in
@@ -32,6 +57,14 @@ class Scene:
     reference_solvers: tuple[str, ...] = ()
     check: Callable | None = None   # cross-parameter physical checks, raises BadInput
     findings: Callable | None = None  # (params, trajectories) -> list[Finding]
+    # frequency scenes: the Campbell sweep; `identify(params, simulate, solver_names)` returns
+    # (json rows, markdown lines) of frequencies identified from time-domain free responses
+    campbell: Campbell | None = None
+    identify: Callable | None = None
+    # time scenes: draw_3d(rec, params, trajectory, colour, offset) logs the bodies to rerun
+    draw_3d: Callable | None = None
+    # the default campaign's cases of this scene: [{"name", "set", "solvers", "timeout_s"}]
+    campaign_cases: tuple = ()
     notes: str = ""
 
     def param(self, name):

@@ -50,9 +50,15 @@ def _check(p):
                        f"{p['phi0']:g} deg, psi0 = {p['psi0']:g} deg (needs ≥ {gap:.4g} m)")
 
 
+PRESS_LEAVES = {"lagrange-partial": "custom_models.press_partial",
+                "lagrange-exact": "custom_models.press_exact",
+                "exudyn": "reference_models.exudyn.press",
+                "mujoco": "reference_models.mujoco.press"}
+
+
 PRESS = Scene(
     name="press", title="Crank–rocker press with slider, idle run (2 DOF)", source=SOURCE,
-    kind="time",
+    kind="time", leaves=PRESS_LEAVES,
     params=_MECHANISM + (positive("t_end", 0.05, "s", "horizon (paper: 0.05 s)", hi=1e3),
                          positive("output_dt", 0.00125, "s", "output grid (paper: 40 steps)")),
     channels=CHANNELS, tolerances=TOLERANCES, key_channel="crank_rate", check=_check,
@@ -62,7 +68,7 @@ PRESS = Scene(
 PRESS_CYCLE = Scene(
     name="press-cycle",
     title="Press cycle: idle → rocker locks onto the slider → loaded stroke → release",
-    source=SOURCE, kind="time",
+    source=SOURCE, kind="time", leaves=PRESS_LEAVES,
     params=_MECHANISM + (
         Param("lock_after", 0.01, "s", "earliest lock time", lo=0.0, hi=1e3),
         Param("lock_angle", -48.0, "deg", "rocker angle at which it locks onto the slider",

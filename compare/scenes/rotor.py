@@ -1,9 +1,11 @@
 """Rotor on a spherical joint spun up through resonance (seed 000; spec scene-rotor.md)."""
 import numpy as np
 
+from ..identify import fft_peak, matrix_pencil, transverse_components
 from ..metrics import first_crossing
 from ..params import Param, positive
-from .base import Finding, Scene
+from ..physics.rotor import constants
+from .base import Campbell, Finding, Scene
 
 SOURCE = "seed 000 (Euler-vector rotor), seed 001 (quaternion formulation)"
 
@@ -20,20 +22,6 @@ ROTOR_PARAMS = (
           hi=np.pi - 1e-3),
     Param("spin0", 0.0, "rad/s", "initial spin rate about the initial body axis", lo=-1e4, hi=1e4),
 )
-
-
-def constants(p):
-    """Closed-form rotor numbers: inertias about O and the effective transverse stiffness.
-
-    Gravity enters the tilt stiffness only through its axial component: k_eff = k + m·l·g_z
-    (disk above O and g_z < 0 softens the spring)."""
-    I_t = p["m"] * p["R"] ** 2 / 4 + p["m"] * p["l"] ** 2
-    I_p = p["m"] * p["R"] ** 2 / 2
-    k_eff = p["k"] + p["m"] * p["l"] * float(np.asarray(p["gravity"])[2])
-    return {"I_t": I_t, "I_p": I_p, "k_eff": k_eff,
-            "omega_tilt": np.sqrt(p["k"] / I_t),                 # the paper's 38.8 rad/s
-            "omega_tilt_eff": np.sqrt(max(k_eff, 0.0) / I_t),
-            "forward_critical": np.sqrt(max(k_eff, 0.0) / (I_t - I_p))}
 
 
 def spinup_findings(p, trajectories):
@@ -94,11 +82,36 @@ def spinup_findings(p, trajectories):
     return out
 
 
+def draw_rotor(rec, params, traj, color, offset):
+    """Shaft and disk in body axes; the body pose over time from the solver's orientation."""
+    import rerun as rr
+    q = traj.extra.get("orientation")
+    if q is None:
+        return
+    ent = f"world/{traj.solver}"
+    l, R, e = params["l"], params["R"], params["eccentricity"]
+    rec.log(f"{ent}/shaft", rr.LineStrips3D([[[0, 0, 0], [0, 0, l]]], radii=0.01,
+                                            colors=[color]), static=True)
+    rec.log(f"{ent}/disk", rr.Cylinders3D(lengths=[0.02], radii=[R], centers=[[0, e, l]],
+                                          colors=[color]), static=True)
+    rec.log(f"{ent}/label", rr.Points3D([[0, 0, 0]], labels=[traj.solver], radii=0.02),
+            static=True)
+    ok = np.isfinite(q).all(axis=1)
+    xyzw = np.column_stack([q[ok, 1:], q[ok, :1]])
+    trans = np.tile(offset, (ok.sum(), 1))
+    rec.send_columns(ent, indexes=[rr.TimeColumn("sim_time", duration=traj.t[ok])],
+                     columns=rr.Transform3D.columns(translation=trans, quaternion=xyzw))
+
+
 SPINUP = Scene(
     name="rotor-spinup",
     title="Rotor on a spherical joint spun up through resonance",
     source=SOURCE,
     kind="time",
+    leaves={"euler-vector": "custom_models.rotor_euler",
+            "quaternion": "custom_models.rotor_quaternion",
+            "exudyn": "reference_models.exudyn.rotor",
+            "mujoco": "reference_models.mujoco.rotor"},
     params=ROTOR_PARAMS + (
         Param("torque", 1.5, "N·m", "drive torque about the fixed z axis", lo=-1e4, hi=1e4),
         positive("t_end", 10.0, "s", "horizon", hi=1e5),
@@ -109,17 +122,65 @@ SPINUP = Scene(
     tolerances={"omega_norm": 1e-4, "tilt": 1e-4, "spin_rate": 1e-4, "work": 1e-4,
                 "kinetic": 1e-4},
     key_channel="omega_norm",
+    energy_scale_channels=("kinetic", "potential", "work"),
     reference_solvers=("euler-vector", "quaternion"),
     findings=spinup_findings,
+    draw_3d=draw_rotor,
+    campaign_cases=({"name": "rotor-spinup-1.5Nm"},
+                    {"name": "rotor-spinup-3.2Nm", "set": {"torque": "3.2", "t_end": "5"}}),
     notes="Spring −kγ exactly as the paper defines it (U = ½k|γ|², γ the transverse Euler "
           "vector); a Cardan spring ½k(α²+β²) is a different model.",
 )
+
+def identify_free_response(params, run, solver_names=None, t_end=2.0, dt=1e-3, tilt0=1e-3):
+    """Release the rotor with a small tilt and no torque; identify the tilt frequency from each
+    time-domain solver's record (matrix pencil, FFT peak) for several record lengths.
+
+    `run(scene, solver_name, params, max_dt)` runs one time-domain solver (the compare layer's
+    adapter); returns (rows for the JSON output, Markdown lines for the report)."""
+    p = SPINUP.resolve({"torque": 0.0, "tilt0": tilt0, "t_end": t_end, "output_dt": dt})
+    p.update({k: params[k] for k in ("l", "k", "m", "R", "eccentricity", "gravity")})
+    lengths = [t_end / 8, t_end / 4, t_end / 2, t_end]
+    rows = []
+    for name in SPINUP.leaves:
+        if solver_names and name not in solver_names:
+            continue
+        tr = run(SPINUP, name, p, dt)
+        if tr.status != "ok" or "orientation" not in tr.extra:
+            rows.append({"solver": name, "status": tr.status, "reason": tr.reason})
+            continue
+        gx, _ = transverse_components(tr.extra["orientation"])
+        rec = {"solver": name, "status": "ok", "record_s": lengths, "matrix_pencil": [],
+               "fft": []}
+        for T in lengths:
+            n = int(round(T / dt)) + 1
+            w, _ = matrix_pencil(gx[:n], dt, n_modes=2)
+            rec["matrix_pencil"].append(float(w[np.argmax(w > 1.0)]) if np.any(w > 1) else None)
+            rec["fft"].append(float(fft_peak(gx[:n], dt)))
+        rows.append(rec)
+    md = ["## Frequencies identified from free responses", "",
+          f"Rotor released with tilt0 = {tilt0:g} rad, no torque, {t_end:g} s record at "
+          f"{dt * 1e3:g} ms; identified tilt frequency [rad/s] vs record length; closed form "
+          f"√(k_eff/I_t) = {constants(params)['omega_tilt_eff']:.8g} rad/s.", "",
+          "| solver | method | " + " | ".join(f"{T:g} s" for T in lengths) + " |",
+          "|---|---|" + "---|" * len(lengths)]
+    for r in rows:
+        if r["status"] == "ok":
+            for m in ("matrix_pencil", "fft"):
+                md.append(f"| {r['solver']} | {m} | "
+                          + " | ".join(f"{w:.8g}" if w else "—" for w in r[m]) + " |")
+    return rows, md
+
 
 WHIRL = Scene(
     name="rotor-whirl",
     title="Whirl frequencies of the rotor at constant spin (Campbell diagram)",
     source=SOURCE,
     kind="modes",
+    leaves={"closed-form": "custom_models.rotor_closed_form",
+            "euler-vector": "custom_models.rotor_whirl",
+            "exudyn": "reference_models.exudyn.rotor",
+            "mujoco": "reference_models.mujoco.rotor"},
     params=ROTOR_PARAMS[:4] + (
         Param("eccentricity", 0.0, "m", "centre-of-mass offset along body y (0: closed form "
               "exact)", lo=0.0, hi=1.0),
@@ -130,4 +191,9 @@ WHIRL = Scene(
     ),
     energy_channel=None,
     tolerances={"frequency": 1e-6},
+    campbell=Campbell("spin", 0.0, "spin_max", "n_spin",
+                      excitation_hz=lambda p, spin: spin / (2 * np.pi)),
+    identify=lambda params, run, names=None: (
+        identify_free_response(params, run, names) if params["spin"] == 0 else ([], [])),
+    campaign_cases=({"name": "rotor-whirl"},),
 )

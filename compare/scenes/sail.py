@@ -35,6 +35,9 @@ SAIL = Scene(
     name="sail-deploy",
     title="Two-blade heliogyro: threads unrolling from spools on a spinning hub",
     source=SOURCE, kind="time",
+    leaves={"thread-spool": "custom_models.thread_spool",
+            "thread-spool-conservative": "custom_models.thread_spool",
+            "exudyn": "reference_models.exudyn.sail", "mujoco": "reference_models.mujoco.sail"},
     params=(
         positive("J_hub", 0.004, "kg·m²", "spacecraft inertia about the spin axis"),
         positive("rho_L", 0.000735, "kg/m", "blade linear density"),

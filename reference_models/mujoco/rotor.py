@@ -32,13 +32,15 @@ import time as _time
 import mujoco
 import numpy as np
 
+from compare.contract import LeafResult, ModesResult, merge_settings
+from compare.physics import rotor as physics
+
 DEFAULT_SETTINGS = {
     "integrator": "rk4",
     "dt": 1e-3,
     "spring": "cone",       # "cone" (the scene's −kγ) | "cardan" (named model variant)
     "callback": "native",   # "native" (numba cfunc, no GIL) | "python" (Python callable)
     "omega_max": 1e5,       # |ω| bound [rad/s]: beyond it the run is reported diverged
-    "energy_tol_div": 0.5,  # diverged when |ΔE_bal| > this × (T + |U| + |A| + m|g||r_c|)
 }
 INTEGRATORS = ("rk4", "euler", "implicitfast", "implicit")
 SPRINGS = ("cone", "cardan")
@@ -51,12 +53,6 @@ _INTEGRATOR_ENUM = {
     "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
 }
 _RHS_PER_STEP = {"rk4": 4, "euler": 1, "implicitfast": 1, "implicit": 1}
-
-DEFAULT_PARAMS = {
-    "l": 0.5, "k": 2000.0, "m": 5.0, "R": 0.25, "eccentricity": 0.005,
-    "gravity": np.array([0.0, 0.0, -9.81]), "torque": 1.5, "t_end": 10.0, "output_dt": 0.01,
-    "tilt0": 0.0, "spin0": 0.0, "spin": 0.0,
-}
 
 # --- userdata layout (doubles in mjData.userdata, read/written by the callback) -------------
 _U_K, _U_TORQUE, _U_COS_PI, _U_OMEGA2, _U_FLAG, _U_TFAIL, _U_VARIANT, _U_COS_CARDAN = range(8)
@@ -273,14 +269,9 @@ class _Callback:
 # ----------------------------------------------------------------------------------------------
 # Model
 # ----------------------------------------------------------------------------------------------
-def _p(params, key):
-    return params[key] if key in params else DEFAULT_PARAMS[key]
-
-
-def _check_settings(settings):
-    s = {**DEFAULT_SETTINGS, **(settings or {})}
-    if s["integrator"] not in INTEGRATORS:
-        raise ValueError(f"integrator must be one of {INTEGRATORS}, got {s['integrator']!r}")
+def check_settings(settings, t_out=None):
+    """Settings merged and checked before anything runs."""
+    s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
     if not (isinstance(s["dt"], (int, float)) and math.isfinite(s["dt"]) and s["dt"] > 0):
         raise ValueError(f"dt must be a positive number, got {s['dt']!r}")
     if s["spring"] not in SPRINGS:
@@ -289,17 +280,15 @@ def _check_settings(settings):
         raise ValueError(f"callback must be one of {CALLBACKS}, got {s['callback']!r}")
     if not (float(s["omega_max"]) > 0):
         raise ValueError(f"omega_max must be positive, got {s['omega_max']!r}")
-    if not (float(s["energy_tol_div"]) > 0):
-        raise ValueError(f"energy_tol_div must be positive, got {s['energy_tol_div']!r}")
     s["dt"] = float(s["dt"])
     return s
 
 
 def _build(params, settings, integrator, torque):
     """Compile the ball-joint rotor; return (model, data, body id)."""
-    l, k, mass, rad = (float(_p(params, n)) for n in ("l", "k", "m", "R"))
-    ecc = float(_p(params, "eccentricity"))
-    g = np.asarray(_p(params, "gravity"), dtype=float).reshape(3)
+    l, k, mass, rad = (float(params[n]) for n in ("l", "k", "m", "R"))
+    ecc = float(params["eccentricity"])
+    g = np.asarray(params["gravity"], dtype=float).reshape(3)
     spec = mujoco.MjSpec()
     spec.modelname = "rotor"
     spec.nuserdata = _NUSERDATA
@@ -345,66 +334,15 @@ def _bad_warnings(d):
 # Channels (vectorised, from stored states)
 # ----------------------------------------------------------------------------------------------
 def _channels(params, spring, quat, vel, work):
-    l, k, mass, rad = (float(_p(params, n)) for n in ("l", "k", "m", "R"))
-    ecc = float(_p(params, "eccentricity"))
-    g = np.asarray(_p(params, "gravity"), dtype=float).reshape(3)
-    q = quat / np.linalg.norm(quat, axis=1, keepdims=True)
-    w, x, y, z = q.T
-    # rotation matrix rows/cols
-    R = np.empty((len(q), 3, 3))
-    R[:, 0, 0] = 1 - 2 * (y * y + z * z)
-    R[:, 0, 1] = 2 * (x * y - w * z)
-    R[:, 0, 2] = 2 * (x * z + w * y)
-    R[:, 1, 0] = 2 * (x * y + w * z)
-    R[:, 1, 1] = 1 - 2 * (x * x + z * z)
-    R[:, 1, 2] = 2 * (y * z - w * x)
-    R[:, 2, 0] = 2 * (x * z - w * y)
-    R[:, 2, 1] = 2 * (y * z + w * x)
-    R[:, 2, 2] = 1 - 2 * (x * x + y * y)
-    c = np.array([0.0, ecc, l])
-    J = np.diag([mass * rad**2 / 4, mass * rad**2 / 4, mass * rad**2 / 2])
-    J = J + mass * (c @ c * np.eye(3) - np.outer(c, c))     # inertia about O, body frame
-    omega_s = np.einsum("nij,nj->ni", R, vel)
-    kinetic = 0.5 * np.einsum("ni,ij,nj->n", vel, J, vel)
-    n = R[:, :, 2]
-    tilt = np.arctan2(np.hypot(n[:, 0], n[:, 1]), n[:, 2])
-    if spring == "cone":
-        u_spring = 0.5 * k * tilt**2
-    else:
+    """The shared rotor channels; only the Cardan variant brings its own spring potential."""
+    R = physics.rotations_from_quaternions(quat)
+    u_spring = None
+    if spring == "cardan":
+        n = R[:, :, 2]
         beta = np.arcsin(np.clip(n[:, 0], -1, 1))
         alpha = np.arctan2(-n[:, 1], n[:, 2])
-        u_spring = 0.5 * k * (alpha**2 + beta**2)
-    r_c = R @ c
-    potential = u_spring - mass * (r_c @ g)
-    return {
-        "omega_norm": np.linalg.norm(vel, axis=1),
-        "spin_rate": omega_s[:, 2],
-        "tilt": tilt,
-        "work": work,
-        "kinetic": kinetic,
-        "potential": potential,
-        "energy_balance": kinetic + potential - work,
-    }
-
-
-def _energy_blowup(params, ch, tol):
-    """First index where |E_bal − E_bal(0)| > tol · (running energy scale), and a reason."""
-    mass = float(_p(params, "m"))
-    g = np.linalg.norm(np.asarray(_p(params, "gravity"), dtype=float))
-    c = math.hypot(float(_p(params, "l")), float(_p(params, "eccentricity")))
-    err = np.abs(ch["energy_balance"] - ch["energy_balance"][0])
-    scale = np.maximum.accumulate(ch["kinetic"] + np.abs(ch["potential"]) + np.abs(ch["work"])
-                                  + mass * g * c + 1e-300)
-    with np.errstate(invalid="ignore"):
-        hit = np.nonzero(err > tol * scale)[0]
-    if hit.size == 0:
-        return None
-    i = int(hit[0])
-    return i, (f"energy balance error {err[i]:.3g} J exceeds {tol:g} x energy scale "
-               f"{scale[i]:.3g} J (integration unstable)")
-
-
-CHANNELS = ("omega_norm", "spin_rate", "tilt", "work", "kinetic", "potential", "energy_balance")
+        u_spring = 0.5 * float(params["k"]) * (alpha**2 + beta**2)
+    return physics.channels(params, R, np.einsum("nij,nj->ni", R, vel), work, u_spring)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -416,12 +354,12 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> dict:
     Steps: each output interval Δ is split into N = ceil(Δ/dt) equal steps (h = Δ/N ≤ dt; h = dt
     when dt divides Δ, reported as ``settings['dt_effective']``). If dt > Δ the integrator steps
     at exactly dt and the channels are interpolated linearly onto t_out."""
-    s = _check_settings(settings)
+    s = check_settings(settings)
     t_out = np.asarray(t_out, dtype=float)
     if t_out.ndim != 1 or t_out.size < 1 or t_out[0] != 0.0 or np.any(np.diff(t_out) <= 0):
         raise ValueError("t_out must be increasing and start at 0")
-    torque = float(_p(params, "torque"))
-    tilt0, spin0 = float(_p(params, "tilt0")), float(_p(params, "spin0"))
+    torque = float(params["torque"])
+    tilt0, spin0 = float(params["tilt0"]), float(params["spin0"])
     m, d, bid = _build(params, s, s["integrator"], torque)
     d.qpos[:] = (math.cos(tilt0 / 2), math.sin(tilt0 / 2), 0.0, 0.0)    # R0 = Rx(tilt0)
     d.qvel[:] = (0.0, 0.0, spin0)                                       # spin0·n0, body frame
@@ -480,11 +418,6 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> dict:
     wall = _time.perf_counter() - wall0
 
     ch = _channels(params, s["spring"], quat, vel, work)
-    if status == "ok":      # a finite but exploding run: energy error beyond the energy scale
-        bad_e = _energy_blowup(params, ch, float(s["energy_tol_div"]))
-        if bad_e is not None:
-            status, reason = "diverged", bad_e[1]
-            t_fail = float(step_t[bad_e[0]])
     orient = quat / np.linalg.norm(quat, axis=1, keepdims=True)
     if coarse:
         good = np.isfinite(work)
@@ -507,16 +440,12 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> dict:
     used["dt_effective"] = float(dt if coarse else min(h for _, h in chunks) if chunks else dt)
     if kind != s["callback"]:
         used["callback_fallback_reason"] = _NATIVE["error"]
-    return {
-        "channels": {name: np.ascontiguousarray(ch[name], dtype=np.float64) for name in CHANNELS},
-        "status": status,
-        "t_fail": t_fail,
-        "reason": reason,
-        "stats": {"steps": int(steps), "rhs_evals": int(steps * _RHS_PER_STEP[s["integrator"]]),
-                  "wall_s": wall, "steps_per_s": steps / wall if wall > 0 else float("nan")},
-        "settings": used,
-        "extra": {"orientation": orient},
-    }
+    return LeafResult(
+        channels={name: np.ascontiguousarray(v, dtype=np.float64) for name, v in ch.items()},
+        status=status, t_fail=t_fail, reason=reason,
+        stats={"steps": int(steps), "rhs_evals": int(steps * _RHS_PER_STEP[s["integrator"]]),
+               "integrate_s": wall},
+        settings=used, extra={"orientation": orient})
 
 
 # ----------------------------------------------------------------------------------------------
@@ -527,7 +456,7 @@ _FD_EPS = 1e-6
 
 
 def _whirl_setup(params, settings):
-    s = _check_settings({**(settings or {}), "integrator": "euler", "dt": _FD_H})
+    s = check_settings({**(settings or {}), "integrator": "euler", "dt": _FD_H})
     m, d, _ = _build(params, s, "euler", torque=0.0)   # no drive torque in the linearisation
     return s, m, d
 
@@ -599,7 +528,7 @@ def modes(params: dict, settings: dict) -> dict:
     Linearisation: mjd_transitionFD under Euler (no drive torque), continuous-time blocks
     recovered exactly, ball-joint body-frame tangent frequencies converted to the inertial frame
     (+Ω), backward/forward labelled from the eigenvector's rotation sense."""
-    spin = float(_p(params, "spin"))
+    spin = float(params["spin"])
     s, m, d = _whirl_setup(params, settings)
     with _Callback(s["callback"]) as cbk:
         pairs = _whirl_at(m, d, spin)
@@ -607,10 +536,11 @@ def modes(params: dict, settings: dict) -> dict:
     (wb, zb), (wf, zf) = _classify(pairs, spin)
     used = {"integrator": "euler", "dt": _FD_H, "fd_eps": _FD_EPS, "spring": s["spring"],
             "callback": kind, "linearisation": "mjd_transitionFD, ball joint, inertial frame"}
-    return {"frequencies_hz": [wb / (2 * math.pi), wf / (2 * math.pi)],
-            "labels": ["backward whirl", "forward whirl"],
-            "damping": [zb, zf],
-            "settings": used}
+    notes = (["approximate: steady spin is no equilibrium of an eccentric rotor"]
+             if spin != 0 and params["eccentricity"] != 0 else [])
+    return ModesResult(frequencies_hz=np.array([wb, wf]) / (2 * math.pi),
+                       labels=["backward whirl", "forward whirl"], damping=np.array([zb, zf]),
+                       settings=used, notes=notes)
 
 
 def whirl_sweep(params: dict, spins, settings: dict | None = None):

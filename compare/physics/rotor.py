@@ -1,0 +1,78 @@
+"""Rotor on a spherical joint (scenes `rotor-spinup`, `rotor-whirl`): the inertias, the effective
+stiffness and every channel, defined once for all four solvers.
+
+Each solver supplies only a common kinematic output — rotations R (n, 3, 3) body → fixed, the
+fixed-frame angular velocity ω (n, 3) and the drive work A (n,) — and `channels` turns it into
+the scene's channels. A solver that models a different spring (MuJoCo's `spring=cardan` variant)
+passes its own spring potential; everything else is shared.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def constants(p: dict) -> dict:
+    """Closed-form rotor numbers from the scene parameters.
+
+    rc0: centre of mass in the body frame (eccentricity along body y, disk at l on the shaft);
+    I_c: central inertia of the disk, I_o: inertia about the pivot O (Steiner), both body frame;
+    I_t, I_p: transverse and polar inertia about O of the axisymmetric rotor (eccentricity 0);
+    k_eff = k + m·l·g_z: gravity enters the tilt stiffness only through its axial component
+    (disk above O and g_z < 0 soften the spring)."""
+    m, R, l, e = p["m"], p["R"], p["l"], p["eccentricity"]
+    g = np.asarray(p["gravity"], float)
+    rc0 = np.array([0.0, e, l])
+    I_c = np.diag([m * R**2 / 4, m * R**2 / 4, m * R**2 / 2])
+    I_o = I_c + m * ((rc0 @ rc0) * np.eye(3) - np.outer(rc0, rc0))
+    I_t = m * R**2 / 4 + m * l**2
+    I_p = m * R**2 / 2
+    k_eff = p["k"] + m * l * g[2]
+    return {"rc0": rc0, "I_c": I_c, "I_o": I_o, "I_t": I_t, "I_p": I_p, "k_eff": k_eff,
+            "gravity": g,
+            "omega_tilt": np.sqrt(p["k"] / I_t),                 # the paper's 38.8 rad/s
+            "omega_tilt_eff": np.sqrt(max(k_eff, 0.0) / I_t),
+            "forward_critical": np.sqrt(max(k_eff, 0.0) / (I_t - I_p))}
+
+
+def tilt(Rs: np.ndarray) -> np.ndarray:
+    """Angle between the body axis R·e_z and the fixed z axis (= |γ|, the transverse turn)."""
+    n = Rs[:, :, 2]
+    return np.arctan2(np.hypot(n[:, 0], n[:, 1]), n[:, 2])
+
+
+def channels(p: dict, Rs: np.ndarray, omegas: np.ndarray, work: np.ndarray,
+             spring_potential: np.ndarray | None = None) -> dict:
+    """The scene channels from rotations (n,3,3), fixed-frame ω (n,3) and drive work (n,).
+
+    U = ½k|γ|² − m r_c·g (the paper's spring −kγ), unless a solver's model variant passes its
+    own spring potential. T = ½ ω·(R I_o Rᵀ)·ω."""
+    c = constants(p)
+    body_w = np.einsum("nji,nj->ni", Rs, omegas)                  # Rᵀω, body frame
+    kinetic = 0.5 * np.einsum("ni,ij,nj->n", body_w, c["I_o"], body_w)
+    tl = tilt(Rs)
+    u_spring = 0.5 * p["k"] * tl**2 if spring_potential is None else spring_potential
+    potential = u_spring - p["m"] * (Rs @ c["rc0"]) @ c["gravity"]
+    return {"omega_norm": np.linalg.norm(omegas, axis=1), "spin_rate": omegas[:, 2].copy(),
+            "tilt": tl, "work": np.array(work, float), "kinetic": kinetic,
+            "potential": potential, "energy_balance": kinetic + potential - work}
+
+
+def rotations_from_quaternions(q: np.ndarray) -> np.ndarray:
+    """(n, 4) unit quaternions w, x, y, z (normalised here) → (n, 3, 3) rotation matrices."""
+    q = np.asarray(q, float)
+    q = q / np.linalg.norm(q, axis=1, keepdims=True)
+    w, x, y, z = q.T
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+    ], 1)
+
+
+def whirl_closed_form(p: dict, spins) -> tuple[np.ndarray, np.ndarray]:
+    """(backward, forward) whirl frequencies [rad/s] of I_t w² ∓ I_p Ω w − k_eff = 0.
+    Exact for eccentricity 0 and gravity along the shaft."""
+    c = constants(p)
+    W = np.abs(np.asarray(spins, float))
+    root = np.sqrt((c["I_p"] * W) ** 2 + 4 * c["I_t"] * c["k_eff"])
+    return (root - c["I_p"] * W) / (2 * c["I_t"]), (root + c["I_p"] * W) / (2 * c["I_t"])

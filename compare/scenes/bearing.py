@@ -23,6 +23,7 @@ BEARING_ROTOR = Scene(
     title="Two-bearing rotor with a bearing defect, spun up by a DC motor",
     source=SOURCE,
     kind="time",
+    leaves={"quaternion": "custom_models.bearing_rotor"},
     params=(
         positive("m", 6.0, "kg", "shaft mass"),
         positive("l", 0.6, "m", "distance between the journals a (+l/2) and b (−l/2)"),
@@ -57,6 +58,7 @@ BEARING_ROTOR = Scene(
                 "journal_a_y": 1e-3, "journal_b_x": 1e-3, "journal_b_y": 1e-3,
                 "kinetic": 1e-4, "motor_work": 1e-4},
     key_channel="spin_rate",
+    energy_scale_channels=("kinetic", "motor_work"),
     reference_solvers=("quaternion",),
     check=check,
     notes="Force laws, spin angle (swing–twist about the shaft axis) and every observable are "

@@ -1,0 +1,219 @@
+"""`quaternion` solver of the two-bearing rotor (scene `bearing-rotor`, seed 001): the paper's
+Euler equations as a SECOND-ORDER equation for the Rodrigues–Hamilton parameters Λ, plus
+Newton's law for the centre of mass. Force laws and observables: compare.physics.bearing_rotor.
+
+The paper (eqs. 6–11, text partly garbled) writes (0, ω_Y) = 2 Λ̃ Λ̇ (6–7) with Λ̃ the matrix of
+the conjugate product, differentiates it with the normalisation (3) — the scalar row becomes the
+auxiliary M0 = (−2 Σ λ̇ᵢ², 0, 0, 0) — substitutes Euler's equations (2) (the gyroscopic terms
+(J_k − J_j) ω_j ω_k are its G[(TΛΛ̇)•(TᵀΛΛ̇)]) and solves with Λ̃⁻¹ = Λ̃ᵀ for |Λ| = 1:
+    Λ̈ = Λᵀ J⁻¹ (K P M_X + M0 − G[…])                                        (11)
+with the moment M_X in the fixed frame, P = Rᵀ its projection on the body axes (4–5). The
+garbled matrices are not copied; the same equation is derived here. With q ≡ Λ (w, x, y, z,
+body → fixed) and Ω the body angular velocity, (0, Ω) = 2 q̄∘q̇ / |q|². Differentiating,
+    2 q̄∘q̈ = (0, Ω̇)·|q|² − 2 q̄̇∘q̇,   q̄̇∘q̇ = (|q̇|², 0)   (a conjugate pair has no vector part)
+so, with J Ω̇ = Rᵀ M − Ω × J Ω (Euler's equations (2)),
+    q̈ = q ∘ (−|q̇|², ½ Ω̇) / |q|².
+No trigonometric function appears. Its scalar row gives q·q̈ = −|q̇|², i.e. d²|q|²/dt² = 0:
+|q|² = 1 and q·q̇ = 0 are first integrals (the paper's (3)), kept by the exact flow only —
+numerically |q| drifts (reported as `invariants["quaternion_norm"]`, the largest | |q| − 1 | over
+every accepted step). tests/test_bearing_rotor.py checks this q̈ against the first-order
+q̇ = ½ q∘Ω (= ½ ω∘q in the fixed frame).
+
+Setting `project` (default False): after each accepted step q ← q/|q| and the radial part of q̇
+is removed (q̇ ← q̇ − (q·q̇) q). The shared drivers call the guard on the accepted state after
+every step; the projection runs there (the adaptive driver's first-same-as-last derivative of
+the next step is then the one of the unprojected state, an O(h·correction) effect).
+"""
+from __future__ import annotations
+
+import time
+
+import numba as nb
+import numpy as np
+
+from compare.contract import LeafResult, merge_settings
+from compare.physics import bearing_rotor as phys
+
+from .integrators import (
+    ADAPTIVE_TABLEAUS,
+    FAIL_REASONS,
+    FIXED_TABLEAUS,
+    integrate_adaptive,
+    integrate_fixed,
+)
+from .rotation import quat_times_vector
+
+INTEGRATORS = tuple(ADAPTIVE_TABLEAUS) + tuple(FIXED_TABLEAUS)
+ADAPTIVE = tuple(ADAPTIVE_TABLEAUS)
+# atol defaults to rtol/100 (journal offsets ~3e-5 m sit well above it); h_max to output_dt.
+DEFAULT_SETTINGS = {"integrator": "dop853", "rtol": 1e-10, "atol": None, "dt": None,
+                    "h_max": None, "max_steps": 10**8, "project": False}
+DEFAULT_FIXED_DT = 1e-5       # rk4: the rocking mode (~1000 rad/s) and the 1.4 ms bump
+
+# state layout
+R_, V_, Q_, QD_, W_, D_, NORM_ = (slice(0, 3), slice(3, 6), slice(6, 10), slice(10, 14),
+                                  14, 15, 16)
+NY = 17
+# extra entries after the physics parameters in p
+P_PROJECT, P_BOUND = phys.N_PACK, phys.N_PACK + 1
+
+FAIL_BOUND, FAIL_NORM = 20, 21
+NORM_LIMIT = 1e-3     # |q| drifted this far from 1: the first integral is lost
+REASONS = {**FAIL_REASONS,
+           FAIL_BOUND: "a journal left its bearing (radial offset > l/10)",
+           FAIL_NORM: f"quaternion norm drifted by more than {NORM_LIMIT:g} (first integral "
+                      "lost: use project=True or a tighter step)"}
+STATUS = {1: "diverged", 2: "unstable", 3: "unstable", FAIL_BOUND: "diverged",
+          FAIL_NORM: "unstable"}
+
+
+@nb.njit(cache=True)
+def body_rate(q, qd):
+    """Ω = 2 vec(q̄∘q̇)/|q|² (body frame)."""
+    w, v, wd, vd = q[0], q[1:], qd[0], qd[1:]
+    return 2.0 * (w * vd - wd * v - np.cross(v, vd)) / (q @ q)
+
+
+@nb.njit(cache=True)
+def fixed_rate(q, qd):
+    """ω = 2 vec(q̇∘q̄)/|q|² (fixed frame)."""
+    w, v, wd, vd = q[0], q[1:], qd[0], qd[1:]
+    return 2.0 * (w * vd - wd * v + np.cross(v, vd)) / (q @ q)
+
+
+@nb.njit(cache=True)
+def quaternion_acceleration(q, qd, omega_body_dot):
+    """q̈ = q ∘ (−|q̇|², ½ Ω̇) / |q|²."""
+    return (quat_times_vector(q, 0.5 * omega_body_dot) - (qd @ qd) * q) / (q @ q)
+
+
+@nb.njit(cache=True)
+def rhs(t, y, p):
+    r, v = y[R_].copy(), y[V_].copy()
+    q, qd = y[Q_].copy(), y[QD_].copy()
+    W = body_rate(q, qd)
+    force, moment, motor_power, dissipation = phys.body_loads(r, q, v, fixed_rate(q, qd), p)
+    R = phys.quat_matrix(q)
+    J = np.array([p[phys.I_JT], p[phys.I_JT], p[phys.I_JP]])
+    W_dot = (R.T @ moment - np.cross(W, J * W)) / J
+    dy = np.empty(NY)
+    dy[R_] = v
+    m = p[phys.I_M]
+    dy[3] = force[0] / m + p[phys.I_GX]
+    dy[4] = force[1] / m + p[phys.I_GY]
+    dy[5] = force[2] / m + p[phys.I_GZ]
+    dy[Q_] = qd
+    dy[QD_] = quaternion_acceleration(q, qd, W_dot)
+    dy[W_] = motor_power
+    dy[D_] = dissipation
+    dy[NORM_] = 0.0
+    return dy
+
+
+@nb.njit(cache=True)
+def guard(t, y, p):
+    """Track the norm drift, project if asked, stop on a lost first integral or a journal out
+    of its bearing. Runs on the accepted state after every step (and may change it)."""
+    qq = y[6] ** 2 + y[7] ** 2 + y[8] ** 2 + y[9] ** 2
+    drift = abs(np.sqrt(qq) - 1.0)
+    y[NORM_] = max(y[NORM_], drift)
+    if p[P_PROJECT] != 0.0:
+        s = 1.0 / np.sqrt(qq)
+        radial = 0.0
+        for i in range(6, 10):
+            y[i] *= s
+            radial += y[i] * y[i + 4]
+        for i in range(6, 10):
+            y[i + 4] -= radial * y[i]
+    elif drift > NORM_LIMIT:
+        return FAIL_NORM
+    # journal offsets: centre ± (l/2) e3, e3 = third column of R(q)
+    w, x, yy, z = y[6:10] / np.sqrt(y[6:10] @ y[6:10])
+    half = 0.5 * p[phys.I_L]
+    ex, ey = 2 * (x * z + w * yy), 2 * (yy * z - w * x)
+    for sgn in (1.0, -1.0):
+        dx, dy = y[0] + sgn * half * ex, y[1] + sgn * half * ey
+        if dx * dx + dy * dy > p[P_BOUND] ** 2:
+            return FAIL_BOUND
+    return 0
+
+
+def _settings(settings: dict | None, t_out: np.ndarray) -> dict:
+    s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
+    if isinstance(s["project"], str):
+        if s["project"].lower() not in ("true", "false", "1", "0"):
+            raise ValueError(f"project={s['project']!r}: use true or false")
+        s["project"] = s["project"].lower() in ("true", "1")
+    s["project"] = bool(s["project"])
+    if s["integrator"] in FIXED_TABLEAUS:
+        dt_out = t_out[1] - t_out[0]
+        dt = s["dt"] or DEFAULT_FIXED_DT
+        substeps = int(round(dt_out / dt))
+        if substeps < 1 or abs(substeps * dt - dt_out) > 1e-9 * dt_out:
+            raise ValueError(f"dt={dt:g} must divide output_dt={dt_out:g} into whole steps")
+    return s
+
+
+def initial_state(params: dict) -> np.ndarray:
+    r, q, v, omega = phys.initial_state(params)
+    y = np.zeros(NY)
+    y[R_], y[V_], y[Q_] = r, v, q
+    y[QD_] = 0.5 * quat_times_vector(q, omega)       # at rest: zero
+    return y
+
+
+def simulate(params: dict, t_out: np.ndarray, settings: dict) -> LeafResult:
+    s = _settings(settings, t_out)
+    t_out = np.ascontiguousarray(t_out, float)
+    p = np.concatenate([phys.pack(params), [float(s["project"]), 0.1 * params["l"]]])
+    y0 = initial_state(params)
+    name = s["integrator"]
+    t0 = time.perf_counter()
+    if name in FIXED_TABLEAUS:
+        tb = FIXED_TABLEAUS[name]
+        substeps = int(round((t_out[1] - t_out[0]) / (s["dt"] or DEFAULT_FIXED_DT)))
+        Y, steps, evals, t_fail, code = integrate_fixed(rhs, guard, y0, p, t_out, substeps,
+                                                        tb["A"], tb["B"], tb["C"])
+        used = {"integrator": name, "dt": (t_out[1] - t_out[0]) / substeps}
+        stats = {"steps": int(steps), "rhs_evals": int(evals)}
+    else:
+        tb = ADAPTIVE_TABLEAUS[name]
+        rtol = float(s["rtol"])
+        atol = float(s["atol"] or rtol * 1e-2)
+        h_max = float(s["h_max"] or (t_out[1] - t_out[0]))
+        Y, steps, evals, rej, t_fail, code = integrate_adaptive(
+            rhs, guard, y0, p, t_out, rtol, atol, h_max, int(s["max_steps"]),
+            tb["A"], tb["B"], tb["C"], tb["E"], tb["E3"], tb["err_order"])
+        used = {"integrator": name, "rtol": rtol, "atol": atol, "h_max": h_max}
+        stats = {"steps": int(steps), "rhs_evals": int(evals), "rejected": int(rej)}
+    stats["integrate_s"] = time.perf_counter() - t0
+    used["project"] = s["project"]
+    return _result(params, t_out, Y, stats, used, int(code), t_fail)
+
+
+def _result(params, t_out, Y, stats, used, code, t_fail) -> LeafResult:
+    n = len(t_out)
+    ok = np.isfinite(Y).all(axis=1)
+    Yk = Y[ok]
+    q, qd = Yk[:, Q_], Yk[:, QD_]
+    qq = np.einsum("ij,ij->i", q, q)[:, None]
+    omega = 2.0 * (q[:, :1] * qd[:, 1:] - qd[:, :1] * q[:, 1:]
+                   + np.cross(q[:, 1:], qd[:, 1:])) / qq
+    ch_ok = phys.channels(params, t_out[ok], Yk[:, R_], Yk[:, V_], q, omega, Yk[:, W_],
+                          Yk[:, D_])
+    channels = {}
+    for k, v in ch_ok.items():
+        channels[k] = np.full(n, np.nan)
+        channels[k][ok] = v
+    orientation = np.full((n, 4), np.nan)
+    orientation[ok] = q / np.sqrt(qq)
+    journal_a, journal_b = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
+    journal_a[ok], journal_b[ok] = phys.journal_positions(params, Yk[:, R_], q)
+    status = "ok" if code == 0 else STATUS.get(code, "diverged")
+    return LeafResult(
+        channels=channels, status=status,
+        t_fail=None if code == 0 else float(t_fail),
+        reason=None if code == 0 else REASONS.get(code, f"failure code {code}"),
+        stats=stats, settings=used,
+        extra={"orientation": orientation, "journal_a": journal_a, "journal_b": journal_b},
+        invariants={"quaternion_norm": float(np.max(Yk[:, NORM_])) if len(Yk) else np.nan})

@@ -1,0 +1,208 @@
+"""What both engine models of the MSTMM beams (`rotating-beam`, `spinning-shaft`) are given
+alike: the rigid-finite-element layout of a cantilever, the per-segment inertia, the stations
+where mode shapes are sampled, and the post-processing of the linearised system (quadratic
+eigenproblem, labels, shapes). The dynamics (centrifugal, Coriolis, the chain's inertia) stay in
+each engine.
+
+Layout (the MuJoCo notes §4, "rigid-finite-element" layout, second order in 1/N): N hinges at
+x_i = (i − ½)Δl, Δl = L/N, each with springs EI/Δl (bending) and GJ/Δl (torsion); the root
+piece [0, Δl/2] is clamped, N − 1 bodies of length Δl and the last of length Δl/2.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+
+N_STATIONS = 10     # mode shapes sampled at x_k = k·L/10, k = 1..10 (every speed alike)
+
+
+def layout(L: float, n: int) -> dict:
+    """Hinge positions (from the root), body lengths and body centres of an n-hinge chain."""
+    dl = L / n
+    hinges = (np.arange(1, n + 1) - 0.5) * dl
+    ends = np.append(hinges[1:], L)
+    lengths = ends - hinges
+    return {"dl": dl, "hinges": hinges, "lengths": lengths}
+
+
+def segment_inertia(m_line: float, length: float, axial: float, bend1: float, bend2: float
+                    ) -> np.ndarray:
+    """Principal inertia about the segment's centre (axis 0 along the beam): the line mass's
+    m ℓ²/12 about both transverse axes plus the section terms ρ·ℓ·(∫ dA) given per length:
+    `axial` about the beam axis, `bend1`/`bend2` about transverse axes 1 and 2."""
+    m = m_line * length
+    return np.array([axial * length, m * length**2 / 12 + bend1 * length,
+                     m * length**2 / 12 + bend2 * length])
+
+
+def blade_chain(params: dict, section: dict, n: int, rotary_inertia: bool = True) -> dict:
+    """Rigid-segment blade along x from the root at x = r_H, spinning about z at `speed`.
+
+    Joints per hinge, in this order: torsion (about x, GJ/Δl), flap (about y: out of the rotor
+    plane, EI_flap/Δl), lag (about z: in the plane, EI_lag/Δl). Segment inertia: the line mass
+    plus the section's ρ∫z²dA = ρI_flap (about y), ρ∫y²dA = ρI_lag (about z), I_α (about x).
+    These section terms are what make the rotating-frame terms of a rigid section come out
+    right: the torsion 'propeller' stiffness Ω²(I_zz − I_yy) = Ω²ρ(I_lag − I_flap) per length
+    (the paper's eq. 30 writes Ω²I_α = Ω²ρ(I_lag + I_flap): 1.3 % more on the Ω² part, 0.03 %
+    on the torsion frequency at 40 rad/s) and no flap–torsion gyroscopic coupling
+    Ω(I_xx + I_yy − I_zz) = 2Ωρ I_flap ≈ 0. They also give the lag modes a rotary inertia
+    ρI_lag the Euler–Bernoulli closed forms lack (−0.13 % on lag 1 at rest).
+    `rotary_inertia=False` drops the section terms in bending (Euler–Bernoulli exactly, I_α kept
+    in torsion); it is only consistent at rest: spinning, that body would carry a spurious
+    flap–torsion coupling ΩI_α and flap softening −Ω²I_α."""
+    lay = layout(params["L"], n)
+    rho = params["rho"]
+    b1, b2 = (rho * section["I_flap"], rho * section["I_lag"]) if rotary_inertia else (0, 0)
+    inertia = np.array([segment_inertia(section["m"], ell, section["I_alpha"], b1, b2)
+                        for ell in lay["lengths"]])
+    dl = lay["dl"]
+    return {**lay, "axis": 0, "root": params["hub_radius"], "spin": params["speed"],
+            "joints": (("torsion", 0, section["GJ"] / dl), ("flap", 1, section["EI_flap"] / dl),
+                       ("lag", 2, section["EI_lag"] / dl)),
+            "masses": section["m"] * lay["lengths"], "inertia": inertia,
+            "L": params["L"], "chord": params["chord"]}
+
+
+def shaft_chain(params: dict, n: int, spin: float) -> dict:
+    """Rigid-segment shaft along z spinning about z at `spin` (rad/s). Joints per hinge: about
+    x (bending v along y, EI_xx/Δl), about y (bending u along x, EI_yy/Δl); Euler–Bernoulli:
+    segment inertia m ℓ²/12 about x and y only (no section rotary or polar inertia)."""
+    lay = layout(params["L"], n)
+    m = params["m"]
+    tiny = 1e-9 * m * lay["dl"] ** 3 / 12     # engines want a positive polar inertia
+    inertia = np.array([[m * ell**3 / 12, m * ell**3 / 12, tiny] for ell in lay["lengths"]])
+    dl = lay["dl"]
+    return {**lay, "axis": 2, "root": 0.0, "spin": spin,
+            "joints": (("bend_v", 0, params["EI_xx"] / dl), ("bend_u", 1, params["EI_yy"] / dl)),
+            "masses": m * lay["lengths"], "inertia": inertia, "L": params["L"]}
+
+
+def joint_table(chain: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per coordinate (hinge-major, joints in chain order): family, hinge index, stiffness."""
+    n, js = len(chain["hinges"]), chain["joints"]
+    fam = np.array([j[0] for _ in range(n) for j in js])
+    hinge = np.repeat(np.arange(n), len(js))
+    k = np.array([j[2] for _ in range(n) for j in js])
+    return fam, hinge, k
+
+
+def quadratic_modes(M: np.ndarray, K: np.ndarray, D: np.ndarray):
+    """Eigenvalues s and eigenvectors (coordinates only) of M q̈ + D q̇ + K q = 0: the
+    oscillatory ones (Im s > 0) ascending in Im s, and the count of eigenvalues with
+    Re s > 0 beyond round-off (divergence or flutter: an unstable linearisation)."""
+    n = M.shape[0]
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-K, -D]])
+    B = np.block([[np.eye(n), np.zeros((n, n))], [np.zeros((n, n)), M]])
+    s, V = scipy.linalg.eig(A, B)
+    fin = np.isfinite(s)
+    scale = np.max(np.abs(s[fin]))
+    n_unstable = int(np.sum(s[fin].real > 1e-7 * scale))
+    keep = fin & (s.imag > 1e-9 * scale)
+    s, V = s[keep], V[:n, keep]
+    order = np.argsort(s.imag)
+    return s[order], V[:, order], n_unstable
+
+
+def stations(L: float) -> np.ndarray:
+    return L * np.arange(1, N_STATIONS + 1) / N_STATIONS
+
+
+def _arms(chain: dict) -> np.ndarray:
+    return np.clip(stations(chain["L"])[:, None] - chain["hinges"][None, :], 0.0, None)
+
+
+def real_shape(v: np.ndarray) -> np.ndarray:
+    """A complex mode shape made comparable: phase turned so the largest entry is real
+    positive, unit max-abs; returns [Re, Im] (Im ≈ 0 for a standing mode)."""
+    k = int(np.argmax(np.abs(v)))
+    v = v * np.exp(-1j * np.angle(v[k])) / max(np.abs(v[k]), 1e-300)
+    return np.concatenate([v.real, v.imag])
+
+
+def family_labels(families: list) -> list:
+    """'flap 1', 'lag 1', 'flap 2', … numbered per family in the given (ascending) order."""
+    count: dict = {}
+    out = []
+    for f in families:
+        count[f] = count.get(f, 0) + 1
+        out.append(f"{f} {count[f]}")
+    return out
+
+
+def blade_modes(chain: dict, M, K, D, n_modes: int) -> dict:
+    """Frequencies (Hz), labels by the family holding most of the hinge-spring energy, shapes
+    [flap z, lag y, (chord/2)·twist] at the stations (Re then Im), damping −Re s/|s|."""
+    s, V, n_unstable = quadratic_modes(M, K, D)
+    fam, hinge, k = joint_table(chain)
+    families, shapes = [], []
+    arm = _arms(chain)
+    on = (arm > 0).astype(float)
+    for i in range(V.shape[1]):
+        v = V[:, i]
+        e = {f: float(np.sum(k[fam == f] * np.abs(v[fam == f]) ** 2))
+             for f in ("flap", "lag", "torsion")}
+        families.append(max(e, key=e.get))
+        z = -arm @ v[fam == "flap"]           # R_y(θ) x̂ = (cos θ, 0, −sin θ)
+        y = arm @ v[fam == "lag"]             # R_z(θ) x̂ = (cos θ, sin θ, 0)
+        tw = 0.5 * chain["chord"] * (on @ v[fam == "torsion"])
+        shapes.append(real_shape(np.concatenate([z, y, tw])))
+    s, shapes = s[:n_modes], np.array(shapes[:n_modes])
+    return {"frequencies_hz": s.imag / (2 * np.pi),
+            "labels": family_labels(families)[:n_modes], "shapes": shapes,
+            "damping": -s.real / np.abs(s), "n_unstable": n_unstable}
+
+
+def whirl_sense(u: np.ndarray, v: np.ndarray) -> float:
+    """Sense of the whirl of the section centres (u, v) about +z for the motion Re(φ e^{iωt}),
+    ω > 0, summed over the stations: > 0 counter-clockwise (x → y). (u, v) = (1, −i) is
+    u = cos ωt, v = sin ωt, counter-clockwise, and Im(u·conj(v)) = +1."""
+    return float(np.sum(np.imag(u * np.conj(v))))
+
+
+def shaft_modes(chain: dict, M, K, D, n_modes: int) -> dict:
+    """Whirl modes of the spinning shaft, frequencies in the co-rotating frame (as Table 2).
+
+    Labels: the whirl seen from the ground turns at ω_inertial = sense·ω + Ω (sense of the
+    co-rotating whirl, see `whirl_sense`); 'forward whirl n' when it turns with the spin,
+    'backward whirl n' against it, numbered per kind ascending; 'whirl n' for the degenerate
+    pairs at rest. For the isotropic shaft the forward whirl is the lower branch |λ² − Ω*|
+    (its inertial frequency is λ²ω₀ turning with the spin) and the backward the upper λ² + Ω*.
+    Shapes: [u, v] at the stations (Re then Im)."""
+    s, V, n_unstable = quadratic_modes(M, K, D)
+    fam, hinge, k = joint_table(chain)
+    arm = _arms(chain)
+    spin = chain["spin"]
+    kinds, shapes = [], []
+    for i in range(V.shape[1]):
+        v = V[:, i]
+        u_x = arm @ v[fam == "bend_u"]        # R_y(θ) ẑ = (sin θ, 0, cos θ)
+        v_y = -arm @ v[fam == "bend_v"]       # R_x(θ) ẑ = (0, −sin θ, cos θ)
+        shapes.append(real_shape(np.concatenate([u_x, v_y])))
+        if spin == 0:
+            kinds.append("whirl")
+        else:
+            inertial = np.sign(whirl_sense(u_x, v_y)) * s[i].imag + spin
+            kinds.append("forward whirl" if inertial * spin > 0 else "backward whirl")
+    labels = family_labels(kinds)
+    if spin == 0:      # degenerate pairs share a number: whirl 1, whirl 1, whirl 2, …
+        labels = [f"whirl {j // 2 + 1}" for j in range(len(kinds))]
+    s = s[:n_modes]
+    return {"frequencies_hz": s.imag / (2 * np.pi), "labels": labels[:n_modes],
+            "shapes": np.array(shapes[:n_modes]), "damping": -s.real / np.abs(s),
+            "n_unstable": n_unstable}
+
+
+def richardson(coarse: dict, fine: dict, n_modes: int) -> np.ndarray:
+    """Second-order Richardson extrapolation (4 f_fine − f_coarse)/3 per mode label (the chain
+    converges as 1/N²; fine has twice the segments). Modes of `fine` whose label the coarse
+    model lacks keep their fine value."""
+    f_c = {}
+    for lab, f in zip(coarse["labels"], coarse["frequencies_hz"]):
+        f_c.setdefault(lab, []).append(f)
+    out, used = [], {}
+    for lab, f in zip(fine["labels"], fine["frequencies_hz"]):
+        j = used.get(lab, 0)
+        used[lab] = j + 1
+        cands = f_c.get(lab, [])
+        out.append((4 * f - cands[j]) / 3 if j < len(cands) else f)
+    return np.array(out[:n_modes])

@@ -6,13 +6,15 @@ Settings: integrator (see INTEGRATORS: linacc, wilson [theta], linacc-pc (the pa
 predictor–corrector), linacc-fp, euler, midpoint, rk4, rk23, dopri5, dop853 (adaptive: press
 only)), dt or rtol/atol, newton_tol, max_iter, singular_tol, energy_jump, event_tol.
 """
+import numpy as np
+
 from . import press
 
-DEFAULT_SETTINGS = {"integrator": "rk4", "dt": 1e-5}
+DEFAULT_SETTINGS = {**press.COMMON_SETTINGS, "integrator": "rk4", "dt": 1e-5}
 INTEGRATORS = press.INTEGRATORS
 ADAPTIVE = press.ADAPTIVE          # error-controlled (press only, not press-cycle)
 CHANNELS = press.CHANNELS
 
 
-def simulate(params, t_out, settings=None):
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> dict:
     return press.simulate("exact", DEFAULT_SETTINGS, params, t_out, settings)

@@ -6,13 +6,16 @@ linear-acceleration (Wilson) integration (eqs. 41–45) or RK4. Physics in `pres
 
 Settings: as `press_exact`, plus dphi_deg, dpsi_deg (paper: 0.1°).
 """
+import numpy as np
+
 from . import press
 
-DEFAULT_SETTINGS = {"integrator": "linacc", "dt": 1e-5, "dphi_deg": 0.1, "dpsi_deg": 0.1}
+DEFAULT_SETTINGS = {**press.COMMON_SETTINGS, "integrator": "linacc", "dt": 1e-5, "dphi_deg": 0.1,
+                    "dpsi_deg": 0.1}
 INTEGRATORS = press.INTEGRATORS
 ADAPTIVE = press.ADAPTIVE          # error-controlled (press only, not press-cycle)
 CHANNELS = press.CHANNELS
 
 
-def simulate(params, t_out, settings=None):
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> dict:
     return press.simulate("partial", DEFAULT_SETTINGS, params, t_out, settings)

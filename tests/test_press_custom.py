@@ -5,14 +5,20 @@ from a number this code printed.
 """
 import math
 
-import numpy as np
 import numba as nb
+import numpy as np
 import pytest
 
+from compare.errors import BadInput
+from compare.physics import press as phys
+from compare.scenes.press import PRESS, PRESS_CYCLE
 from custom_models import press, press_exact, press_partial
+from custom_models import press_equations as eqs
+from custom_models import press_kinematics as kin
+from custom_models import press_model as model
 from custom_models.integrators import accel_from_mass_force, integrate_wilson, no_guard
 
-DEFAULT = press.DEFAULT_PARAMS
+DEFAULT = PRESS.resolve({})
 RNG = np.random.default_rng(3)
 T_OUT = np.linspace(0.0, 0.05, 41)
 LIMIT = math.sqrt(3.0) / math.pi       # 0.5513: linear-acceleration limit h/T (Newmark β = 1/6)
@@ -20,11 +26,11 @@ LIMIT = math.sqrt(3.0) / math.pi       # 0.5513: linear-acceleration limit h/T (
 
 def _random_states(n, par=DEFAULT):
     """(φ, ψ) well inside the chart (|sin θ2| < 0.9), any assembly."""
-    p = press.pack(par)
+    p = model.pack(par)
     out = []
     while len(out) < n:
         q = RNG.uniform(-math.pi, math.pi, 2)
-        if abs(press.rod_sine(q[0], q[1], p)) < 0.9:
+        if abs(kin.rod_sine(q[0], q[1], p)) < 0.9:
             out.append(q)
     return p, out
 
@@ -42,10 +48,10 @@ def _geometry(q, par, sigma):
 
 @pytest.mark.parametrize("assembly", [1, 2])
 def test_loop_closure_by_geometry(assembly):
-    par = dict(DEFAULT, assembly=assembly)
+    par = PRESS.resolve({"assembly": assembly})
     p, qs = _random_states(50, par)
     for q in qs:
-        xA, yA, xB, yB, xC, ok = press.positions(q[0], q[1], p)
+        xA, yA, xB, yB, xC, ok = kin.positions(q[0], q[1], p)
         A, B, C = np.array([xA, yA]), np.array([xB, yB]), np.array([xC, 0.0])
         assert ok
         assert abs(np.linalg.norm(B - A) - par["l2"]) < 1e-15
@@ -58,19 +64,19 @@ def test_loop_closure_by_geometry(assembly):
 
 def test_initial_slider_position_change_point():
     """Scene text: with assembly 1 the start has x_C ≈ 25 mm where l1 + l2 = OC + l3."""
-    p = press.pack(DEFAULT)
-    assert abs(p[press.XC0] + DEFAULT["l3"] - DEFAULT["l1"] - DEFAULT["l2"]) < 1e-4
+    p = model.pack(DEFAULT)
+    assert abs(p[model.XC0] + DEFAULT["l3"] - DEFAULT["l1"] - DEFAULT["l2"]) < 1e-4
 
 
 def test_exact_gradients_and_hessians_against_differences_of_positions():
     p, qs = _random_states(20)
     h = 1e-5
     for q in qs:
-        base, G, H = press.exact_derivatives(q[0], q[1], p)
+        base, G, H = kin.exact_derivatives(q[0], q[1], p)
         for k in range(2):
             e = np.eye(2)[k] * h
-            bp, Gp, _ = press.exact_derivatives(*(q + e), p)
-            bm, Gm, _ = press.exact_derivatives(*(q - e), p)
+            bp, Gp, _ = kin.exact_derivatives(*(q + e), p)
+            bm, Gm, _ = kin.exact_derivatives(*(q - e), p)
             A_p, B_p, C_p = _geometry(q + e, DEFAULT, 1.0)
             A_m, B_m, C_m = _geometry(q - e, DEFAULT, 1.0)
             fd = np.concatenate([(A_p - A_m), (B_p - B_m), [C_p[0] - C_m[0]]]) / (2 * h)
@@ -83,12 +89,12 @@ def test_velocity_analogues_converge_at_second_order():
     errs = []
     _, qs = _random_states(10)
     for d in (0.4, 0.2, 0.1):
-        p = press.pack(DEFAULT, dphi_deg=d, dpsi_deg=d)
+        p = model.pack(DEFAULT, dphi_deg=d, dpsi_deg=d)
         e = 0.0
         for q in qs:
-            P, ok = press._stencil_positions(q[0], q[1], p, 13)
-            Gfd = press.fd_gradients(P, press.NEIGH[0], p)
-            _, G, _ = press.exact_derivatives(q[0], q[1], p)
+            P, ok = kin._stencil_positions(q[0], q[1], p, 13)
+            Gfd = kin.fd_gradients(P, kin.NEIGH[0], p)
+            _, G, _ = kin.exact_derivatives(q[0], q[1], p)
             e = max(e, np.max(np.abs(Gfd - G)))
         errs.append(e)
     slopes = np.diff(np.log(errs)) / np.diff(np.log([0.4, 0.2, 0.1]))
@@ -102,7 +108,7 @@ def test_lagrange_equations_against_independent_energy_derivation():
     p, qs = _random_states(5)
     m1, m2, m34 = par["m1"], par["m2"], par["m3"] + par["m4"]
     J1, J2, J3, g, k = par["J1"], par["J2"], par["J3"], par["gravity"], par["slider_stiffness"]
-    xc0 = p[press.XC0]
+    xc0 = p[model.XC0]
 
     def T(q, qd, eps=1e-6):
         Ap, Bp, Cp = _geometry(q + eps * qd, par, 1)
@@ -124,17 +130,22 @@ def test_lagrange_equations_against_independent_energy_derivation():
         M = np.array([[(T(q, qd + h * (ei + ej)) - T(q, qd + h * (ei - ej))
                         - T(q, qd - h * (ei - ej)) + T(q, qd - h * (ei + ej))) / (4 * h * h)
                        for ej in np.eye(2)] for ei in np.eye(2)])
-        mom = lambda qq: np.array([(T(qq, qd + h * e) - T(qq, qd - h * e)) / (2 * h)
-                                   for e in np.eye(2)])
+        def mom(qq, qd=qd, h=h):
+            return np.array([(T(qq, qd + h * e) - T(qq, qd - h * e)) / (2 * h)
+                             for e in np.eye(2)])
         hq = 1e-5
         dmom_dq = np.column_stack([(mom(q + hq * e) - mom(q - hq * e)) / (2 * hq)
                                    for e in np.eye(2)])
         dT_dq = np.array([(T(q + hq * e, qd) - T(q - hq * e, qd)) / (2 * hq) for e in np.eye(2)])
         dV_dq = np.array([(V(q + hq * e) - V(q - hq * e)) / (2 * hq) for e in np.eye(2)])
-        s = 1 - qd[0] / press.OMEGA_SYNC
-        Q = -dV_dq + np.array([2 * press.M_K * s * press.S_K / (s * s + press.S_K ** 2), 0.0])
+        # the scene's Kloss law written out (scene-press.md: 1500 W, 1500 rpm, s_n 0.058, λ 2.2)
+        w_sync = 2 * math.pi * 1500 / 60
+        m_k = 2.2 * 1500 / (w_sync * (1 - 0.058))
+        s_k = 0.058 * (2.2 + math.sqrt(2.2 ** 2 - 1))
+        s = 1 - qd[0] / w_sync
+        Q = -dV_dq + np.array([2 * m_k / (s / s_k + s_k / s), 0.0])
         qdd_ref = np.linalg.solve(M, Q - dmom_dq @ qd + dT_dq)
-        qdd = press.acc_exact(0.0, q, qd, p)[:2]
+        qdd = eqs.acc_exact(0.0, q, qd, p)[:2]
         assert np.allclose(qdd, qdd_ref, rtol=2e-4, atol=1e-3 * np.max(np.abs(qdd_ref))), \
             (qdd, qdd_ref)
 
@@ -143,23 +154,23 @@ def test_energy_balance_and_closure_over_the_paper_run():
     for mod, st in ((press_exact, {"integrator": "rk4", "dt": 1e-5}),
                     (press_partial, {"integrator": "rk4", "dt": 1e-5, "dphi_deg": 0.01,
                                      "dpsi_deg": 0.01})):
-        r = mod.simulate({}, T_OUT, st)
+        r = mod.simulate(DEFAULT, T_OUT, st)
         assert r["status"] == "ok"
         eb = r["channels"]["energy_balance"]
         work = r["extra"]["motor_work"][-1]
         assert work > 1.0
         assert np.max(np.abs(eb - eb[0])) <= 1e-6 * work
         assert np.max(r["channels"]["loop_violation"]) < 1e-15
-        assert set(r["channels"]) == set(press.CHANNELS)
+        assert set(r["channels"]) == set(PRESS.channels)
         assert all(len(v) == len(T_OUT) for v in r["channels"].values())
 
 
 def test_partial_minus_exact_is_second_order_in_the_virtual_step():
-    ref = press_exact.simulate({}, T_OUT, {"integrator": "rk4", "dt": 1e-5})
+    ref = press_exact.simulate(DEFAULT, T_OUT, {"integrator": "rk4", "dt": 1e-5})
     ds = np.array([0.2, 0.1, 0.05])
     dev = []
     for d in ds:
-        r = press_partial.simulate({}, T_OUT, {"integrator": "rk4", "dt": 1e-5,
+        r = press_partial.simulate(DEFAULT, T_OUT, {"integrator": "rk4", "dt": 1e-5,
                                                "dphi_deg": d, "dpsi_deg": d})
         dev.append(np.max(np.abs(r["channels"]["crank_rate"] - ref["channels"]["crank_rate"])))
     slopes = np.diff(np.log(dev)) / np.diff(np.log(ds))
@@ -170,7 +181,7 @@ def test_start_at_the_double_root_is_reported_not_nan():
     # rod 1.7° from vertical: the partial systems' stencil crosses the root at t = 0; the exact
     # chart runs until the rod reaches singular_tol
     for mod in (press_partial, press_exact):
-        r = mod.simulate({"psi0": 62.0}, T_OUT, {"integrator": "rk4", "dt": 1e-5})
+        r = mod.simulate(PRESS.resolve({"psi0": 62.0}), T_OUT, {"integrator": "rk4", "dt": 1e-5})
         assert r["status"] == "diverged"
         assert "singular" in r["reason"]
         ok = np.isfinite(r["channels"]["crank_rate"])
@@ -180,11 +191,33 @@ def test_start_at_the_double_root_is_reported_not_nan():
 
 def test_bad_settings_raise():
     with pytest.raises(ValueError):
-        press_exact.simulate({}, T_OUT, {"integrator": "nope"})
+        press_exact.simulate(DEFAULT, T_OUT, {"integrator": "nope"})
     with pytest.raises(ValueError):
-        press_partial.simulate({}, T_OUT, {"dphi_deg": 0.0})
-    with pytest.raises(ValueError):
-        press_exact.simulate({"assembly": 3}, T_OUT, {})
+        press_partial.simulate(DEFAULT, T_OUT, {"dphi_deg": 0.0})
+    with pytest.raises(ValueError, match="unknown settings"):
+        press_exact.simulate(DEFAULT, T_OUT, {"no_such_key": 1})
+    with pytest.raises(BadInput):
+        PRESS.resolve({"assembly": 3})
+
+
+def test_old_integrator_spellings_are_accepted():
+    a = press_exact.simulate(DEFAULT, T_OUT[:3], {"integrator": "rk44", "dt": 1e-4})
+    b = press_exact.simulate(DEFAULT, T_OUT[:3], {"integrator": "rk4", "dt": 1e-4})
+    assert a["settings"]["integrator"] == "rk4"
+    np.testing.assert_array_equal(a["channels"]["crank_rate"], b["channels"]["crank_rate"])
+
+
+def test_motor_characteristic_is_the_kloss_law():
+    """M(s) = 2 M_k/(s/s_k + s_k/s) from the motor data of scene-press.md, at a few slips."""
+    w_sync = 2 * math.pi * 1500 / 60
+    m_n = 1500 / (w_sync * (1 - 0.058))
+    m_k = 2.2 * m_n
+    s_k = 0.058 * (2.2 + math.sqrt(2.2 ** 2 - 1))
+    for s in (0.01, 0.058, s_k, 0.5, 1.0):
+        assert phys.motor_torque(w_sync * (1 - s), 1.0) == pytest.approx(
+            2 * m_k / (s / s_k + s_k / s), rel=1e-13)
+    # at the rated slip the torque is the rated torque P_n / ω_n
+    assert phys.motor_torque(w_sync * (1 - 0.058), 1.0) == pytest.approx(m_n, rel=1e-12)
 
 
 # ---- the linear-acceleration integrator on a linear oscillator ----------------------------
@@ -221,8 +254,9 @@ def test_wilson_theta_137_is_unconditionally_stable(ratio):
 
 
 # ---- slow: whole-press checks ------------------------------------------------------------
-QUIET = {"slider_stiffness": 1e9, "gravity": 0.0, "gear_ratio": 0.0, "omega0": 0.0,
-         "rocker_rate0": 0.01}      # small vibration about the start: the linearisation holds
+# small vibration about the start (motor disconnected: u = 0): the linearisation holds
+QUIET = PRESS.resolve({"slider_stiffness": 1e9, "gravity": 0.0, "gear_ratio": 0.0,
+                       "omega0": 0.0, "rocker_rate0": 0.01})
 
 
 @pytest.mark.slow
@@ -243,8 +277,8 @@ def test_press_linear_acceleration_threshold_from_linearised_modes():
 
 @pytest.mark.slow
 def test_press_cycle_lock_event_and_impact_loss():
-    cyc = dict(press.CYCLE_DEFAULTS)
-    t = np.arange(0, cyc["t_end"] + 1e-12, 0.00125)
+    cyc = PRESS_CYCLE.resolve({})
+    t = PRESS_CYCLE.output_grid(cyc)
     runs = [press_exact.simulate(cyc, t, {"integrator": "rk4", "dt": dt}) for dt in (1e-4, 1e-5)]
     for r in runs:
         assert r["status"] == "ok"
@@ -265,7 +299,8 @@ def test_press_cycle_lock_event_and_impact_loss():
 
 @pytest.mark.slow
 def test_stiff_slider_1e9_energy():
-    r = press_exact.simulate({"slider_stiffness": 1e9}, T_OUT, {"integrator": "rk4", "dt": 1e-6})
+    r = press_exact.simulate(PRESS.resolve({"slider_stiffness": 1e9}), T_OUT,
+                             {"integrator": "rk4", "dt": 1e-6})
     eb = r["channels"]["energy_balance"]
     assert r["status"] == "ok"
     assert np.max(np.abs(eb - eb[0])) < 1e-6 * r["extra"]["motor_work"][-1]
@@ -273,8 +308,8 @@ def test_stiff_slider_1e9_energy():
 
 @pytest.mark.slow
 def test_hundred_crank_revolutions_energy_drift():
-    par = {"slider_stiffness": 1e8, "slider_damping": 1e5, "t_end": 6.0}
-    t = np.arange(0, 6.0 + 1e-12, 0.00125)
+    par = PRESS.resolve({"slider_stiffness": 1e8, "slider_damping": 1e5, "t_end": 6.0})
+    t = PRESS.output_grid(par)
     r = press_exact.simulate(par, t, {"integrator": "rk4", "dt": 1e-5})
     c = r["channels"]
     assert r["status"] == "ok"

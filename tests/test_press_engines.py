@@ -10,22 +10,27 @@ import math
 import numpy as np
 import pytest
 
-ex = pytest.importorskip("reference_models.exudyn.press")
-mj = pytest.importorskip("reference_models.mujoco.press")
+import reference_models.exudyn.press as ex  # hard dependencies: a broken import fails
+import reference_models.mujoco.press as mj
+from compare.scenes.press import PRESS, PRESS_CYCLE
 
+# the scene's defaults, written out where a test computes with them (scene-press.md)
 L1, L2, L3 = 0.015, 0.040, 0.030
 PHI0, PSI0, OMEGA0 = -64.1, -46.34, 43.5
 T_OUT = np.linspace(0.0, 0.05, 41)
-CYCLE = {"lock_after": 0.01, "lock_angle": -48.0, "press_force": 2000.0, "release_after": 0.045}
+CYCLE = PRESS_CYCLE.resolve({})
 
 _cache = {}
 
 
 def run(engine, params=None, settings=None, t_out=T_OUT):
-    key = (engine.__name__, repr(sorted((params or {}).items())), repr(sorted((settings or {}).items())),
-           len(t_out), float(t_out[-1]))
+    """A leaf run on the scene's resolved parameters (`params`: resolved, or overrides of
+    `press`)."""
+    params = params if params is not None and "l1" in params else PRESS.resolve(params or {})
+    key = (engine.__name__, repr(sorted(params.items())),
+           repr(sorted((settings or {}).items())), len(t_out), float(t_out[-1]))
     if key not in _cache:
-        _cache[key] = engine.simulate(dict(params or {}), t_out, dict(settings or {}))
+        _cache[key] = engine.simulate(dict(params), t_out, dict(settings or {}))
     return _cache[key]
 
 
@@ -133,7 +138,7 @@ def test_press_cycle_engines_agree():
 
 def test_mujoco_divergence_is_reported_and_callbacks_reset():
     import mujoco
-    r = mj.simulate({"slider_stiffness": 1e10}, T_OUT, {"dt": 1e-3})
+    r = mj.simulate(PRESS.resolve({"slider_stiffness": 1e10}), T_OUT, {"dt": 1e-3})
     assert r["status"] == "diverged" and r["t_fail"] is not None and r["reason"]
     bad = T_OUT >= r["t_fail"]
     for v in r["channels"].values():
@@ -142,17 +147,20 @@ def test_mujoco_divergence_is_reported_and_callbacks_reset():
 
 
 def test_exudyn_solver_failure_is_reported():
-    r = ex.simulate({}, T_OUT, {"newton_rtol": 1e-30, "newton_atol": 1e-30})
+    r = ex.simulate(PRESS.resolve({}), T_OUT, {"newton_tol": 1e-30, "newton_abs_tol": 1e-30})
     assert r["status"] == "diverged" and r["reason"]
     assert np.all(np.isnan(r["channels"]["crank_angle"][T_OUT > r["t_fail"]]))
 
 
 @pytest.mark.parametrize("engine", [ex, mj], ids=["exudyn", "mujoco"])
 def test_bad_settings_raise(engine):
+    p = PRESS.resolve({})
     with pytest.raises(ValueError):
-        engine.simulate({}, T_OUT, {"integrator": "no-such"})
+        engine.simulate(p, T_OUT, {"integrator": "no-such"})
     with pytest.raises(ValueError):
-        engine.simulate({}, T_OUT, {"dt": -1.0})
+        engine.simulate(p, T_OUT, {"dt": -1.0})
+    with pytest.raises(ValueError, match="unknown settings"):
+        engine.simulate(p, T_OUT, {"no_such_key": 1.0})
 
 
 @pytest.mark.slow

@@ -26,8 +26,8 @@ _MECHANISM = (
     positive("slider_stiffness", 1e6, "N/m", "slider spring about its initial position",
              hi=1e12),
     Param("slider_damping", 0.0, "N·s/m", "slider damper", lo=0.0, hi=1e9),
-    positive("gear_ratio", 1.0, "", "motor-to-crank reduction u (u ≠ 1 adds u²·0.0033 kg·m²)",
-             hi=1e3),
+    Param("gear_ratio", 1.0, "", "motor-to-crank reduction u (u ≠ 1 adds u²·0.0033 kg·m²; "
+          "u = 0 disconnects the motor)", lo=0.0, hi=1e3),
     Param("mass_model", "paper", "", "paper: masses lumped at the joints (eq. 21); midpoint: "
           "link masses at mid-points", kind="choice", choices=("paper", "midpoint")),
     Param("assembly", 1, "", "loop-closure root: 1 x_B > x_A, 2 the other", kind="choice",

@@ -24,13 +24,17 @@ from __future__ import annotations
 
 import math
 
+import exudyn as exu
 import numpy as np
+from exudyn import itemInterface as ii
 
-from reference_models import press_common as pc
+from compare.physics import press as phys
 
-DEFAULT_SETTINGS = {"integrator": "generalized-alpha", "dt": 2e-5, "spectral_radius": 0.8,
-                    "newton_rtol": 1e-10, "newton_atol": 1e-12}
-INTEGRATORS = ("generalized-alpha", "trapezoidal-index2")
+from .. import press_common as pc
+
+DEFAULT_SETTINGS = {"integrator": "generalized_alpha", "dt": 2e-5, "spectral_radius": 0.8,
+                    "newton_tol": 1e-10, "newton_abs_tol": 1e-12}
+INTEGRATORS = ("generalized_alpha", "trapezoidal")
 
 _BISECT_TOL = 1e-9   # s, width of the final lock-time bracket
 
@@ -41,8 +45,7 @@ class _Diverged(Exception):
         self.t, self.reason = t, reason
 
 
-def _check_settings(settings: dict) -> dict:
-    s = pc.fixed_step_settings(settings, DEFAULT_SETTINGS, INTEGRATORS, "exudyn")
+def _check_settings(s: dict) -> dict:
     rho = float(s["spectral_radius"])
     if not 0.0 <= rho <= 1.0:
         raise ValueError(f"spectral_radius must be in [0, 1], got {rho!r}")
@@ -54,16 +57,15 @@ class _Press:
     """The Exudyn system plus the bookkeeping the scene needs."""
 
     def __init__(self, p: dict, st: dict, settings: dict, cycle: bool):
-        import exudyn as exu
-        from exudyn import itemInterface as ii
         self.exu = exu
-        self.p, self.st, self.cycle = p, st, cycle
+        self.p, self.st, self.cycle, self.settings = p, st, cycle, settings
+        self.n_bisections = 0
         self.u = float(p["gear_ratio"])
         self.k, self.c = float(p["slider_stiffness"]), float(p["slider_damping"])
-        self.F = float(p.get("press_force", 0.0))
+        self.F = float(p["press_force"]) if cycle else 0.0
         self.g = float(p["gravity"])
         self.locked = False
-        lay = pc.link_layout(p)
+        lay = phys.link_layout(p)
         self.lay = lay
         SC = exu.SystemContainer()
         mbs = SC.AddSystem()
@@ -101,11 +103,12 @@ class _Press:
         self.nodes["slider"] = ns
 
         def bm(name, which):
-            return mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=self.bodies[name],
-                                                       localPosition=[*self.local[name][which], 0.0]))
+            return mbs.AddMarker(ii.MarkerBodyPosition(
+                bodyNumber=self.bodies[name], localPosition=[*self.local[name][which], 0.0]))
         mO = mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=ground, localPosition=[0, 0, 0]))
         mS = mbs.AddMarker(ii.MarkerNodePosition(nodeNumber=ns))
-        # joints: O (ground–crank), A (crank end – rod start), B (rod end – rocker end), C (rocker start – slider)
+        # joints: O (ground–crank), A (crank end – rod start), B (rod end – rocker end),
+        # C (rocker start – slider)
         for m0, m1 in ((mO, bm("crank", 0)), (bm("crank", 1), bm("rod", 0)),
                        (bm("rod", 1), bm("rocker", 1)), (bm("rocker", 0), mS)):
             mbs.AddObject(ii.RevoluteJoint2D(markerNumbers=[m0, m1]))
@@ -121,7 +124,7 @@ class _Press:
         u = self.u
 
         def motor(mbs_, t, load):
-            return pc.motor_torque(mbs_.GetNodeOutput(ncr, Ct)[2], u)
+            return phys.motor_torque(mbs_.GetNodeOutput(ncr, Ct)[2], u)
         mbs.AddLoad(ii.LoadCoordinate(markerNumber=mcr, load=0.0, loadUserFunction=motor))
         self.lock = None
         if cycle:
@@ -132,14 +135,16 @@ class _Press:
             def press(mbs_, t, load):
                 if not self.locked:
                     return 0.0
-                return pc.press_load(mbs_.GetNodeOutput(ns, Ct)[0], F, vreg)
+                return phys.press_load(mbs_.GetNodeOutput(ns, Ct)[0], F, vreg)
             mbs.AddLoad(ii.LoadCoordinate(markerNumber=msx, load=0.0, loadUserFunction=press))
-            mro = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=self.nodes["rocker"], coordinate=2))
+            mro = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=self.nodes["rocker"],
+                                                        coordinate=2))
             self.lock = mbs.AddObject(ii.CoordinateConstraint(markerNumbers=[mg, mro], offset=0.0,
                                                               activeConnector=False))
         mbs.Assemble()
         self.idx = {k: mbs.GetNodeODE2Index(n) for k, n in self.nodes.items()}
-        self.ref = np.array(mbs.systemData.GetODE2Coordinates(configuration=exu.ConfigurationType.Reference))
+        self.ref = np.array(mbs.systemData.GetODE2Coordinates(
+            configuration=exu.ConfigurationType.Reference))
 
         ss = exu.SimulationSettings()
         ss.solution.file.write = False
@@ -147,11 +152,11 @@ class _Press:
         ss.show.statistics = False
         ss.show.computationTime = False
         ss.timeIntegration.adaptiveStep = False
-        ss.timeIntegration.newton.relativeTolerance = float(settings["newton_rtol"])
-        ss.timeIntegration.newton.absoluteTolerance = float(settings["newton_atol"])
+        ss.timeIntegration.newton.relativeTolerance = float(settings["newton_tol"])
+        ss.timeIntegration.newton.absoluteTolerance = float(settings["newton_abs_tol"])
         ss.timeIntegration.newton.useModifiedNewton = False
         ss.linearSolver.solverType = exu.LinearSolverType.EXUdense
-        if settings["integrator"] == "generalized-alpha":
+        if settings["integrator"] == "generalized_alpha":
             ss.timeIntegration.generalizedAlpha.spectralRadius = settings["spectral_radius"]
             ss.timeIntegration.generalizedAlpha.useIndex2Constraints = False
             ss.timeIntegration.generalizedAlpha.useNewmark = False
@@ -186,19 +191,9 @@ class _Press:
 
     # ---- observation ------------------------------------------------------------------------
     def observe(self, q, v, a):
+        """The kinematic output the scene's channels are built from, and T, V of the bodies."""
         i = self.idx
         x = self.ref + q
-        pos = {}
-        for name in ("crank", "rod", "rocker"):
-            j = i[name]
-            th = x[j + 2]
-            R = np.array([[math.cos(th), -math.sin(th)], [math.sin(th), math.cos(th)]])
-            pos[name] = [x[j:j + 2] + R @ r for r in self.local[name]]
-        S = x[i["slider"]:i["slider"] + 2]
-        viol = max(np.linalg.norm(pos["crank"][0]),
-                   np.linalg.norm(pos["crank"][1] - pos["rod"][0]),
-                   np.linalg.norm(pos["rod"][1] - pos["rocker"][1]),
-                   np.linalg.norm(pos["rocker"][0] - S), abs(S[1]))
         T = 0.0
         Vg = 0.0
         for name in ("crank", "rod", "rocker"):
@@ -212,20 +207,19 @@ class _Press:
         Vs = 0.5 * self.k * q[js] ** 2
         jc, jr = i["crank"] + 2, i["rocker"] + 2
         return {"crank_angle": x[jc], "crank_rate": v[jc], "crank_accel": a[jc],
-                "rocker_angle": x[jr], "slider_x": x[js], "loop_violation": viol,
-                "T": T, "V": Vg + Vs}
+                "rocker_angle": x[jr], "slider_x": x[js], "T": T, "V": Vg + Vs}
 
     def rates(self, v, a, locked):
         """(integrand, derivative) of motor work, damper loss, press work at one state."""
         jc, js = self.idx["crank"] + 2, self.idx["slider"]
         w, wd = v[jc], a[jc]
-        tau = pc.motor_torque(w, self.u)
+        tau = phys.motor_torque(w, self.u)
         eps = 1e-6 * max(1.0, abs(w))
-        dtau = (pc.motor_torque(w + eps, self.u) - pc.motor_torque(w - eps, self.u)) / (2 * eps)
+        dtau = (phys.motor_torque(w + eps, self.u) - phys.motor_torque(w - eps, self.u)) / (2 * eps)
         vs, as_ = v[js], a[js]
         out = [tau * w, (dtau * w + tau) * wd, self.c * vs * vs, 2 * self.c * vs * as_, 0.0, 0.0]
         if locked:
-            out[4], out[5] = pc.press_power(vs, as_, self.F, float(self.p["press_force_vreg"]))
+            out[4], out[5] = phys.press_power(vs, as_, self.F, float(self.p["press_force_vreg"]))
         return np.array(out)
 
     # ---- solving ----------------------------------------------------------------------------
@@ -240,7 +234,8 @@ class _Press:
         try:
             ok = self.mbs.SolveDynamic(ss, solverType=self.solver_type, updateInitialValues=True)
         except Exception as exc:  # exudyn.SolverError, RuntimeError
-            raise _Diverged(t0, f"exudyn solver failed in [{t0:.6g}, {t1:.6g}]: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}")
+            why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise _Diverged(t0, f"exudyn solver failed in [{t0:.6g}, {t1:.6g}]: {why}") from None
         if not ok:
             raise _Diverged(t0, f"exudyn SolveDynamic returned False in [{t0:.6g}, {t1:.6g}]")
         self.steps += int(nsteps)
@@ -270,7 +265,8 @@ class _Press:
             j = i[name]
             th = x[j + 2]
             r = self.local[name][which]
-            Rr = np.array([math.cos(th) * r[0] - math.sin(th) * r[1], math.sin(th) * r[0] + math.cos(th) * r[1]])
+            Rr = np.array([math.cos(th) * r[0] - math.sin(th) * r[1],
+                           math.sin(th) * r[0] + math.cos(th) * r[1]])
             G = np.zeros((2, n2))
             G[:, j:j + 2] = np.eye(2)
             G[:, j + 2] = [-Rr[1], Rr[0]]
@@ -296,46 +292,92 @@ def _hermite(rec_rates, t):
     return np.sum(0.5 * h * (f[1:] + f[:-1]) + h * h / 12.0 * (fd[:-1] - fd[1:]), axis=0)
 
 
-def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, cycle: bool | None = None) -> dict:
-    """Run the press (idle) scene; with lock_after/lock_angle/press_force/release_after in params
-    (or cycle=True) the press-cycle scene."""
-    cycle, p, s, t_out, st = pc.prepare(params, t_out, settings, _check_settings, cycle)
-    dt = s["dt"]
-    n = len(t_out)
-    ch = {k: np.full(n, np.nan) for k in pc.CHANNELS}
-    extra = {}
-    import exudyn as exu
-    prev = exu.config.printToConsole
-    exu.config.printToConsole = False      # the failure banner would otherwise go to stdout
-    try:
-        return _run(p, s, st, t_out, cycle, ch, extra)
-    finally:
-        exu.config.printToConsole = prev
+def _integrate_records(model, rec, locked) -> np.ndarray:
+    """Motor work, damper loss and press work over a run of step records."""
+    return _hermite(np.array([model.rates(r[2], r[3], locked) for r in rec]),
+                    np.array([r[0] for r in rec]))
 
 
-def _run(p, s, st, t_out, cycle, ch, extra):
-    dt = s["dt"]
-    model = _Press(p, st, s, cycle)
-    status, t_fail, reason = "ok", None, None
+def _rocker_angle(model, q) -> float:
+    jr = model.idx["rocker"] + 2
+    return model.ref[jr] + q[jr]
 
+
+def _find_lock(model, rec, h, psi_lock, work) -> float | None:
+    """The first step in `rec` across ψ = lock angle: its work is booked up to the crossing,
+    located by bisection with one-step re-solves from the step's start. Returns the lock time
+    (the state is then at the crossing) or None."""
+    g = np.array([_rocker_angle(model, r[1]) - psi_lock for r in rec])
+    hit = np.nonzero(np.sign(g[1:]) * np.sign(g[:-1]) <= 0)[0]
+    if not len(hit):
+        return None
+    j = int(hit[0])
+    work += _integrate_records(model, rec[:j + 1], model.locked)
+    ta, qa, va = rec[j][0], rec[j][1], rec[j][2]
+    lo, hi = 0.0, h
+    nb = 0
+    last = None
+    while hi - lo > _BISECT_TOL:
+        mid = 0.5 * (lo + hi)
+        model.set_initial(qa, va)
+        r2 = model.solve(ta, ta + mid, 1)
+        nb += 1
+        gm = _rocker_angle(model, r2[-1][1]) - psi_lock
+        if np.sign(gm) == np.sign(g[j]) and gm != 0.0:
+            lo = mid
+        else:
+            hi, last = mid, r2
+    if last is None or abs(last[-1][0] - (ta + hi)) > 1e-15:
+        model.set_initial(qa, va)
+        last = model.solve(ta, ta + hi, 1)
+    work += _integrate_records(model, last, False)
+    model.n_bisections = nb
+    return ta + hi
+
+
+def _apply_lock(model) -> tuple:
+    """Plastic lock: activate the rocker constraint, project the velocities with Exudyn's own M
+    and G. Returns (kinetic energy lost, crank-rate jump)."""
+    q, v, a = model.state()
+    jr = model.idx["rocker"] + 2
+    model.mbs.SetObjectParameter(model.lock, "offset", float(q[jr]))
+    model.mbs.SetObjectParameter(model.lock, "activeConnector", True)
+    model.set_initial(q, v)
+    M, G = model.impact_matrices(q)
+    Minv_Gt = np.linalg.solve(M, G.T)
+    lam = np.linalg.lstsq(G @ Minv_Gt, G @ v, rcond=None)[0]
+    v_new = v - Minv_Gt @ lam
+    loss = model.observe(q, v, a)["T"] - model.observe(q, v_new, a)["T"]
+    model.locked = True
+    model.set_initial(q, v_new)
+    jc = model.idx["crank"] + 2
+    return loss, v_new[jc] - v[jc]
+
+
+COLUMNS = ("crank_angle", "crank_rate", "crank_accel", "rocker_angle", "slider_x", "T", "V",
+           "W_motor", "W_damper", "W_press", "lock_loss")
+
+
+def _run(model, p: dict, t_out: np.ndarray, rows: dict, extra: dict) -> tuple:
+    """Segment by segment between the breakpoints; the lock as an event between two steps.
+    Fills `rows` at the outputs; returns (status, t_fail, reason)."""
+    dt = model.settings["dt"]
     work = np.zeros(3)          # motor work, damper loss, press work
     lock_loss = 0.0
-    t_lock = None
 
     def store(k, obs):
-        for name in ("crank_angle", "crank_rate", "crank_accel", "rocker_angle", "slider_x", "loop_violation"):
-            ch[name][k] = obs[name]
-        ch["energy_balance"][k] = obs["T"] + obs["V"] - work[0] + work[1] + work[2] + lock_loss
+        for name in COLUMNS[:7]:
+            rows[name][k] = obs[name]
+        rows["W_motor"][k], rows["W_damper"][k], rows["W_press"][k] = work
+        rows["lock_loss"][k] = lock_loss
 
-    # segment boundaries
-    bounds, out_index, events = pc.breakpoints(p, t_out, cycle)
-    la, ra, psiL = events if cycle else (None, None, None)
-
-    q0, v0, a0 = model.state()
-    store(0, model.observe(q0, v0, a0))
+    bounds, out_index, events = phys.breakpoints(p, t_out)
+    la, ra, psi_lock = events if model.cycle else (None, None, None)
+    store(0, model.observe(*model.state()))
     t = 0.0
     bi = 1
     released = False
+    t_lock = None
     try:
         while bi < len(bounds):
             t1 = bounds[bi]
@@ -343,63 +385,19 @@ def _run(p, s, st, t_out, cycle, ch, extra):
             rec = model.solve(t, t1, nst)
             if t == 0.0:   # GA computed the consistent initial accelerations: store t = 0 again
                 store(0, model.observe(*rec[0][1:]))
-            armed = cycle and t_lock is None and la - 1e-15 <= t < ra - 1e-15
-            if armed:
-                g = np.array([model.ref[model.idx["rocker"] + 2] + r[1][model.idx["rocker"] + 2] - psiL
-                              for r in rec])
-                hit = np.nonzero(np.sign(g[1:]) * np.sign(g[:-1]) <= 0)[0]
-                if len(hit):
-                    j = int(hit[0])
-                    rec = rec[:j + 1]
-                    work += _hermite(np.array([model.rates(r[2], r[3], model.locked) for r in rec]),
-                                     np.array([r[0] for r in rec]))
-                    ta, (qa, va) = rec[j][0], (rec[j][1], rec[j][2])
-                    lo, hi = 0.0, (t1 - t) / nst
-                    ga = g[j]
-                    nb = 0
-                    last = None
-                    while hi - lo > _BISECT_TOL:
-                        mid = 0.5 * (lo + hi)
-                        model.set_initial(qa, va)
-                        r2 = model.solve(ta, ta + mid, 1)
-                        nb += 1
-                        gm = model.ref[model.idx["rocker"] + 2] + r2[-1][1][model.idx["rocker"] + 2] - psiL
-                        if np.sign(gm) == np.sign(ga) and gm != 0.0:
-                            lo = mid
-                        else:
-                            hi, last = mid, r2
-                    if last is None or abs(last[-1][0] - (ta + hi)) > 1e-15:
-                        model.set_initial(qa, va)
-                        last = model.solve(ta, ta + hi, 1)
-                    t_lock = ta + hi
-                    work += _hermite(np.array([model.rates(r[2], r[3], False) for r in last]),
-                                     np.array([r[0] for r in last]))
-                    # plastic lock: activate, project velocities with Exudyn's own M and G
-                    q, v, a = model.state()
-                    jr = model.idx["rocker"] + 2
-                    model.mbs.SetObjectParameter(model.lock, "offset", float(q[jr]))
-                    model.mbs.SetObjectParameter(model.lock, "activeConnector", True)
-                    model.set_initial(q, v)
-                    M, G = model.impact_matrices(q)
-                    Minv_Gt = np.linalg.solve(M, G.T)
-                    lam = np.linalg.lstsq(G @ Minv_Gt, G @ v, rcond=None)[0]
-                    v_new = v - Minv_Gt @ lam
-                    T_before = model.observe(q, v, a)["T"]
-                    T_after = model.observe(q, v_new, a)["T"]
-                    lock_loss = T_before - T_after
-                    model.locked = True
-                    model.set_initial(q, v_new)
+            if model.cycle and t_lock is None and la - 1e-15 <= t < ra - 1e-15:
+                t_lock = _find_lock(model, rec, (t1 - t) / nst, psi_lock, work)
+                if t_lock is not None:
+                    lock_loss, jump = _apply_lock(model)
                     extra.update({"lock_time": np.array([t_lock]),
                                   "lock_energy_loss": np.array([lock_loss]),
-                                  "lock_bisections": np.array([nb]),
-                                  "crank_rate_jump": np.array([v_new[model.idx['crank'] + 2] - v[model.idx['crank'] + 2]])})
+                                  "lock_bisections": np.array([model.n_bisections]),
+                                  "crank_rate_jump": np.array([jump])})
                     t = t_lock
-                    # bounds[bi] is still the target: loop again from t_lock
-                    continue
-            work += _hermite(np.array([model.rates(r[2], r[3], model.locked) for r in rec]),
-                             np.array([r[0] for r in rec]))
+                    continue          # bounds[bi] is still the target: on from t_lock
+            work += _integrate_records(model, rec, model.locked)
             t = t1
-            if cycle and model.locked and not released and abs(t - ra) < 1e-12:
+            if model.cycle and model.locked and not released and abs(t - ra) < 1e-12:
                 model.mbs.SetObjectParameter(model.lock, "activeConnector", False)
                 model.locked = False
                 released = True
@@ -411,18 +409,35 @@ def _run(p, s, st, t_out, cycle, ch, extra):
                     raise _Diverged(t1, "non-finite output")
             bi += 1
     except _Diverged as d:
-        status, t_fail, reason = "diverged", float(d.t), d.reason
-        bad = t_out > d.t - 1e-15
-        for name in ch:
-            ch[name][bad] = np.nan
+        return "diverged", float(d.t), d.reason, work
     finally:
         model.mbs.SetPreStepUserFunction(0)
+    return "ok", None, None, work
+
+
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> dict:
+    """Run `press` (idle) or, when the parameters carry the lock, `press-cycle`."""
+    cycle, s, t_out, st = pc.prepare(params, t_out, settings, DEFAULT_SETTINGS, INTEGRATORS)
+    s = _check_settings(s)
+    prev = exu.config.printToConsole
+    exu.config.printToConsole = False      # the failure banner would otherwise go to stdout
+    rows = {k: np.full(len(t_out), np.nan) for k in COLUMNS}
+    extra = {}
+    try:
+        model = _Press(params, st, s, cycle)
+        status, t_fail, reason, work = _run(model, params, t_out, rows, extra)
+    finally:
+        exu.config.printToConsole = prev
+    ch = phys.channels(params, *(rows[k] for k in COLUMNS))
+    if t_fail is not None:
+        bad = t_out > t_fail - 1e-15
+        for name in ch:
+            ch[name][bad] = np.nan
     if cycle:
         extra.setdefault("lock_time", np.array([np.nan]))
         extra.setdefault("lock_energy_loss", np.array([np.nan]))
         extra["motor_work"] = np.array([work[0]])
         extra["press_work"] = np.array([work[2]])
-    used = dict(s)
     return {"channels": ch, "status": status, "t_fail": t_fail, "reason": reason,
-            "stats": {"steps": model.steps, "rhs_evals": -1},
-            "settings": used, "extra": extra}
+            "stats": {"steps": model.steps, "rhs_evals": -1}, "settings": dict(s),
+            "extra": extra}

@@ -24,9 +24,12 @@ from __future__ import annotations
 
 import math
 
+import mujoco
 import numpy as np
 
-from reference_models import press_common as pc
+from compare.physics import press as phys
+
+from .. import press_common as pc
 
 DEFAULT_SETTINGS = {"integrator": "rk4", "dt": 1e-4, "solref_factor": 4.0,
                     "solimp": (0.9999, 0.9999, 0.001, 0.5, 2.0)}
@@ -35,8 +38,7 @@ INTEGRATORS = ("rk4", "euler", "implicitfast", "implicit")
 _BISECT_TOL = 1e-9   # s
 
 
-def _check_settings(settings: dict) -> dict:
-    s = pc.fixed_step_settings(settings, DEFAULT_SETTINGS, INTEGRATORS, "mujoco")
+def _check_settings(s: dict) -> dict:
     s["solref_factor"] = float(s["solref_factor"])
     if not s["solref_factor"] > 0:
         raise ValueError("solref_factor must be > 0")
@@ -47,13 +49,13 @@ def _check_settings(settings: dict) -> dict:
 
 
 def _xml(p: dict, st: dict, s: dict, cycle: bool) -> str:
-    lay = pc.link_layout(p)
+    lay = phys.link_layout(p)
     l1, l2, l3 = float(p["l1"]), float(p["l2"]), float(p["l3"])
     cx1, m1, J1 = lay["crank"]
     cx2, m2, J2 = lay["rod"]
     cx3, m3, J3 = lay["rocker"]
-    J1 -= pc.crank_rotor_inertia(p)       # the rotor goes in as armature
-    arm = pc.crank_rotor_inertia(p)
+    J1 -= phys.crank_rotor_inertia(p)       # the rotor goes in as armature
+    arm = phys.crank_rotor_inertia(p)
     # rocker frame points B -> C (length l3); its COM is cx3 from C, i.e. l3 - cx3 from B
     r3 = l3 - cx3
     tc = s["solref_factor"] * s["dt"]
@@ -65,14 +67,17 @@ def _xml(p: dict, st: dict, s: dict, cycle: bool) -> str:
         J = max(J, 1e-12)
         return (f'<inertial pos="{pos:.17g} 0 0" mass="{m:.17g}" '
                 f'diaginertia="{J:.17g} {J:.17g} {J:.17g}"/>')
-    integ = {"rk4": "RK4", "euler": "Euler", "implicitfast": "implicitfast", "implicit": "implicit"}[s["integrator"]]
+    integ = {"rk4": "RK4", "euler": "Euler", "implicitfast": "implicitfast",
+             "implicit": "implicit"}[s["integrator"]]
+    gravity = -float(p["gravity"])
     weld = ""
     if cycle:
         weld = (f'<weld name="lock" site1="C_rocker" site2="C_slider" active="false" '
                 f'solref="{solref}" solimp="{solimp}"/>')
     return f"""
 <mujoco model="press">
-  <option timestep="{s['dt']:.17g}" integrator="{integ}" gravity="0 {-float(p['gravity']):.17g} 0" jacobian="dense">
+  <option timestep="{s['dt']:.17g}" integrator="{integ}" gravity="0 {gravity:.17g} 0"
+          jacobian="dense">
     <flag contact="disable" energy="enable" autoreset="disable"/>
   </option>
   <worldbody>
@@ -109,89 +114,156 @@ def _xml(p: dict, st: dict, s: dict, cycle: bool) -> str:
 """
 
 
-def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, cycle: bool | None = None) -> dict:
-    """Run the press (idle) scene; with lock_after/lock_angle/press_force/release_after in params
-    (or cycle=True) the press-cycle scene."""
-    import mujoco
-    cycle, p, s, t_out, st = pc.prepare(params, t_out, settings, _check_settings, cycle)
-    dt = s["dt"]
-    m = mujoco.MjModel.from_xml_string(_xml(p, st, s, cycle))
-    d = mujoco.MjData(m)
-    u = float(p["gear_ratio"])
-    c = float(p["slider_damping"])
-    F = float(p.get("press_force", 0.0))
-    vreg = float(p.get("press_force_vreg", 0.01))
-    flags = {"locked": False}
-    sid_r = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "C_rocker")
-    sid_s = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "C_slider")
-    eq_loop = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_EQUALITY, "loop")
-    eq_lock = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_EQUALITY, "lock") if cycle else -1
+class _Press:
+    """build (the model, its callbacks, the consistent initial state) / step / observe."""
 
-    def passive(m_, d_):
-        d_.qfrc_passive[0] += pc.motor_torque(d_.qvel[0], u)
-        if flags["locked"] and F != 0.0:
-            d_.qfrc_passive[3] += pc.press_load(d_.qvel[3], F, vreg)
+    COLUMNS = ("phi", "phid", "phidd", "psi", "xC", "T", "V", "W_motor", "W_damper", "W_press",
+               "lock_loss")
 
-    def act_dyn(m_, d_, i):
+    def __init__(self, p: dict, st: dict, s: dict, cycle: bool, n_out: int):
+        self.p, self.st, self.s, self.cycle = p, st, s, cycle
+        self.m = m = mujoco.MjModel.from_xml_string(_xml(p, st, s, cycle))
+        self.d = d = mujoco.MjData(m)
+        self.u = float(p["gear_ratio"])
+        self.c = float(p["slider_damping"])
+        self.F = float(p["press_force"]) if cycle else 0.0
+        self.vreg = float(p["press_force_vreg"]) if cycle else 1.0
+        self.locked = False
+        self.lock_loss = 0.0
+        self.steps = 0
+        self.extra = {}
+        self.warnings: list[str] = []
+        self.sid_r = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "C_rocker")
+        self.sid_s = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "C_slider")
+        self.eq_loop = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_EQUALITY, "loop")
+        self.eq_lock = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_EQUALITY, "lock") if cycle else -1
+        self.spec = mujoco.mjtState.mjSTATE_INTEGRATION
+        self.nstate = mujoco.mj_stateSize(m, self.spec)
+        # a loop violation this large means the model has fallen apart
+        self.vmax = 1e-3 * (float(p["l1"]) + float(p["l2"]) + float(p["l3"]))
+        d.qpos[:] = [st["phi"], st["theta2"] - st["phi"], st["psi"] + math.pi - st["theta2"], 0.0]
+        d.qvel[:] = [st["phid"], st["theta2d"] - st["phid"], st["psid"] - st["theta2d"],
+                     st["vC"][0]]
+        d.act[:] = 0.0
+        self.rows = {k: np.full(n_out, np.nan) for k in self.COLUMNS}
+
+    # ---- forces evaluated in every RK stage (process-wide callbacks) --------------------------
+    def passive(self, m_, d_):
+        d_.qfrc_passive[0] += phys.motor_torque(d_.qvel[0], self.u)
+        if self.locked and self.F != 0.0:
+            d_.qfrc_passive[3] += phys.press_load(d_.qvel[3], self.F, self.vreg)
+
+    def act_dyn(self, m_, d_, i):
         if i == 0:
-            return pc.motor_torque(d_.qvel[0], u) * d_.qvel[0]
+            return phys.motor_torque(d_.qvel[0], self.u) * d_.qvel[0]
         if i == 1:
-            return c * d_.qvel[3] ** 2
-        return -pc.press_load(d_.qvel[3], F, vreg) * d_.qvel[3] if flags["locked"] else 0.0
+            return self.c * d_.qvel[3] ** 2
+        return -phys.press_load(d_.qvel[3], self.F, self.vreg) * d_.qvel[3] if self.locked else 0.0
 
-    # initial state
-    d.qpos[:] = [st["phi"], st["theta2"] - st["phi"], st["psi"] + math.pi - st["theta2"], 0.0]
-    d.qvel[:] = [st["phid"], st["theta2d"] - st["phid"], st["psid"] - st["theta2d"], st["vC"][0]]
-    d.act[:] = 0.0
-
-    n = len(t_out)
-    ch = {k: np.full(n, np.nan) for k in pc.CHANNELS}
-    extra = {}
-    lock_loss = [0.0]
-    steps = [0]
-    spec = mujoco.mjtState.mjSTATE_INTEGRATION
-    nstate = mujoco.mj_stateSize(m, spec)
-
-    def psi_of(qpos):
+    # ---- step / observe ---------------------------------------------------------------------
+    @staticmethod
+    def psi_of(qpos) -> float:
         return qpos[0] + qpos[1] + qpos[2] - math.pi
 
-    vmax = 1e-3 * (float(p["l1"]) + float(p["l2"]) + float(p["l3"]))   # the model has fallen apart
-
-    def observe(k):
-        mujoco.mj_forward(m, d)
-        T = d.energy[1]
-        V = d.energy[0]
-        ch["crank_angle"][k] = d.qpos[0]
-        ch["crank_rate"][k] = d.qvel[0]
-        ch["crank_accel"][k] = d.qacc[0]
-        ch["rocker_angle"][k] = psi_of(d.qpos)
-        ch["slider_x"][k] = st["C"][0] + d.qpos[3]
-        ch["loop_violation"][k] = float(np.linalg.norm(d.site_xpos[sid_r, :2] - d.site_xpos[sid_s, :2]))
-        ch["energy_balance"][k] = T + V - d.act[0] + d.act[1] + d.act[2] + lock_loss[0]
-        if not ch["loop_violation"][k] <= vmax:
-            raise FloatingPointError(f"loop violation {ch['loop_violation'][k]:.3g} m exceeds {vmax:.3g} m")
-
-    def step(h):
+    def step(self, h: float) -> None:
+        m, d = self.m, self.d
         m.opt.timestep = h
         mujoco.mj_step(m, d)
-        steps[0] += 1
+        self.steps += 1
         if (not np.all(np.isfinite(d.qpos)) or not np.all(np.isfinite(d.qvel))
                 or not np.all(np.isfinite(d.act))
                 or d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0):
             raise FloatingPointError("non-finite state (MuJoCo bad qacc)"
-                                     + (f": {warnings[-1].strip()}" if warnings else ""))
+                                     + (f": {self.warnings[-1].strip()}" if self.warnings
+                                        else ""))
 
-    bounds, out_index, events = pc.breakpoints(p, t_out, cycle)
-    la, ra, psiL = events if cycle else (None, None, None)
+    def observe(self, k: int) -> None:
+        m, d, r = self.m, self.d, self.rows
+        mujoco.mj_forward(m, d)
+        gap = float(np.linalg.norm(d.site_xpos[self.sid_r, :2] - d.site_xpos[self.sid_s, :2]))
+        if not gap <= self.vmax:
+            raise FloatingPointError(f"loop violation {gap:.3g} m exceeds {self.vmax:.3g} m")
+        r["phi"][k], r["phid"][k], r["phidd"][k] = d.qpos[0], d.qvel[0], d.qacc[0]
+        r["psi"][k], r["xC"][k] = self.psi_of(d.qpos), self.st["C"][0] + d.qpos[3]
+        r["T"][k], r["V"][k] = d.energy[1], d.energy[0]
+        r["W_motor"][k], r["W_damper"][k], r["W_press"][k] = d.act[0], d.act[1], d.act[2]
+        r["lock_loss"][k] = self.lock_loss
 
-    status, t_fail, reason = "ok", None, None
-    warnings: list[str] = []
-    prev_warning = mujoco.get_mju_user_warning()
-    mujoco.set_mju_user_warning(warnings.append)     # no stdout, no MUJOCO_LOG.TXT
-    mujoco.set_mjcb_passive(passive)
-    mujoco.set_mjcb_act_dyn(act_dyn)
+    # ---- press-cycle: lock event, plastic impact, release -------------------------------------
+    def step_with_lock_event(self, h: float, psi_lock: float) -> bool:
+        """One step; if ψ crossed the lock angle, re-step to the crossing (bisection on the step
+        with mj_getState/mj_setState) and lock there. Returns True at the lock."""
+        m, d = self.m, self.d
+        saved = np.empty(self.nstate)
+        mujoco.mj_getState(m, d, saved, self.spec)
+        g0 = self.psi_of(d.qpos) - psi_lock
+        self.step(h)
+        g1 = self.psi_of(d.qpos) - psi_lock
+        if not (g0 == 0.0 or np.sign(g1) != np.sign(g0)):
+            return False
+        lo, hi = 0.0, h
+        nb = 0
+        while hi - lo > _BISECT_TOL:
+            mid = 0.5 * (lo + hi)
+            mujoco.mj_setState(m, d, saved, self.spec)
+            self.step(mid)
+            nb += 1
+            gm = self.psi_of(d.qpos) - psi_lock
+            if gm != 0.0 and np.sign(gm) == np.sign(g0):
+                lo = mid
+            else:
+                hi = mid
+        mujoco.mj_setState(m, d, saved, self.spec)
+        self.step(hi)
+        self.lock(nb)
+        return True
+
+    def lock(self, n_bisections: int) -> None:
+        """Swap the connect for a weld at the current relative rotation and apply the plastic
+        impact with MuJoCo's own mass matrix and equality Jacobian."""
+        m, d = self.m, self.d
+        t_lock = d.time
+        mujoco.mj_kinematics(m, d)
+        qrel = np.empty(4)
+        mujoco.mju_mat2Quat(qrel, d.site_xmat[self.sid_r])
+        m.site_quat[self.sid_s] = qrel           # slider body frame = world rotation
+        m.site_sameframe[self.sid_s] = 0
+        d.eq_active[self.eq_loop] = 0
+        d.eq_active[self.eq_lock] = 1
+        mujoco.mj_forward(m, d)
+        T_before = d.energy[1]
+        M = np.zeros((m.nv, m.nv))
+        mujoco.mj_fullM(m, d, M)
+        rows = d.efc_type[:d.nefc] == mujoco.mjtConstraint.mjCNSTR_EQUALITY
+        J = d.efc_J[:d.nefc * m.nv].reshape(d.nefc, m.nv)[rows]
+        J = J[np.any(np.abs(J) > 1e-14, axis=1)]
+        v = d.qvel.copy()
+        MiJt = np.linalg.solve(M, J.T)
+        lam = np.linalg.lstsq(J @ MiJt, J @ v, rcond=None)[0]
+        vn = v - MiJt @ lam
+        d.qvel[:] = vn
+        self.locked = True
+        mujoco.mj_forward(m, d)
+        self.lock_loss = T_before - d.energy[1]
+        self.extra.update({"lock_time": np.array([t_lock]),
+                           "lock_energy_loss": np.array([self.lock_loss]),
+                           "lock_bisections": np.array([n_bisections]),
+                           "crank_rate_jump": np.array([vn[0] - v[0]])})
+
+    def release(self) -> None:
+        self.d.eq_active[self.eq_lock] = 0
+        self.d.eq_active[self.eq_loop] = 1
+        self.locked = False
+
+
+def _run(run: _Press, params: dict, t_out: np.ndarray) -> tuple:
+    """Step through the breakpoints, observing at the outputs. Returns (status, t_fail,
+    reason)."""
+    dt, d = run.s["dt"], run.d
+    bounds, out_index, events = phys.breakpoints(params, t_out)
+    la, ra, psi_lock = events if run.cycle else (None, None, None)
     try:
-        observe(0)
+        run.observe(0)
         t = 0.0
         released = False
         t_lock = None
@@ -199,83 +271,55 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None, *, c
             while t < t1 - 1e-15:
                 nst = max(1, int(math.ceil((t1 - t) / dt - 1e-9)))
                 h = (t1 - t) / nst
-                armed = cycle and t_lock is None and la - 1e-15 <= t < ra - 1e-15
-                if armed:
-                    saved = np.empty(nstate)
-                    mujoco.mj_getState(m, d, saved, spec)
-                    g0 = psi_of(d.qpos) - psiL
-                step(h)
-                if armed:
-                    g1 = psi_of(d.qpos) - psiL
-                    if g0 == 0.0 or np.sign(g1) != np.sign(g0):
-                        lo, hi = 0.0, h
-                        nb = 0
-                        while hi - lo > _BISECT_TOL:
-                            mid = 0.5 * (lo + hi)
-                            mujoco.mj_setState(m, d, saved, spec)
-                            step(mid)
-                            nb += 1
-                            gm = psi_of(d.qpos) - psiL
-                            if gm != 0.0 and np.sign(gm) == np.sign(g0):
-                                lo = mid
-                            else:
-                                hi = mid
-                        mujoco.mj_setState(m, d, saved, spec)
-                        step(hi)
+                if run.cycle and t_lock is None and la - 1e-15 <= t < ra - 1e-15:
+                    if run.step_with_lock_event(h, psi_lock):
                         t_lock = d.time
-                        # lock: swap connect -> weld at the current relative rotation
-                        mujoco.mj_kinematics(m, d)
-                        qrel = np.empty(4)
-                        mujoco.mju_mat2Quat(qrel, d.site_xmat[sid_r])
-                        m.site_quat[sid_s] = qrel           # slider body frame = world rotation
-                        m.site_sameframe[sid_s] = 0
-                        d.eq_active[eq_loop] = 0
-                        d.eq_active[eq_lock] = 1
-                        mujoco.mj_forward(m, d)
-                        T_before = d.energy[1]
-                        M = np.zeros((m.nv, m.nv))
-                        mujoco.mj_fullM(m, d, M)
-                        rows = d.efc_type[:d.nefc] == mujoco.mjtConstraint.mjCNSTR_EQUALITY
-                        J = d.efc_J[:d.nefc * m.nv].reshape(d.nefc, m.nv)[rows]
-                        J = J[np.any(np.abs(J) > 1e-14, axis=1)]
-                        v = d.qvel.copy()
-                        MiJt = np.linalg.solve(M, J.T)
-                        lam = np.linalg.lstsq(J @ MiJt, J @ v, rcond=None)[0]
-                        vn = v - MiJt @ lam
-                        d.qvel[:] = vn
-                        flags["locked"] = True
-                        mujoco.mj_forward(m, d)
-                        lock_loss[0] = T_before - d.energy[1]
-                        extra.update({"lock_time": np.array([t_lock]),
-                                      "lock_energy_loss": np.array([lock_loss[0]]),
-                                      "lock_bisections": np.array([nb]),
-                                      "crank_rate_jump": np.array([vn[0] - v[0]])})
+                else:
+                    run.step(h)
                 t = d.time
                 if t > t1 - 1e-12:
                     t = t1
                     d.time = t1
             k = out_index.get(float(t1))
             if k is not None:
-                observe(k)     # before a release at this instant: left limits, as the Exudyn leaf
-            if cycle and flags["locked"] and not released and abs(t - ra) < 1e-12:
-                d.eq_active[eq_lock] = 0
-                d.eq_active[eq_loop] = 1
-                flags["locked"] = False
+                run.observe(k)   # before a release at this instant: left limits, as Exudyn
+            if run.cycle and run.locked and not released and abs(t - ra) < 1e-12:
+                run.release()
                 released = True
     except FloatingPointError as exc:
-        status, t_fail, reason = "diverged", float(d.time), str(exc)
-        bad = t_out > t_fail - 1e-15
-        for name in ch:
-            ch[name][bad] = np.nan
+        return "diverged", float(d.time), str(exc)
+    return "ok", None, None
+
+
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> dict:
+    """Run `press` (idle) or, when the parameters carry the lock, `press-cycle`."""
+    cycle, s, t_out, st = pc.prepare(params, t_out, settings, DEFAULT_SETTINGS, INTEGRATORS)
+    s = _check_settings(s)
+    run = _Press(params, st, s, cycle, len(t_out))
+    prev_warning = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(run.warnings.append)     # no stdout, no MUJOCO_LOG.TXT
+    mujoco.set_mjcb_passive(run.passive)
+    mujoco.set_mjcb_act_dyn(run.act_dyn)
+    try:
+        status, t_fail, reason = _run(run, params, t_out)
     finally:
         mujoco.set_mjcb_passive(None)
         mujoco.set_mjcb_act_dyn(None)
         mujoco.set_mju_user_warning(prev_warning)
+    r = run.rows
+    ch = phys.channels(params, r["phi"], r["phid"], r["phidd"], r["psi"], r["xC"], r["T"],
+                       r["V"], r["W_motor"], r["W_damper"], r["W_press"], r["lock_loss"])
+    if t_fail is not None:
+        bad = t_out > t_fail - 1e-15
+        for name in ch:
+            ch[name][bad] = np.nan
+    extra = run.extra
     if cycle:
         extra.setdefault("lock_time", np.array([np.nan]))
         extra.setdefault("lock_energy_loss", np.array([np.nan]))
-        extra["motor_work"] = np.array([d.act[0]])
-        extra["press_work"] = np.array([d.act[2]])
+        extra["motor_work"] = np.array([run.d.act[0]])
+        extra["press_work"] = np.array([run.d.act[2]])
+    evals = 4 * run.steps if s["integrator"] == "rk4" else run.steps
     return {"channels": ch, "status": status, "t_fail": t_fail, "reason": reason,
-            "stats": {"steps": steps[0], "rhs_evals": 4 * steps[0] if s["integrator"] == "rk4" else steps[0]},
-            "settings": dict(s), "extra": extra}
+            "stats": {"steps": run.steps, "rhs_evals": evals}, "settings": dict(s),
+            "extra": extra}

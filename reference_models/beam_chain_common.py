@@ -11,7 +11,6 @@ piece [0, Δl/2] is clamped, N − 1 bodies of length Δl and the last of length
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
 
 N_STATIONS = 10     # mode shapes sampled at x_k = k·L/10, k = 1..10 (every speed alike)
 
@@ -91,9 +90,9 @@ def quadratic_modes(M: np.ndarray, K: np.ndarray, D: np.ndarray):
     oscillatory ones (Im s > 0) ascending in Im s, and the count of eigenvalues with
     Re s > 0 beyond round-off (divergence or flutter: an unstable linearisation)."""
     n = M.shape[0]
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-K, -D]])
-    B = np.block([[np.eye(n), np.zeros((n, n))], [np.zeros((n, n)), M]])
-    s, V = scipy.linalg.eig(A, B)
+    MinvK, MinvD = np.split(np.linalg.solve(M, np.hstack([K, D])), 2, axis=1)
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-MinvK, -MinvD]])
+    s, V = np.linalg.eig(A)          # standard form: ~20x faster than the QZ of (A, B)
     fin = np.isfinite(s)
     scale = np.max(np.abs(s[fin]))
     n_unstable = int(np.sum(s[fin].real > 1e-7 * scale))

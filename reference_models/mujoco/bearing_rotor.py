@@ -1,0 +1,268 @@
+"""MuJoCo model of the two-bearing rotor with a bearing defect (scene `bearing-rotor`).
+
+The shaft is one body on a free joint (six degrees of freedom) with its frame at the centre of
+mass: mass m, central inertia diag(J_t, J_t, J_p), axis body z; gravity is MuJoCo's. Everything
+else — the bearing spring–dampers with the defect lift, the axial spring, the motor and the
+friction moment about the shaft axis — is `compare.physics.bearing_rotor.body_loads`, evaluated
+by a passive-force callback at every force evaluation (inside every RK4 stage, so RK4 stays 4th
+order; a per-step `qfrc_applied` would freeze the force over the stages).
+
+The callback is, by default, a numba `cfunc` installed as a raw C function pointer (MuJoCo never
+re-enters Python). It finds the arrays of the one `MjData` being stepped through a small address
+table (`_ADDR`) that `simulate` fills before stepping, so no knowledge of the `mjData` struct
+layout is needed. `settings["callback"] = "python"` installs a Python callable that runs the same
+numba kernel (about 5x slower). The callback is process-global: one simulation at a time.
+
+Free-joint conventions: qvel[0:3] is the world velocity of the body frame (the centre of mass),
+qvel[3:6] the angular velocity in the body frame; qfrc_passive[0:3] takes the world force and
+qfrc_passive[3:6] the moment in the body frame.
+
+Motor work and dissipated work are two actuator states with integrator dynamics and zero gain
+and gear (they exert nothing); the callback sets their `ctrl` to Ẇ and Ḋ in every stage, so
+MuJoCo's own integrator integrates them with the mechanics (act_dot = ctrl) — the energy
+balance closes at the integrator's accuracy, not at the output grid's.
+
+Divergence: the kernel raises a flag on a non-finite state or a bound (journal farther than l
+from its bearing, |ω| > 1e5 rad/s) and stops applying loads; MuJoCo's bad-qpos/qvel/qacc warning
+counters and the simulated time are checked after every output step (MuJoCo resets a diverged
+state silently unless autoreset is disabled, which it is here); the energy balance is checked
+on the output grid. Each ends the run as `diverged` with t_fail and the reason.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import mujoco
+import numpy as np
+from numba import carray, cfunc, njit, types
+from numba.extending import intrinsic
+
+from compare.contract import LeafResult, merge_settings
+from compare.physics import bearing_rotor as br
+from reference_models import bearing_common as bc
+
+# Accurate default (measured against RK4 at 5 µs over the default 3 s run): RK4 at 50 µs —
+# journals within 2e-11 m, spin rate within 1.3e-7 rad/s, energy balance 1e-8 of the motor work;
+# inside the RK4 stability limit of the bearing modes up to k_b ≈ 3e9 N/m (bearing_common).
+DEFAULT_SETTINGS = {"integrator": "rk4", "dt": 5e-5, "callback": "native"}
+INTEGRATORS = ("rk4", "euler", "implicitfast", "implicit")
+CALLBACKS = ("native", "python")
+_ENUM = {"rk4": mujoco.mjtIntegrator.mjINT_RK4, "euler": mujoco.mjtIntegrator.mjINT_EULER,
+         "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+         "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT}
+_STAGES = {"rk4": 4, "euler": 1, "implicitfast": 1, "implicit": 1}
+
+# userdata: [flag, journal bound (m), omega bound (rad/s), packed scene parameters...]
+_U_FLAG, _U_RBOUND, _U_WBOUND, _U_P = 0, 1, 2, 3
+_FLAG_REASONS = {1.0: "non-finite state", 2.0: "journal left its bearing by more than l",
+                 3.0: "angular velocity bound exceeded"}
+
+
+@njit(cache=True)
+def _passive(qpos, qvel, qfrc, ctrl, ud):
+    """Add the bearing/motor/friction wrench to qfrc_passive and set ctrl = (Ẇ, Ḋ)."""
+    if ud[_U_FLAG] != 0.0:
+        return
+    s = 0.0
+    for i in range(7):
+        s += qpos[i]
+    for i in range(6):
+        s += qvel[i]
+    if not math.isfinite(s):
+        ud[_U_FLAG] = 1.0
+        return
+    q = qpos[3:7].copy()
+    R = br.quat_matrix(q)
+    omega = R @ qvel[3:6]
+    r = qpos[0:3].copy()
+    half = 0.5 * ud[_U_P + br.I_L]
+    if (r[0] * r[0] + r[1] * r[1]) ** 0.5 + half * (R[0, 2] ** 2 + R[1, 2] ** 2) ** 0.5 \
+            > ud[_U_RBOUND]:
+        ud[_U_FLAG] = 2.0
+        return
+    if omega @ omega > ud[_U_WBOUND] ** 2:
+        ud[_U_FLAG] = 3.0
+        return
+    force, moment, p_motor, p_diss = br.body_loads(r, q, qvel[0:3].copy(), omega, ud[_U_P:])
+    mb = R.T @ moment
+    for i in range(3):
+        qfrc[i] += force[i]
+        qfrc[3 + i] += mb[i]
+    ctrl[0] = p_motor
+    ctrl[1] = p_diss
+
+
+def _python_callback(m, d):
+    _passive(d.qpos, d.qvel, d.qfrc_passive, d.ctrl, d.userdata)
+
+
+# --------------------------------------------------------------------- native callback
+_ADDR = np.zeros(6, dtype=np.int64)     # qpos, qvel, qfrc_passive, ctrl, userdata, len(userdata)
+_NATIVE = {"cb": None, "error": None}
+
+
+def _native_callback():
+    """The cfunc (compiled once per process), or None with _NATIVE['error'] set."""
+    if _NATIVE["cb"] is not None or _NATIVE["error"] is not None:
+        return _NATIVE["cb"]
+    try:
+        @intrinsic
+        def _ptr(typingctx, addr):
+            sig = types.CPointer(types.float64)(addr)
+
+            def codegen(context, builder, signature, args):
+                return builder.inttoptr(args[0],
+                                        context.get_value_type(types.CPointer(types.float64)))
+            return sig, codegen
+
+        @intrinsic
+        def _iptr(typingctx, addr):
+            sig = types.CPointer(types.int64)(addr)
+
+            def codegen(context, builder, signature, args):
+                return builder.inttoptr(args[0],
+                                        context.get_value_type(types.CPointer(types.int64)))
+            return sig, codegen
+
+        table = int(_ADDR.ctypes.data)      # fixed for the process: the array is never rebound
+
+        @cfunc(types.void(types.voidptr, types.voidptr), nopython=True)
+        def _cb(m, d):
+            a = carray(_iptr(table), (6,))
+            _passive(carray(_ptr(a[0]), (7,)), carray(_ptr(a[1]), (6,)),
+                     carray(_ptr(a[2]), (6,)), carray(_ptr(a[3]), (2,)),
+                     carray(_ptr(a[4]), (a[5],)))
+
+        _NATIVE["cb"] = _cb
+    except Exception as exc:  # noqa: BLE001 - numba missing or failing: use the Python callable
+        _NATIVE["error"] = f"{type(exc).__name__}: {exc}"
+    return _NATIVE["cb"]
+
+
+class _Callback:
+    """Install the passive callback (and a quiet warning handler) for one MjData; restore."""
+
+    def __init__(self, kind: str, d):
+        self.kind, self.d = kind, d
+        self.warnings: list[str] = []
+
+    def __enter__(self):
+        cb = _native_callback() if self.kind == "native" else None
+        if cb is None:
+            self.kind = "python"
+        else:
+            d = self.d
+            _ADDR[:] = (d.qpos.ctypes.data, d.qvel.ctypes.data, d.qfrc_passive.ctypes.data,
+                        d.ctrl.ctypes.data, d.userdata.ctypes.data, len(d.userdata))
+        self._prev = mujoco.get_mju_user_warning()
+        mujoco.set_mju_user_warning(self.warnings.append)    # no stdout, no MUJOCO_LOG.TXT
+        mujoco.set_mjcb_passive(cb.ctypes if cb is not None else _python_callback)
+        return self
+
+    def __exit__(self, *exc):
+        mujoco.set_mjcb_passive(None)
+        mujoco.set_mju_user_warning(self._prev)
+        _ADDR[:] = 0
+        return False
+
+
+# --------------------------------------------------------------------- model
+def _build(params: dict, integrator: str, h: float):
+    """The free shaft and the two work integrators; (model, data) at the common start."""
+    p = br.pack(params)
+    spec = mujoco.MjSpec()
+    spec.modelname = "bearing_rotor"
+    spec.nuserdata = _U_P + len(p)
+    spec.option.timestep = h
+    spec.option.integrator = _ENUM[integrator]
+    spec.option.gravity = [float(x) for x in params["gravity"]]
+    body = spec.worldbody.add_body(name="shaft")
+    body.add_freejoint(name="free")
+    body.mass = float(params["m"])
+    body.inertia = [float(params["J_t"]), float(params["J_t"]), float(params["J_p"])]
+    body.explicitinertial = True
+    for name in ("motor_work", "dissipated"):
+        act = spec.add_actuator(trntype=mujoco.mjtTrn.mjTRN_JOINT, target="free", name=name)
+        act.dyntype = mujoco.mjtDyn.mjDYN_INTEGRATOR
+        act.gainprm = [0.0] * len(act.gainprm)
+        act.biasprm = [0.0] * len(act.biasprm)
+        act.gear = [0.0] * 6
+        act.ctrllimited = mujoco.mjtLimited.mjLIMITED_FALSE
+        act.actlimited = mujoco.mjtLimited.mjLIMITED_FALSE
+    m = spec.compile()
+    m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
+    d = mujoco.MjData(m)
+    d.userdata[_U_FLAG] = 0.0
+    d.userdata[_U_RBOUND] = bc.JOURNAL_BOUND * float(params["l"])
+    d.userdata[_U_WBOUND] = bc.OMEGA_BOUND
+    d.userdata[_U_P:] = p
+    r0, q0, v0, w0 = br.initial_state(params)
+    d.qpos[:] = np.concatenate([r0, q0])
+    d.qvel[:] = np.concatenate([v0, br.quat_matrix(q0).T @ w0])
+    d.act[:] = 0.0
+    return m, d
+
+
+def _bad_warnings(d) -> int:
+    return sum(int(d.warning[int(w)].number) for w in (mujoco.mjtWarning.mjWARN_BADQPOS,
+                                                        mujoco.mjtWarning.mjWARN_BADQVEL,
+                                                        mujoco.mjtWarning.mjWARN_BADQACC))
+
+
+def simulate(params: dict, t_out: np.ndarray, settings: dict) -> LeafResult:
+    """Spin-up on the output grid t_out (uniform, from 0) at fixed step ≤ dt dividing output_dt."""
+    s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
+    if s["callback"] not in CALLBACKS:
+        raise ValueError(f"callback must be one of {CALLBACKS}, got {s['callback']!r}")
+    try:
+        dt = float(s["dt"])
+    except (TypeError, ValueError):
+        raise ValueError(f"dt must be a positive number, got {s['dt']!r}") from None
+    if not (math.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a positive number, got {s['dt']!r}")
+    t_out = np.asarray(t_out, float)
+    n_sub, h = bc.step_plan(t_out, dt)
+    m, d = _build(params, s["integrator"], h)
+    n = len(t_out)
+    r_cm, v_cm, quat, omega = (np.full((n, k), np.nan) for k in (3, 3, 4, 3))
+    work, diss = np.full(n, np.nan), np.full(n, np.nan)
+
+    def record(i):
+        r_cm[i], v_cm[i], quat[i] = d.qpos[0:3], d.qvel[0:3], d.qpos[3:7]
+        omega[i] = br.quat_matrix(np.array(d.qpos[3:7])) @ d.qvel[3:6]
+        work[i], diss[i] = d.act[0], d.act[1]
+
+    record(0)
+    status, t_fail, reason, steps = "ok", None, None, 0
+    ud = d.userdata
+    wall0 = time.perf_counter()
+    with _Callback(s["callback"], d) as cbk:
+        for i in range(1, n):
+            mujoco.mj_step(m, d, n_sub)
+            steps += n_sub
+            bad = None
+            if ud[_U_FLAG] != 0.0:
+                bad = _FLAG_REASONS[float(ud[_U_FLAG])]
+            elif _bad_warnings(d):
+                bad = "MuJoCo reported a bad (NaN/huge) qpos/qvel/qacc"
+            elif not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))
+                      and np.all(np.isfinite(d.act))):
+                bad = "non-finite state"
+            elif abs(d.time - t_out[i]) > 1e-9 * max(1.0, t_out[i]):
+                bad = f"time did not advance as expected (MuJoCo reset?) t = {d.time:.6g} s"
+            if bad is not None:
+                status, t_fail = "diverged", float(t_out[i])
+                reason = bad + bc.stability_note(params, h)
+                break
+            record(i)
+        kind = cbk.kind
+    wall = time.perf_counter() - wall0
+    used = {**s, "dt": h, "callback": kind}
+    if abs(h - dt) > 1e-12 * dt:
+        used["dt_requested"] = dt
+    if kind != s["callback"]:
+        used["callback_fallback_reason"] = _NATIVE["error"]
+    stats = {"steps": steps, "rhs_evals": steps * _STAGES[s["integrator"]], "integrate_s": wall}
+    return bc.result(params, t_out, r_cm, v_cm, quat, omega, work, diss, status, t_fail, reason,
+                     stats, used, h)

@@ -21,7 +21,8 @@ KEY_ALIASES = {"rho_inf": "spectral_radius", "newton_tol": "newton_tol",
 
 
 def canonical_integrator(name: str) -> str:
-    return ALIASES.get(str(name).lower(), str(name).lower())
+    name = str(name).lower()
+    return ALIASES.get(name, name).replace("-", "_")
 
 
 def merge_settings(settings: dict | None, defaults: dict, integrators: tuple,

@@ -1,119 +1,150 @@
 """`xval modes`: natural frequencies from every solver that can linearise, matched mode by mode;
-for rotor scenes a Campbell sweep with critical speeds, and frequencies identified from free
-responses of the time-domain solvers."""
+for a scene that declares a Campbell sweep, each solver's mode lines over the sweep (tracked by
+mode-shape correlation where the leaves return shapes, else by label) with the critical speeds
+where a line crosses an excitation line, and the scene's own identification hook (frequencies
+identified from free responses of its time-domain solvers). Nothing here names a scene.
+"""
+from __future__ import annotations
+
 from pathlib import Path
 
 import numpy as np
-from scipy.optimize import brentq
+from scipy.optimize import brentq, linear_sum_assignment
 
 from . import metrics, solvers
 from .atomic import write_json, write_text
 from .errors import BadInput
-from .identify import fft_peak, matrix_pencil, transverse_components
 from .runner import new_run_dir
-from .scenes import get_scene
+from .scenes import Scene, get_scene
+from .trajectory import Modes
 
 
-def campbell(solver, params, spins):
-    """(backward, forward) whirl lines [rad/s] over `spins` from one solver."""
-    leaf = solver.leaf("rotor-whirl")
-    if hasattr(leaf, "whirl_sweep"):
-        b, f = leaf.whirl_sweep(params, spins)
-        return np.asarray(b, float), np.asarray(f, float)
-    res = [leaf.modes(dict(params, spin=s), {}) for s in spins]
-    return (np.array([2 * np.pi * r["frequencies_hz"][0] for r in res]),
-            np.array([2 * np.pi * r["frequencies_hz"][1] for r in res]))
+def sweep(scene: Scene, solver: solvers.Solver, params: dict, values: np.ndarray) -> list[Modes]:
+    """The solver's modes at each value of the scene's sweep parameter."""
+    name = scene.campbell.parameter
+    return [solvers.modes(scene, solver, {**params, name: float(v)}) for v in values]
 
 
-def critical_speeds(solver, params, spins, lines):
-    """Spins where a whirl line crosses the 1× line, refined by root finding on the solver."""
+def mac(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Modal assurance criterion between the rows of a and b (complex shapes allowed)."""
+    a, b = np.atleast_2d(a), np.atleast_2d(b)
+    num = np.abs(np.conj(a) @ b.T) ** 2
+    den = np.outer(np.sum(np.abs(a) ** 2, 1), np.sum(np.abs(b) ** 2, 1))
+    return num / np.maximum(den, 1e-300)
+
+
+def track(results: list[Modes]) -> dict[str, np.ndarray]:
+    """Mode lines over a sweep, keyed by the label at the start of the sweep. Modes are followed
+    from one point to the next by mode-shape correlation (MAC, optimal assignment) when every
+    point has shapes, so crossings and veerings are drawn as they are; else by label (a leaf
+    that labels its modes consistently), else by order."""
+    ok = [r for r in results if r.status == "ok" and len(r.frequencies_hz)]
+    if len(ok) != len(results) or not ok:
+        return {}
+    n = min(len(r.frequencies_hz) for r in ok)
+    keys = [lb or f"mode {i + 1}" for i, lb in enumerate(ok[0].labels[:n])]
+    lines = np.full((n, len(ok)), np.nan)
+    if all(r.shapes is not None and len(r.shapes) >= n for r in ok):
+        order = np.arange(n)
+        for k, r in enumerate(ok):
+            if k:
+                prev = ok[k - 1].shapes[:n][order]
+                rows, cols = linear_sum_assignment(-mac(prev, r.shapes[:n]))
+                order = cols[np.argsort(rows)]
+            lines[:, k] = r.frequencies_hz[order]
+    elif all(len(set(r.labels)) == len(r.labels) and set(keys) <= set(r.labels) for r in ok):
+        for k, r in enumerate(ok):
+            lines[:, k] = [r.frequencies_hz[r.labels.index(lb)] for lb in keys]
+    else:
+        for k, r in enumerate(ok):
+            lines[:, k] = np.sort(r.frequencies_hz)[:n]
+    return dict(zip(keys, lines))
+
+
+def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: np.ndarray,
+                    lines: dict[str, np.ndarray]) -> dict[str, float]:
+    """Sweep values where a mode line crosses `order` × the excitation line, refined by root
+    finding on the solver itself (the mode followed by label, else by nearest frequency)."""
+    cb = scene.campbell
+    if cb.excitation_hz is None:
+        return {}
     out = {}
-    for k, name in enumerate(("backward", "forward")):
-        g = lines[k] - spins
-        idx = np.nonzero(np.sign(g[:-1]) != np.sign(g[1:]))[0]
-        if len(idx):
-            i = idx[0]
-            fun = lambda s: campbell(solver, params, np.array([s]))[k][0] - s   # noqa: E731
-            try:
-                out[name] = brentq(fun, spins[i], spins[i + 1], xtol=1e-12, rtol=1e-14)
-            except Exception:
-                # a body-frame linearisation loses the mode exactly at the crossing (its
-                # body-frame frequency is 0 there): fit a parabola through points beside it
-                s0 = spins[i] - g[i] * (spins[i + 1] - spins[i]) / (g[i + 1] - g[i])
-                ds = 1e-3 * (spins[i + 1] - spins[i])
-                x = s0 + ds * np.array([-3.0, -2.0, 2.0, 3.0])
-                y = campbell(solver, params, x)[k] - x
-                roots = np.roots(np.polyfit(x - s0, y, 2)).real + s0
-                out[name] = float(roots[np.argmin(np.abs(roots - s0))])
+    for order in cb.orders:
+        exc = np.array([order * cb.excitation_hz(params, v) for v in values])
+        for key, f in lines.items():
+            g = f - exc
+            idx = np.nonzero(np.sign(g[:-1]) * np.sign(g[1:]) < 0)[0]
+            for i in idx[:1]:                      # the first crossing of each line
+                def gap(v, key=key, f0=f[i]):
+                    m = solvers.modes(scene, solver, {**params, cb.parameter: float(v)})
+                    fr = (m.frequencies_hz[m.labels.index(key)] if key in m.labels
+                          else m.frequencies_hz[np.argmin(np.abs(m.frequencies_hz - f0))])
+                    return fr - order * cb.excitation_hz(params, v)
+                name = key if order == 1 else f"{key} ({order}×)"
+                try:
+                    out[name] = brentq(gap, values[i], values[i + 1], xtol=1e-12, rtol=1e-14)
+                except (ValueError, IndexError):
+                    # a body-frame linearisation can lose the mode exactly at the crossing
+                    # (its body-frame frequency is 0 there): parabola through points beside it
+                    v0 = values[i] - g[i] * (values[i + 1] - values[i]) / (g[i + 1] - g[i])
+                    x = v0 + 1e-3 * (values[i + 1] - values[i]) * np.array([-3, -2, 2, 3.0])
+                    y = np.array([gap(v) for v in x])
+                    roots = np.roots(np.polyfit(x - v0, y, 2)).real + v0
+                    out[name] = float(roots[np.argmin(np.abs(roots - v0))])
     return out
 
 
-def free_response_frequencies(params, time_solvers, t_end=2.0, dt=1e-3, tilt0=1e-3):
-    """Release the rotor with a small tilt and no torque; identify the tilt frequency from each
-    time-domain solver's record, for several record lengths (convergence)."""
-    spin_scene = get_scene("rotor-spinup")
-    p = spin_scene.resolve()
-    for k in ("l", "k", "m", "R", "eccentricity", "gravity"):
-        p[k] = params[k]
-    p.update(torque=0.0, tilt0=tilt0, t_end=t_end, output_dt=dt)
-    rows = []
-    for s in time_solvers:
-        leaf = s.leaf(spin_scene.name)
-        settings = dict(leaf.DEFAULT_SETTINGS)
-        if settings.get("dt") and settings["dt"] > dt:     # fixed steps must fit the record grid
-            settings["dt"] = dt
-        tr = solvers.simulate(spin_scene, s, p, settings)
-        if tr.status != "ok" or "orientation" not in tr.extra:
-            rows.append({"solver": s.name, "status": tr.status, "reason": tr.reason})
-            continue
-        gx, _ = transverse_components(tr.extra["orientation"])
-        lengths = [t_end / 8, t_end / 4, t_end / 2, t_end]
-        rec = {"solver": s.name, "status": "ok", "record_s": lengths, "matrix_pencil": [],
-               "fft": []}
-        for T in lengths:
-            n = int(round(T / dt)) + 1
-            w, _ = matrix_pencil(gx[:n], dt, n_modes=2)
-            rec["matrix_pencil"].append(float(w[np.argmax(w > 1.0)]) if np.any(w > 1) else None)
-            rec["fft"].append(float(fft_peak(gx[:n], dt)))
-        rows.append(rec)
-    return rows
-
-
-def _campbell_png(path, spins, lines, crit):
+def _campbell_png(path, scene, values, lines_by_solver, crit, params):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    for name, (b, f) in lines.items():
-        ax.plot(spins, b, lw=1, label=f"{name} backward")
-        ax.plot(spins, f, lw=1, ls="--", label=f"{name} forward")
-    ax.plot(spins, spins, "k:", lw=1, label="1× spin")
-    for name, c in crit.items():
-        for kind, s in c.items():
-            ax.plot([s], [s], "o", ms=5)
-            ax.annotate(f"{kind} {s:.3f}", (s, s), fontsize=7)
-    ax.set_xlabel("spin Ω [rad/s]")
-    ax.set_ylabel("whirl frequency [rad/s]")
-    ax.set_ylim(0, max(np.max(f) for _, f in lines.values()) * 1.1)
+    cb = scene.campbell
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    styles = ["-", "--", ":", "-."]
+    for k, (solver, lines) in enumerate(lines_by_solver.items()):
+        for j, (key, f) in enumerate(lines.items()):
+            ax.plot(values, f, lw=1, ls=styles[k % len(styles)], color=f"C{j % 10}",
+                    label=f"{key}" if k == 0 else None)
+    if cb.excitation_hz is not None:
+        for order in cb.orders:
+            ax.plot(values, [order * cb.excitation_hz(params, v) for v in values], "k:", lw=1,
+                    label=f"{order}× excitation")
+    for solver, c in crit.items():
+        for v in c.values():
+            ax.plot([v], [cb.excitation_hz(params, v)], "ko", ms=3)
+    ax.set_xlabel(f"{cb.parameter} [{cb.unit}]")
+    ax.set_ylabel("frequency [Hz]")
+    top = max(np.nanmax(f) for lines in lines_by_solver.values() for f in lines.values())
+    ax.set_ylim(0, 1.1 * top)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=6)
-    ax.set_title("Campbell diagram")
+    ax.legend(fontsize=7, ncol=2)
+    ax.set_title(f"Campbell diagram ({', '.join(f'{s}: {styles[k % 4]}' for k, s in enumerate(lines_by_solver))})",
+                 fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
-def _campbell_rrd(path, spins, lines):
+def _campbell_rrd(path, scene, values, lines_by_solver):
     import rerun as rr
     with rr.RecordingStream("xval", recording_id=f"campbell-{path.parent.name}") as rec:
         rec.save(str(path))
-        idx = [rr.TimeColumn("spin", duration=spins)]       # 1 s on this timeline = 1 rad/s
-        rec.send_columns("campbell/one_x", indexes=idx, columns=rr.Scalars.columns(scalars=spins))
-        for name, (b, f) in lines.items():
-            for kind, v in (("backward", b), ("forward", f)):
-                rec.send_columns(f"campbell/{kind}/{name}", indexes=idx,
-                                 columns=rr.Scalars.columns(scalars=v))
+        idx = [rr.TimeColumn(scene.campbell.parameter, duration=values)]   # 1 s = 1 unit
+        for solver, lines in lines_by_solver.items():
+            for key, f in lines.items():
+                rec.send_columns(f"campbell/{rr.escape_entity_path_part(key)}/{solver}",
+                                 indexes=idx, columns=rr.Scalars.columns(scalars=f))
     return path
+
+
+def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float):
+    """A time-domain run for an identification hook: the solver's accurate defaults, its fixed
+    step capped so that it fits the record's grid."""
+    s = solvers.get_solver(solver_name)
+    settings = solvers.settings_for(s, scene.name)
+    if isinstance(settings.get("dt"), float) and settings["dt"] > max_dt:
+        settings["dt"] = max_dt
+    return solvers.simulate(scene, s, params, settings)
 
 
 def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_sweep=True,
@@ -134,46 +165,45 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
     obj = {"scene": sc.name, "params": params,
            "runs": [{"solver": r.solver, "status": r.status, "wall_s": round(r.wall_s, 6),
                      "frequencies_hz": list(r.frequencies_hz), "labels": r.labels,
+                     **({"notes": r.notes} if r.notes else {}),
+                     **({k: list(np.ravel(v)) for k, v in r.extra.items()}),
                      **({"reason": r.reason} if r.reason else {})} for r in results],
            "comparisons": [c.as_dict() for c in comparisons]}
-    md = [f"# {sc.name}: {sc.title}", "", "| solver | status | frequencies [Hz] | labels |",
-          "|---|---|---|---|"]
+    md = [f"# {sc.name}: {sc.title}", "", f"Source: {sc.source}", "",
+          "| solver | status | frequencies [Hz] | labels | notes |", "|---|---|---|---|---|"]
     md += [f"| {r.solver} | {r.status} | {', '.join(f'{f:.8g}' for f in r.frequencies_hz)} | "
-           f"{', '.join(r.labels)} |" for r in results]
+           f"{', '.join(r.labels)} | {'; '.join(r.notes) or r.reason or ''} |" for r in results]
     md += ["", "| a | b | mode | rel. difference | verdict |", "|---|---|---|---|---|"]
     md += [f"| {c.a} | {c.b} | {c.channel} | {c.max_rel:.2e} | {c.verdict} |"
            for c in comparisons]
-    if sc.name == "rotor-whirl" and campbell_sweep:
-        spins = np.linspace(0.0, params["spin_max"], params["n_spin"])
+    if sc.campbell and campbell_sweep:
+        values = sc.campbell.values(params)
         lines, crit = {}, {}
         for s in chosen:
-            try:
-                lines[s.name] = campbell(s, params, spins)
-                crit[s.name] = critical_speeds(s, params, spins, lines[s.name])
-            except Exception as e:          # a solver failing the sweep is reported, not fatal
-                log(f"campbell {s.name}: {type(e).__name__}: {e}")
-        obj["critical_speeds_rad_s"] = crit
-        _campbell_png(out_dir / "campbell.png", spins, lines, crit)
-        obj["recording"] = str(_campbell_rrd(out_dir / "campbell.rrd", spins, lines))
-        md += ["", "## Campbell diagram", "", "Critical speeds (whirl line crosses 1× spin):", ""]
-        md += [f"- {n}: " + ", ".join(f"{k} {v:.6f} rad/s" for k, v in c.items())
+            tracked = track(sweep(sc, s, params, values))
+            if not tracked:
+                log(f"campbell {s.name}: a sweep point failed; no lines")
+                continue
+            lines[s.name] = tracked
+            crit[s.name] = critical_speeds(sc, s, params, values, tracked)
+        obj["critical_speeds"] = crit
+        obj["campbell"] = {"parameter": sc.campbell.parameter, "values": list(values),
+                           "lines_hz": {s: {k: list(v) for k, v in ln.items()}
+                                        for s, ln in lines.items()}}
+        if lines:
+            _campbell_png(out_dir / "campbell.png", sc, values, lines, crit, params)
+            obj["recording"] = str(_campbell_rrd(out_dir / "campbell.rrd", sc, values, lines))
+        md += ["", "## Campbell diagram", "",
+               f"Critical {sc.campbell.parameter} [{sc.campbell.unit}] (a mode line crosses "
+               "the excitation line):", ""]
+        md += [f"- {n}: " + ", ".join(f"{k} {v:.6f}" for k, v in c.items())
                for n, c in crit.items()]
         md += ["", "![campbell](campbell.png)"]
-        if identify and params["spin"] == 0:
-            time_solvers = [s for s in solvers.solvers_for("rotor-spinup") if s in chosen
-                            or not solver_names]
-            ident = free_response_frequencies(params, time_solvers)
-            obj["identified_from_free_response"] = ident
-            md += ["", "## Frequencies identified from free responses", "",
-                   "Rotor released with tilt0 = 1e-3 rad, no torque, 2 s record at 1 ms; "
-                   "identified tilt frequency [rad/s] vs record length.", "",
-                   "| solver | method | " + " | ".join(f"{T:g} s" for T in (0.25, 0.5, 1, 2)) + " |",
-                   "|---|---|---|---|---|---|"]
-            for r in ident:
-                if r["status"] == "ok":
-                    for m in ("matrix_pencil", "fft"):
-                        md.append(f"| {r['solver']} | {m} | "
-                                  + " | ".join(f"{w:.8g}" if w else "—" for w in r[m]) + " |")
+    if sc.identify and identify:
+        rows, lines_md = sc.identify(params, _run_time, solver_names or None)
+        if rows:
+            obj["identified_from_free_response"] = rows
+            md += [""] + lines_md
     write_text(out_dir / "report.md", "\n".join(md) + "\n")
     obj["report"] = str(out_dir / "report.md")
     write_json(out_dir / "result.json", obj)

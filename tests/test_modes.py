@@ -5,7 +5,7 @@ import pytest
 
 from compare import metrics, solvers
 from compare.identify import fft_peak, matrix_pencil
-from compare.modes import campbell, critical_speeds
+from compare.modes import critical_speeds, sweep, track
 from compare.scenes import get_scene
 from compare.trajectory import Modes
 
@@ -42,11 +42,12 @@ def test_critical_speeds_and_labels(gravity, k_eff):
     bwd_crit = np.sqrt(k_eff / (I_T + I_P))
     for name in ("euler-vector", "exudyn", "mujoco"):
         s = solvers.get_solver(name)
-        lines = campbell(s, p, spins)
-        assert np.all(np.diff(lines[1]) > 0) and np.all(np.diff(lines[0]) < 0)  # fwd ↑, bwd ↓
-        crit = critical_speeds(s, p, spins, lines)
-        assert crit["forward"] == pytest.approx(fwd_crit, rel=1e-8), name
-        assert crit["backward"] == pytest.approx(bwd_crit, rel=1e-8), name
+        lines = track(sweep(SCENE, s, p, spins))
+        fwd, bwd = lines["forward whirl"], lines["backward whirl"]
+        assert np.all(np.diff(fwd) > 0) and np.all(np.diff(bwd) < 0)        # fwd ↑, bwd ↓
+        crit = critical_speeds(SCENE, s, p, spins, lines)
+        assert crit["forward whirl"] == pytest.approx(fwd_crit, rel=1e-8), name
+        assert crit["backward whirl"] == pytest.approx(bwd_crit, rel=1e-8), name
     if gravity == "0,0,0":
         assert fwd_crit == pytest.approx(41.31, abs=0.005)
 
@@ -98,9 +99,9 @@ def test_identification_on_a_known_signal():
 
 @pytest.mark.parametrize("solver", ["exudyn", "mujoco"])
 def test_engines_free_response_gives_the_closed_form_frequency(solver):
-    from compare.modes import free_response_frequencies
+    from compare.modes import _run_time
     p = SCENE.resolve()
-    rows = free_response_frequencies(p, [solvers.get_solver(solver)])
+    rows, _ = SCENE.identify(p, _run_time, [solver])
     k_eff = K - M * G * L
     assert rows[0]["status"] == "ok"
     assert rows[0]["matrix_pencil"][-1] == pytest.approx(np.sqrt(k_eff / I_T), rel=1e-4)

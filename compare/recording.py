@@ -18,28 +18,6 @@ def _time(t):
     return [rr.TimeColumn("sim_time", duration=np.asarray(t, float))]
 
 
-def _draw_rotor(rec, params, traj, offset):
-    """Shaft and disk in body axes; the body pose over time from the solver's orientation."""
-    q = traj.extra.get("orientation")
-    if q is None:
-        return
-    ent = f"world/{traj.solver}"
-    l, R, e = params["l"], params["R"], params["eccentricity"]
-    rec.log(f"{ent}/shaft", rr.LineStrips3D([[[0, 0, 0], [0, 0, l]]], radii=0.01), static=True)
-    rec.log(f"{ent}/disk", rr.Cylinders3D(lengths=[0.02], radii=[R], centers=[[0, e, l]]),
-            static=True)
-    rec.log(f"{ent}/label", rr.Points3D([[0, 0, 0]], labels=[traj.solver], radii=0.02),
-            static=True)
-    ok = np.isfinite(q).all(axis=1)
-    xyzw = np.column_stack([q[ok, 1:], q[ok, :1]])
-    trans = np.tile(offset, (ok.sum(), 1))
-    rec.send_columns(ent, indexes=_time(traj.t[ok]),
-                     columns=rr.Transform3D.columns(translation=trans, quaternion=xyzw))
-
-
-DRAW_3D = {"rotor-spinup": _draw_rotor}
-
-
 def blueprint(scene, with_3d):
     plots = [rrb.TimeSeriesView(origin=f"/{ch}", name=ch) for ch in scene.channels]
     right = rrb.Grid(*plots)
@@ -51,7 +29,7 @@ def blueprint(scene, with_3d):
 
 def write_run_recording(path, result):
     scene, trs = result.scene, result.trajectories
-    draw = DRAW_3D.get(scene.name)
+    draw = scene.draw_3d
     with rr.RecordingStream("xval", recording_id=f"{scene.name}-{path.parent.name}") as rec:
         rec.save(str(path), default_blueprint=blueprint(scene, draw is not None))
         for i, tr in enumerate(trs):
@@ -66,7 +44,7 @@ def write_run_recording(path, result):
                     rec.send_columns(ent, indexes=_time(tr.t[ok]),
                                      columns=rr.Scalars.columns(scalars=v[ok]))
             if draw and tr.status in ("ok", "diverged"):
-                draw(rec, result.params, tr, np.array([1.0 * i, 0.0, 0.0]))
+                draw(rec, result.params, tr, color, np.array([1.0 * i, 0.0, 0.0]))
         for ch in scene.channels:
             curve = analytic_curve(result, ch)
             if curve is not None:

@@ -14,11 +14,12 @@ first-class function types (`RHS`, `GUARD`: fixed signatures, called through a p
 numba caches on disk like any other type — a specialisation on a particular jitted function
 would not be cached, and every process paid ~8 s to compile it again.
 """
-import numpy as np
 import numba as nb
+import numpy as np
 from numba import types as nt
-from scipy.integrate._ivp import dop853_coefficients as _dop853
-from scipy.integrate._ivp.rk import RK23 as _RK23, RK45 as _RK45
+from scipy.integrate import DOP853 as _DOP853
+from scipy.integrate import RK23 as _RK23
+from scipy.integrate import RK45 as _RK45
 
 FAIL_OK, FAIL_NONFINITE, FAIL_STEP_UNDERFLOW, FAIL_MAX_STEPS = 0, 1, 2, 3
 FAIL_REASONS = {FAIL_NONFINITE: "non-finite state",
@@ -49,12 +50,12 @@ FIXED_TABLEAUS = {
                     [1 / 6, 1 / 3, 1 / 3, 1 / 6], [0, 0.5, 0.5, 1.0], order=4),
 }
 
-# Embedded pairs, coefficients taken from scipy (same tables as solve_ivp).
+# Embedded pairs, coefficients from scipy's public solver classes (the tables solve_ivp uses).
 ADAPTIVE_TABLEAUS = {
     "rk23": _tableau(_RK23.A, _RK23.B, _RK23.C, E=_RK23.E, order=3, err_order=2),
     "dopri5": _tableau(_RK45.A, _RK45.B, _RK45.C, E=_RK45.E, order=5, err_order=4),
-    "dop853": _tableau(_dop853.A[:_dop853.N_STAGES, :_dop853.N_STAGES], _dop853.B,
-                       _dop853.C, E=_dop853.E5, E3=_dop853.E3, order=8, err_order=7),
+    "dop853": _tableau(_DOP853.A, _DOP853.B, _DOP853.C, E=_DOP853.E5, E3=_DOP853.E3, order=8,
+                       err_order=7),
 }
 
 

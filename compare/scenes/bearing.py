@@ -5,7 +5,8 @@ import numpy as np
 
 from ..errors import BadInput
 from ..params import Param, positive
-from .base import Scene
+from ..physics import bearing_rotor as physics
+from .base import Finding, Scene
 
 SOURCE = ("seed 001 (001_d37db2f6f0246403.txt): shaft in Rodrigues–Hamilton parameters in the "
           "fixed frame, journals a/b with state-dependent bearing forces, DC motor, defect at a")
@@ -16,6 +17,62 @@ def check(values):
     if values["J_p"] > 2.0 * values["J_t"]:
         raise BadInput(f"J_p: {values['J_p']:g} kg·m² exceeds 2·J_t = {2 * values['J_t']:g} "
                        "kg·m² (no rigid body has such inertias)")
+
+
+def findings(params, trajectories):
+    """Steady spin against the defect-free motor/friction balance, the once-per-revolution
+    ripple and the orbit of journal a over the last five revolutions, solver by solver."""
+    ok = [tr for tr in trajectories if tr.status == "ok"]
+    if not ok:
+        return []
+    w_bal = physics.steady_spin_rate(params)
+    sag = physics.static_sag(params)
+
+    def last_revs(tr):
+        a = tr.channels["spin_angle"]
+        return a >= a[-1] - 5 * 2 * np.pi
+
+    def fmt(fn, unit, digits=6):
+        return ", ".join(f"{tr.solver} {fn(tr):.{digits}g}{unit}" for tr in ok)
+
+    mean = lambda tr: float(np.mean(tr.channels["spin_rate"][last_revs(tr)]))      # noqa: E731
+    ripple = lambda tr: float(np.ptp(tr.channels["spin_rate"][last_revs(tr)]))     # noqa: E731
+    orbit = lambda tr: float(np.hypot(np.ptp(tr.channels["journal_a_x"][last_revs(tr)]),  # noqa
+                                      np.ptp(tr.channels["journal_a_y"][last_revs(tr)])))
+    ref = ok[0]
+    return [
+        Finding("steady_spin_balance", w_bal, "rad/s",
+                f"defect-free motor/friction balance {w_bal:.8g} rad/s; mean spin over the last "
+                f"5 revolutions: " + fmt(mean, " rad/s", 8)),
+        Finding("spin_ripple", ripple(ref), "rad/s",
+                "peak-to-peak spin ripple over the last 5 revolutions (period: one revolution): "
+                + fmt(ripple, " rad/s")),
+        Finding("journal_a_orbit", orbit(ref), "m",
+                f"extent of journal a's orbit over the last 5 revolutions (static sag "
+                f"{np.hypot(sag[0], sag[1]):.4g} m): " + fmt(orbit, " m", 4)),
+    ]
+
+
+def draw_shaft(rec, params, traj, color, offset):
+    """The shaft between its journals, posed from the solver's centre of mass and orientation
+    (the µm journal motion is invisible at this scale; the orbit is drawn 1e4× magnified)."""
+    import rerun as rr
+    q, ja, jb = (traj.extra.get(k) for k in ("orientation", "journal_a", "journal_b"))
+    if q is None or ja is None or jb is None:
+        return
+    ent = f"world/{traj.solver}"
+    half = 0.5 * params["l"]
+    rec.log(f"{ent}/shaft", rr.LineStrips3D([[[0, 0, -half], [0, 0, half]]], radii=0.01,
+                                            colors=[color]), static=True)
+    ok = np.isfinite(q).all(axis=1) & np.isfinite(ja).all(axis=1) & np.isfinite(jb).all(axis=1)
+    xyzw = np.column_stack([q[ok, 1:], q[ok, :1]])
+    centre = 0.5 * (ja[ok] + jb[ok]) + np.asarray(offset, float)
+    rec.send_columns(ent, indexes=[rr.TimeColumn("sim_time", duration=traj.t[ok])],
+                     columns=rr.Transform3D.columns(translation=centre, quaternion=xyzw))
+    orbit = np.column_stack([1e4 * ja[ok, 0], 1e4 * ja[ok, 1], np.full(ok.sum(), half)])
+    rec.log(f"world/{traj.solver}_orbit_a_x1e4",
+            rr.LineStrips3D([orbit + np.asarray(offset, float)], radii=0.002, colors=[color]),
+            static=True)
 
 
 BEARING_ROTOR = Scene(
@@ -61,6 +118,9 @@ BEARING_ROTOR = Scene(
     energy_scale_channels=("kinetic", "motor_work"),
     reference_solvers=("quaternion",),
     check=check,
+    findings=findings,
+    draw_3d=draw_shaft,
+    campaign_cases=({"name": "bearing-rotor"},),
     notes="Force laws, spin angle (swing–twist about the shaft axis) and every observable are "
           "computed by compare/physics/bearing_rotor.py for all solvers; all start at the "
           "defect-free static sag, unrotated, at rest.",

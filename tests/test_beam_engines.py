@@ -233,3 +233,32 @@ def test_against_custom_mstmm():
             eb, _ = blade("exudyn", 0, rotary_inertia=False)
             for label, v in eb.items():
                 assert v == pytest.approx(ref[label], rel=5e-6), label
+
+
+def anisotropic_star(ratio, spin_ratio):
+    """Uniform shaft with EI_yy = ratio·EI_xx in the co-rotating frame: u and v share the
+    cantilever shapes, so each mode i is two coupled oscillators with ω_x² = λᵢ⁴,
+    ω_y² = ratio·λᵢ⁴ (units of ω₀²): ω⁴ − ω²(ω_x² + ω_y² + 2Ω²) + (ω_x² − Ω²)(ω_y² − Ω²) = 0.
+    Between ω_x and ω_y the product is negative: one root ω² < 0, a divergence."""
+    out = []
+    for lam in LAMBDA:
+        wx2, wy2 = lam**4, ratio * lam**4
+        b = wx2 + wy2 + 2 * spin_ratio**2
+        c = (wx2 - spin_ratio**2) * (wy2 - spin_ratio**2)
+        disc = math.sqrt(b * b - 4 * c)
+        out += [(b - disc) / 2, (b + disc) / 2]
+    return np.sort(np.sqrt([w2 for w2 in out if w2 > 0]))
+
+
+@pytest.mark.parametrize("engine", ["exudyn", "mujoco"])
+def test_anisotropic_shaft_and_its_instability_band(engine):
+    """EI_yy = 1.2·EI_xx: the whirl frequencies follow the two-oscillator quartic (measured
+    ≤ 8.5e-7 relative); inside the first band (λ₁² < Ω* < √1.2·λ₁², here Ω* = 3.7) one
+    eigenvalue is real positive and the leaf says so in its notes."""
+    for spin_ratio in (2.0, 3.7, 6.0):
+        p = SPINNING_SHAFT.resolve({"spin_ratio": spin_ratio, "EI_yy": 1.2 * 582.996})
+        r = SHAFT[engine].modes(p, {})
+        expect = anisotropic_star(1.2, spin_ratio)[:6]
+        np.testing.assert_allclose(r.extra["omega_star"][:len(expect)], expect, rtol=8e-6)
+        unstable = [n for n in r.notes if n.startswith("unstable: 1 eigenvalues")]
+        assert bool(unstable) == (spin_ratio == 3.7)

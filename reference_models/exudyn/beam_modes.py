@@ -21,7 +21,8 @@ nor an anisotropic shaft, and in the rotating frame it needs the centrifugal and
 matrices added by hand. The chain converges at second order in 1/N (measured, see
 `MODES_SETTINGS`); the default extrapolates N and N/2 (Richardson), which removes the 1/N² term.
 
-Wall time per `modes` call (defaults, N = 40 and 20): 0.3–1 s on the shared 2-core machine.
+Wall time per `modes` call (defaults, N = 40 and 20): 0.1–0.3 s with OPENBLAS_NUM_THREADS=1;
+under load OpenBLAS threading can make the 240×240 eigen solve 10× slower.
 """
 from __future__ import annotations
 
@@ -35,9 +36,14 @@ from compare.contract import ModesResult, merge_settings
 from compare.physics import mstmm
 from reference_models import beam_chain_common as bc
 
-# Measured convergence (first five modes, Table 1 speeds, blade; tests/test_beam_engines.py):
-# plain N = 40 is off by up to +2.5e-3 (flap 3 at 40 rad/s), N = 80 by +6e-4; Richardson from
-# N = 40/20 agrees with 160/80 to ≤ 5e-5, 80/40 to ≤ 1e-5 (but costs ~4 s per call here).
+# Convergence study (max relative error over the first five modes; second order checked in
+# tests/test_beam_engines.py):
+#   blade at rest, Euler–Bernoulli segments vs closed forms: N = 10/20/40/80 plain 1.3e-2,
+#   3.3e-3, 8.2e-4, 2.0e-4 (order 2); Richardson N/N/2: 4.2e-4, 1.3e-5, 7.9e-7, 5.0e-8;
+#   blade at 40 rad/s vs Richardson 160/80: plain 3.9e-2, 1.0e-2, 2.6e-3, 6.4e-4; Richardson
+#   4.7e-3, 6.3e-4, 5.4e-5, 3.5e-6; shaft at Ω* = 4 vs λ² ± Ω*: Richardson 4.5e-4, 1.5e-5,
+#   9.1e-7, 4.8e-7. Default N = 40 extrapolated: ≤ 5.4e-5 (below the scene's 1e-4 window) in
+#   0.1–0.3 s; N = 80 buys 3.5e-6 for ~4× the time.
 MODES_SETTINGS = {"n_segments": 40, "extrapolate": True, "rotary_inertia": True}
 SHAFT_MODES_SETTINGS = {"n_segments": 40, "extrapolate": True}
 

@@ -262,3 +262,30 @@ def test_anisotropic_shaft_and_its_instability_band(engine):
         np.testing.assert_allclose(r.extra["omega_star"][:len(expect)], expect, rtol=8e-6)
         unstable = [n for n in r.notes if n.startswith("unstable: 1 eigenvalues")]
         assert bool(unstable) == (spin_ratio == 3.7)
+
+
+@pytest.mark.parametrize("engine", ["exudyn", "mujoco"])
+def test_southwell_growth_at_low_speed(engine):
+    """(ω² − ω₀²)/Ω² at small Ω is Rayleigh's first-order coefficient with the exact
+    cantilever shape φ₁: flap K = ∫½(L² − x²)φ₁′² / ∫φ₁² = 1.19334 (Southwell's 1.193), less a
+    hair for the flap rotary inertia in the modal mass; lag K − 1 over the modal mass with the
+    lag rotary inertia ρI_lag (0.19282). Measured at Ω = 0.25 rad/s: flap −4.3e-5 (the O(Ω²)
+    remainder), lag +7.7e-4."""
+    L, lam = 6.0, LAMBDA[0]
+    x = np.linspace(0.0, L, 200001)
+    phi = cantilever_shape(x, L, lam)
+    dphi = np.gradient(phi, x)
+
+    def integral(y):
+        return float(np.sum((y[1:] + y[:-1]) * np.diff(x)) / 2)
+
+    g, m, r = integral((L**2 - x**2) / 2 * dphi**2), integral(phi**2), integral(dphi**2)
+    assert g / m == pytest.approx(1.1933, abs=1e-4)
+    s, area = blade_section(), 0.5 * 0.04
+    k_flap = g / (m + s["I_flap"] / area * r)
+    k_lag = (g - m) / (m + s["I_lag"] / area * r)
+    f0, _ = blade(engine, 0)
+    f, _ = blade(engine, 0.25)
+    for label, k, tol in (("flap 1", k_flap, 4.3e-4), ("lag 1", k_lag, 7.7e-3)):
+        measured = ((2 * math.pi * f[label]) ** 2 - (2 * math.pi * f0[label]) ** 2) / 0.25**2
+        assert measured == pytest.approx(k, rel=tol), label

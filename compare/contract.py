@@ -13,8 +13,8 @@ import numpy as np
 
 # One spelling per integrator; the old spellings of earlier leaves are still accepted.
 ALIASES = {"rk44": "rk4", "generalized-alpha": "generalized_alpha",
-           "trapezoidal-index2": "trapezoidal", "ode23": "rk23", "velocityverlet": "velocity_verlet",
-           "velocity-verlet": "velocity_verlet", "semi-implicit-euler": "euler"}
+           "trapezoidal-index2": "trapezoidal", "ode23": "rk23",
+           "velocityverlet": "velocity_verlet", "semi-implicit-euler": "euler"}
 # One spelling per setting key (old spellings of earlier leaves still accepted).
 KEY_ALIASES = {"rho_inf": "spectral_radius", "newton_tol": "newton_tol",
                "newton_tolerance": "newton_tol"}
@@ -72,7 +72,7 @@ class LeafResult:
     STATUSES = ("ok", "diverged", "unstable", "singular")
 
     @classmethod
-    def coerce(cls, res) -> "LeafResult":
+    def coerce(cls, res) -> LeafResult:
         """A leaf's return value as a LeafResult (earlier leaves return a plain dict)."""
         if isinstance(res, cls):
             return res
@@ -116,7 +116,7 @@ class ModesResult:
     extra: dict = field(default_factory=dict)
 
     @classmethod
-    def coerce(cls, res) -> "ModesResult":
+    def coerce(cls, res) -> ModesResult:
         if isinstance(res, cls):
             return res
         if not isinstance(res, dict) or "frequencies_hz" not in res:

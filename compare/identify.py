@@ -9,7 +9,8 @@ time-domain-only models can be checked against modal results.
 import numpy as np
 
 
-def matrix_pencil(x, dt, n_modes=2, pencil=None):
+def matrix_pencil(x: np.ndarray, dt: float, n_modes: int = 2,
+                  pencil: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Frequencies [rad/s] (≥ 0, sorted) and damping ratios of the strongest modes in x."""
     x = np.asarray(x, float)
     N = len(x)
@@ -27,7 +28,7 @@ def matrix_pencil(x, dt, n_modes=2, pencil=None):
     return w[o], zeta[o]
 
 
-def fft_peak(x, dt):
+def fft_peak(x: np.ndarray, dt: float) -> float:
     """Dominant frequency [rad/s] from a Hann-windowed FFT, peak refined by a parabola."""
     x = np.asarray(x, float) - np.mean(x)
     X = np.abs(np.fft.rfft(x * np.hanning(len(x))))
@@ -38,7 +39,7 @@ def fft_peak(x, dt):
     return 2 * np.pi * i / (len(x) * dt)
 
 
-def transverse_components(orientation):
+def transverse_components(orientation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(γ_x, γ_y) of the transverse Euler vector from (n, 4) w,x,y,z orientations."""
     w, x, y, z = orientation.T
     nx, ny, nz = 2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)

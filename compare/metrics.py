@@ -7,6 +7,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from .trajectory import Modes, Trajectory
+
 
 @dataclass(frozen=True)
 class Comparison:
@@ -25,7 +27,8 @@ class Comparison:
         return asdict(self)
 
 
-def deviation(a, b, channel, tolerance):
+def deviation(a: Trajectory, b: Trajectory, channel: str,
+              tolerance: float | tuple) -> Comparison:
     """Deviation of two trajectories on their common output grid, with the verdict."""
     if a.status != "ok" or b.status != "ok":
         why = ", ".join(f"{t.solver} {t.status}" for t in (a, b) if t.status != "ok")
@@ -49,7 +52,7 @@ def deviation(a, b, channel, tolerance):
                       f"(at t = {a.t[np.argmax(d)]:.4g} s)")
 
 
-def pairwise(trajectories, tolerances):
+def pairwise(trajectories: list[Trajectory], tolerances: dict) -> list[Comparison]:
     out = []
     for i, a in enumerate(trajectories):
         for b in trajectories[i + 1:]:
@@ -57,7 +60,7 @@ def pairwise(trajectories, tolerances):
     return out
 
 
-def energy_residual(traj, channel="energy_balance"):
+def energy_residual(traj: Trajectory, channel: str = "energy_balance") -> float | None:
     """Largest |E(t) − E(0)| in joules over the finite part of the run."""
     e = traj.channels.get(channel)
     if e is None:
@@ -68,7 +71,7 @@ def energy_residual(traj, channel="energy_balance"):
 
 # --- event measures: meaningful when phases drift ------------------------------------------
 
-def first_crossing(t, x, level):
+def first_crossing(t: np.ndarray, x: np.ndarray, level: float) -> float | None:
     """Time x first reaches `level` from below (linear interpolation), or None."""
     above = np.nonzero(x >= level)[0]
     if len(above) == 0 or above[0] == 0:
@@ -77,7 +80,7 @@ def first_crossing(t, x, level):
     return float(t[i - 1] + (level - x[i - 1]) * (t[i] - t[i - 1]) / (x[i] - x[i - 1]))
 
 
-def peak(t, x):
+def peak(t: np.ndarray, x: np.ndarray) -> tuple[float, float]:
     """(value, time) of the maximum, refined by a parabola through the three samples."""
     i = int(np.nanargmax(x))
     if 0 < i < len(x) - 1:
@@ -89,14 +92,14 @@ def peak(t, x):
     return float(x[i]), float(t[i])
 
 
-def window_mean(t, x, t0, t1):
+def window_mean(t: np.ndarray, x: np.ndarray, t0: float, t1: float) -> float | None:
     w = (t >= t0) & (t <= t1)
     return float(np.mean(x[w])) if w.any() else None
 
 
 # --- convergence order ---------------------------------------------------------------------
 
-def observed_order(steps, errors):
+def observed_order(steps, errors) -> float:
     """Least-squares slope of log(error) against log(step)."""
     steps, errors = np.asarray(steps, float), np.asarray(errors, float)
     ok = errors > 0
@@ -105,7 +108,7 @@ def observed_order(steps, errors):
 
 # --- frequencies ---------------------------------------------------------------------------
 
-def match_modes(fa, la, fb, lb):
+def match_modes(fa: list, la: list, fb: list, lb: list) -> list[tuple[int, int]]:
     """Pair the modes of two solvers: by label where both name a mode uniquely, else by nearest
     value — accepted only when it is nearer than half the gap to any other candidate, so two
     close modes are never both paired with one. Returns [(i, j)] index pairs."""
@@ -130,7 +133,7 @@ def match_modes(fa, la, fb, lb):
     return sorted(pairs)
 
 
-def frequency_comparisons(results, tolerance):
+def frequency_comparisons(results: list[Modes], tolerance: float) -> list[Comparison]:
     """Every pair of solvers, mode by mode, as Comparisons (channel = the mode's label)."""
     out = []
     ok = [r for r in results if r.status == "ok"]

@@ -75,7 +75,7 @@ def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: 
             g = f - exc
             idx = np.nonzero(np.sign(g[:-1]) * np.sign(g[1:]) < 0)[0]
             for i in idx[:1]:                      # the first crossing of each line
-                def gap(v, key=key, f0=f[i]):
+                def gap(v, key=key, f0=f[i], order=order):
                     m = solvers.modes(scene, solver, {**params, cb.parameter: float(v)})
                     fr = (m.frequencies_hz[m.labels.index(key)] if key in m.labels
                           else m.frequencies_hz[np.argmin(np.abs(m.frequencies_hz - f0))])
@@ -101,7 +101,7 @@ def _campbell_png(path, scene, values, lines_by_solver, crit, params):
     cb = scene.campbell
     fig, ax = plt.subplots(figsize=(7.5, 4.8))
     styles = ["-", "--", ":", "-."]
-    for k, (solver, lines) in enumerate(lines_by_solver.items()):
+    for k, lines in enumerate(lines_by_solver.values()):
         for j, (key, f) in enumerate(lines.items()):
             ax.plot(values, f, lw=1, ls=styles[k % len(styles)], color=f"C{j % 10}",
                     label=f"{key}" if k == 0 else None)
@@ -109,7 +109,7 @@ def _campbell_png(path, scene, values, lines_by_solver, crit, params):
         for order in cb.orders:
             ax.plot(values, [order * cb.excitation_hz(params, v) for v in values], "k:", lw=1,
                     label=f"{order}× excitation")
-    for solver, c in crit.items():
+    for c in crit.values():
         for v in c.values():
             ax.plot([v], [cb.excitation_hz(params, v)], "ko", ms=3)
     ax.set_xlabel(f"{cb.parameter} [{cb.unit}]")
@@ -118,8 +118,8 @@ def _campbell_png(path, scene, values, lines_by_solver, crit, params):
     ax.set_ylim(0, 1.1 * top)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
-    ax.set_title(f"Campbell diagram ({', '.join(f'{s}: {styles[k % 4]}' for k, s in enumerate(lines_by_solver))})",
-                 fontsize=9)
+    legend = ", ".join(f"{s}: '{styles[k % len(styles)]}'" for k, s in enumerate(lines_by_solver))
+    ax.set_title(f"Campbell diagram (line style per solver — {legend})", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -1,6 +1,6 @@
 """Scene parameters as validated data: name, default, unit, meaning and the admissible range."""
-from dataclasses import dataclass
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -63,5 +63,5 @@ class Param:
         return f"{'(' if self.open_lo else '['}{self.lo:g}, {self.hi:g}]"
 
 
-def positive(name, default, unit, doc, hi=math.inf):
+def positive(name: str, default: float, unit: str, doc: str, hi: float = math.inf) -> Param:
     return Param(name, default, unit, doc, lo=0.0, hi=hi, open_lo=True)

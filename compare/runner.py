@@ -3,13 +3,19 @@
 Used by `xval run` and by the campaign jobs. Solvers run one after another in this process;
 each trajectory is written atomically as soon as it exists, so a later crash loses nothing.
 """
-from dataclasses import dataclass, field
+from __future__ import annotations
+
 import datetime
 import os
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import metrics, solvers
 from .atomic import write_json
+from .scenes import Scene
+from .solvers import Solver
+from .trajectory import Trajectory
 
 
 @dataclass
@@ -48,13 +54,14 @@ class RunResult:
         return out
 
 
-def new_run_dir(out, scene_name):
+def new_run_dir(out: str | Path, scene_name: str) -> Path:
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
     return Path(out) / "runs" / f"{scene_name}-{stamp}-{os.getpid()}"
 
 
-def run_scene(scene, params, chosen, settings_for, out_dir, record=True, report=True, log=None,
-              timeout_s=None):
+def run_scene(scene: Scene, params: dict, chosen: list[Solver], settings_for: Callable,
+              out_dir: str | Path, record: bool = True, report: bool = True,
+              log: Callable | None = None, timeout_s: float | None = None) -> RunResult:
     """Simulate `scene` with each solver in `chosen`; `settings_for(solver)` gives settings;
     `timeout_s` bounds each solver's wall time."""
     out_dir = Path(out_dir)
@@ -72,7 +79,8 @@ def run_scene(scene, params, chosen, settings_for, out_dir, record=True, report=
     return finish_run(scene, params, trajectories, files, out_dir, record, report)
 
 
-def finish_run(scene, params, trajectories, files, out_dir, record=True, report=True):
+def finish_run(scene: Scene, params: dict, trajectories: list[Trajectory], files: dict,
+               out_dir: str | Path, record: bool = True, report: bool = True) -> RunResult:
     comparisons = metrics.pairwise(trajectories, scene.tolerances)
     findings = scene.findings(params, trajectories) if scene.findings else []
     result = RunResult(scene, params, trajectories, comparisons, findings, Path(out_dir), files)

@@ -9,12 +9,23 @@ L = L(γ)·L(φ e); then
 The denominator e·Z⁻¹·L(γ)·e equals (θ/2)·cot(θ/2), θ = |γ|: the split is singular at tilt π,
 which `rotor.tilt_guard` reports.
 """
-import numpy as np
 import numba as nb
+import numpy as np
 
 from . import rotor
-from .rotor import DEFAULT_SETTINGS, INTEGRATORS, ADAPTIVE, check_settings, K_, M_, TORQUE, G, RC0, I0INV  # noqa: F401
-from .rotation import rotation_tensor, rotation_z, zhilin_inverse, transverse_vector
+from .rotation import rotation_tensor, rotation_z, transverse_vector, zhilin_inverse
+from .rotor import (  # noqa: F401
+    ADAPTIVE,
+    DEFAULT_SETTINGS,
+    I0INV,
+    INTEGRATORS,
+    K_,
+    M_,
+    RC0,
+    TORQUE,
+    G,
+    check_settings,
+)
 
 E_Z = np.array([0.0, 0.0, 1.0])
 

@@ -6,12 +6,23 @@ velocity Ω and Euler's equations about the fixed point O in body axes:
 Nothing of the Euler-vector split is used; γ comes only into the spring law. |q| is left free
 (no renormalisation) so its drift is an honest accuracy measure, reported as an invariant.
 """
-import numpy as np
 import numba as nb
+import numpy as np
 
 from . import rotor
-from .rotor import DEFAULT_SETTINGS, INTEGRATORS, ADAPTIVE, check_settings, M_, TORQUE, G, RC0, I0, I0INV  # noqa: F401
-from .rotation import quat_to_matrix, quat_times_vector, matrix_to_quat
+from .rotation import matrix_to_quat, quat_times_vector, quat_to_matrix
+from .rotor import (  # noqa: F401
+    ADAPTIVE,
+    DEFAULT_SETTINGS,
+    I0,
+    I0INV,
+    INTEGRATORS,
+    M_,
+    RC0,
+    TORQUE,
+    G,
+    check_settings,
+)
 
 
 @nb.njit(cache=True)

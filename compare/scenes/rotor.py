@@ -60,7 +60,7 @@ def spinup_findings(p, trajectories):
         hi = float(np.max(w[ref.solver][win]))
         passed = bool(np.min(w[ref.solver][ref.t >= 0.9 * t_end]) > 1.1 * c["forward_critical"])
         if passed:
-            txt = (f"passes through resonance: |ω| leaves the critical band and ends at "
+            txt = ("passes through resonance: |ω| leaves the critical band and ends at "
                    + fmt(w_end, " rad/s", 6) + f" (> 1.1 × forward critical "
                    f"{c['forward_critical']:.4f} rad/s over the last 10 % of the run)")
         else:
@@ -76,7 +76,8 @@ def spinup_findings(p, trajectories):
     tilt_peak = per_solver(lambda tr: float(np.max(tr.channels["tilt"])))
     tilt_t = per_solver(lambda tr: float(tr.t[np.argmax(tr.channels["tilt"])]))
     out.append(Finding("tilt_peak", tilt_peak[ref.solver], "rad",
-                       "peak tilt " + fmt(tilt_peak, " rad", 5) + " at t = " + fmt(tilt_t, " s", 4)))
+                       "peak tilt " + fmt(tilt_peak, " rad", 5)
+                       + " at t = " + fmt(tilt_t, " s", 4)))
     out.append(Finding("omega_final", w_end[ref.solver], "rad/s",
                        f"|ω| at t = {t_end:g} s: " + fmt(w_end, " rad/s", 8)))
     return out

@@ -1,9 +1,27 @@
-"""Atomic file writes: a reader sees the old file or the new one, never half of one."""
+"""Atomic file writes: a reader sees the old file or the new one, never half of one.
+
+Every file is written under a temporary name in its own folder and renamed over the target
+when complete (a rename within one file system is atomic). `mkstemp` creates files with mode
+0600; the finished file gets the mode a plain `open()` would give (0666 less the user's umask,
+0644 by default), so teammates on a shared machine can read the reports.
+"""
 import json
 import os
+import shutil
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
+
+
+def _umask():
+    mask = os.umask(0o022)      # the only portable way to read it is to set it and set it back
+    os.umask(mask)
+    return mask
+
+
+def readable_mode():
+    """The mode `open(path, "w")` would create a file with."""
+    return 0o666 & ~_umask()
 
 
 @contextmanager
@@ -15,6 +33,7 @@ def atomic_path(path):
     os.close(fd)
     try:
         yield Path(tmp)
+        os.chmod(tmp, readable_mode())
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
@@ -28,6 +47,18 @@ def write_text(path, text):
 
 def write_json(path, obj):
     write_text(path, json.dumps(obj, indent=1, default=_jsonable) + "\n")
+
+
+def publish(src, dst):
+    """Make `dst` a copy of the finished file `src` atomically: a hard link where the file
+    system allows (no bytes copied), else a copy under a temporary name, then a rename."""
+    with atomic_path(dst) as tmp:
+        os.unlink(tmp)
+        try:
+            os.link(src, tmp)
+        except OSError:
+            shutil.copyfile(src, tmp)
+    return Path(dst)
 
 
 def _jsonable(x):

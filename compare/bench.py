@@ -14,9 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-from . import metrics, solvers
+from . import budget, metrics, solvers
 from .atomic import write_json, write_text
 from .errors import BadInput
+from .report import fmt_value, plot_style, save_figure
 from .scenes import get_scene
 
 LEVELS = (1e-3, 1e-6)
@@ -87,18 +88,31 @@ def parse_vary(text, sc):
     return name.strip(), vals
 
 
-def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, vary=None):
+def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, vary=None,
+              max_output_gib=None, max_steps=None, make_out=None):
+    """Everything is checked (names, values, the size of the work) before the bench folder is
+    made; `make_out(out)` creates the output folder (the CLI's, which turns a refusal into one
+    line)."""
     sc = get_scene(scene_name)
     if sc.kind != "time":
         raise BadInput(f"scene {sc.name!r}: bench sweeps time-domain scenes")
+    if not (isinstance(repeats, int) and repeats >= 1):
+        raise BadInput(f"--repeats must be at least 1, got {repeats!r}")
+    chosen = solvers.pick(sc, solver_names)
+    budget.check_output(sc, overrides, len(chosen), max_output_gib)
     params = sc.resolve(overrides)
     vary = parse_vary(vary, sc) if vary is not None else None
-    chosen = solvers.pick(sc, solver_names)
+    for s in chosen:
+        for _, st, p in _rungs(sc, s, overrides, params, params["output_dt"], vary):
+            budget.check_steps(s.name, s.leaf(sc.name), p, st, max_steps)
+    if make_out:
+        make_out(out)
     dt_out = params["output_dt"]
     key = sc.key_channel
 
-    # reference: the tightest run of the scene's reference solver (error-controlled at rtol 1e-13 where it
-    # has one, else a quarter of its finest ladder step), confirmed by the second the same way
+    # reference: the tightest run of the scene's reference solver (error-controlled at rtol
+    # 1e-13 where it has one, else a quarter of its finest ladder step), confirmed by the
+    # second the same way
     refs = ([solvers.get_solver(n) for n in sc.reference_solvers]
             or solvers.solvers_for(sc.name)[:2])
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
@@ -165,7 +179,8 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
                          "cross_check_rel": ref_check},
            "repeats": repeats, "rows": rows, "summary": summary, "summary_lines": lines}
     md = [f"# Work-precision: {sc.name}", "",
-          f"Reference: {refs[0].name} ({ref_runs[0].settings}), final {key} = {ref:.15g}"
+          f"Reference: {refs[0].name} ({_settings_text(ref_runs[0].settings)}), "
+          f"final {key} = {ref:.15g}"
           + (f"; {refs[1].name} agrees to {ref_check:.1e} relative" if ref_check is not None
              else ""), "", *[f"- {x}" for x in lines], "",
           "| solver | method | setting | rel. error | energy residual [J] | median wall [s] | "
@@ -173,10 +188,11 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
     for r in rows:
         knob = r["settings"].get("rtol") if "rtol" in r["settings"] and r["method"] in (
             "dop853", "dopri5", "rk23", "ode23") else r["settings"].get("dt")
-        md.append(f"| {r['solver']} | {r['method']} | {knob} | "
-                  f"{'—' if r['rel_error'] is None else format(r['rel_error'], '.2e')} | "
-                  f"{'—' if r['energy_residual'] is None else format(r['energy_residual'], '.2e')} | "
-                  f"{r['wall_s']:.4g} | {r['compile_s'] or '—'} | {r['steps']} |")
+        err, er = r["rel_error"], r["energy_residual"]
+        md.append(f"| {r['solver']} | {r['method']} | {fmt_value(knob)} | "
+                  f"{'—' if err is None else format(err, '.2e')} | "
+                  f"{'—' if er is None else format(er, '.2e')} | {r['wall_s']:.4g} | "
+                  f"{fmt_value(r['compile_s'], 3) if r['compile_s'] else '—'} | {r['steps']} |")
     md += ["", "![work-precision](work_precision.png)"]
     write_text(out_dir / "report.md", "\n".join(md) + "\n")
     write_json(out_dir / "bench.json", obj)
@@ -184,10 +200,12 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
     return obj
 
 
+def _settings_text(settings):
+    return ", ".join(f"{k}={fmt_value(v)}" for k, v in settings.items() if v is not None)
+
+
 def _plot(path, rows, scene, key):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = plot_style()
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for (s, m) in dict.fromkeys((r["solver"], r["method"]) for r in rows):
         pts = [(r["wall_s"], r["rel_error"]) for r in rows
@@ -202,6 +220,11 @@ def _plot(path, rows, scene, key):
     ax.set_title(f"work-precision: {scene}")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
+    # log axes spanning less than a decade get minor labels that overlap: major decades only,
+    # and plain numbers where the span is short
+    from matplotlib.ticker import LogLocator, NullFormatter
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_locator(LogLocator(base=10, numticks=8))
+        axis.set_minor_formatter(NullFormatter())
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)

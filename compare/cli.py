@@ -79,55 +79,150 @@ def _positive(name):
     return conv
 
 
+def _positive_int(name):
+    def conv(text):
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a whole number, got {text!r}") \
+                from None
+        if v < 1:
+            raise argparse.ArgumentTypeError(f"{name} must be at least 1, got {text!r}")
+        return v
+    return conv
+
+
+def check_out(path):
+    """`--out` must name a folder or a place where one can be made; checked before anything
+    runs (BadInput, one line). Nothing is created here."""
+    p = os.path.abspath(path)
+    if os.path.exists(p) and not os.path.isdir(p):
+        raise BadInput(f"--out {path}: exists and is not a folder")
+    parent = p
+    while not os.path.exists(parent):
+        parent = os.path.dirname(parent)
+    if not os.path.isdir(parent):
+        raise BadInput(f"--out {path}: {parent} is not a folder")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise BadInput(f"--out {path}: no permission to write in {parent}")
+
+
+def make_out(path):
+    """Create the output folder after every other check passed; a system that refuses
+    (/proc, a read-only mount) is bad input, one line."""
+    check_out(path)
+    try:
+        os.makedirs(path, exist_ok=True)
+        probe = os.path.join(path, f".xval-write-test-{os.getpid()}")
+        with open(probe, "w"):
+            pass
+        os.unlink(probe)
+    except OSError as e:
+        raise BadInput(f"--out {path}: cannot write there ({e.strerror})") from None
+
+
+def _budget_options(sp):
+    sp.add_argument("--max-output-gib", type=_positive("--max-output-gib"), metavar="GIB",
+                    help="refuse to start when the output (samples × channels × solvers × 8 "
+                         "bytes) would exceed GIB (default 2)")
+    sp.add_argument("--max-steps", type=_positive("--max-steps"), metavar="N",
+                    help="refuse to start a fixed-step run of more than N steps (t_end / dt; "
+                         "default 1e9)")
+
+
 def build_parser():
-    p = _Parser(prog="xval", description="Cross-validate multibody dynamics solvers.")
-    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    sub.add_parser("list", help="scenes and solvers")
-    sp = sub.add_parser("show", help="parameters of a scene")
-    sp.add_argument("scene")
-    sp.add_argument("--json", action="store_true")
+    p = _Parser(prog="xval", description="Cross-validate multibody dynamics solvers: the same "
+                "scene through our implementations of published methods, Exudyn and MuJoCo, "
+                "compared in numbers, plots and rerun recordings.",
+                epilog="Exit status: 0 finished, 1 a verdict is disagree under --strict, 2 bad "
+                       "input (one line, nothing run), 3 a solver crashed.")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser,
+                           metavar="COMMAND")
+    sub.add_parser("list", help="list scenes and solvers",
+                   description="List every scene with its solvers, and every solver.")
+    sp = sub.add_parser("show", help="parameters of a scene: default, unit, admissible range",
+                        description="Every parameter of a scene with default, unit and "
+                                    "admissible range, its channels and the papers it comes "
+                                    "from.")
+    sp.add_argument("scene", help="scene name (see `xval list`)")
+    sp.add_argument("--json", action="store_true", help="print one JSON object instead")
 
     def common(sp):
-        sp.add_argument("scene")
-        sp.add_argument("--solver", action="append", default=[])
-        sp.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
-        sp.add_argument("--json", action="store_true")
+        sp.add_argument("scene", help="scene name (see `xval list`)")
+        sp.add_argument("--solver", action="append", default=[], metavar="NAME",
+                        help="run only this solver (repeatable; default: every solver of the "
+                             "scene)")
+        sp.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                        help="override a scene parameter (repeatable; `xval show SCENE` "
+                             "lists them), e.g. --set torque=3.2")
+        sp.add_argument("--json", action="store_true",
+                        help="print one JSON object on standard output (logs go to "
+                             "standard error)")
 
-    sp = sub.add_parser("run", help="simulate a scene with several solvers and compare them")
+    out_help = "output folder (default: logs)"
+    sp = sub.add_parser("run", help="simulate a scene with several solvers and compare them",
+                        description="Simulate a time-domain scene with each solver, compare "
+                                    "the trajectories pairwise, record (rerun .rrd) and report "
+                                    "(Markdown with plots).")
     common(sp)
     g = sp.add_mutually_exclusive_group()
-    g.add_argument("--dt", type=_positive("--dt"))
-    g.add_argument("--rtol", type=_positive("--rtol"))
-    sp.add_argument("--integrator")
-    sp.add_argument("--out", default="logs")
+    g.add_argument("--dt", type=_positive("--dt"), metavar="S",
+                   help="fixed step in seconds (an adaptive default switches to its fixed-step "
+                        "method, e.g. rk4)")
+    g.add_argument("--rtol", type=_positive("--rtol"),
+                   help="relative tolerance for the error-controlled integrators (fixed-step "
+                        "solvers keep their step and say so)")
+    sp.add_argument("--integrator", metavar="NAME",
+                    help="integrator of every chosen solver (each must offer it)")
+    sp.add_argument("--out", default="logs", help=out_help)
     sp.add_argument("--strict", action="store_true", help="exit 1 when a verdict is disagree")
     sp.add_argument("--no-record", action="store_true", help="skip the .rrd recording")
     sp.add_argument("--timeout", type=_positive("--timeout"), metavar="S",
                     help="wall-clock limit per solver run: status timeout")
+    _budget_options(sp)
 
-    sp = sub.add_parser("modes", help="natural frequencies")
+    sp = sub.add_parser("modes", help="natural frequencies, Campbell diagram, critical speeds",
+                        description="Natural frequencies from every solver that linearises, "
+                                    "matched mode by mode; Campbell diagram for rotor scenes.")
     common(sp)
-    sp.add_argument("--out", default="logs")
-    sp.add_argument("--strict", action="store_true")
+    sp.add_argument("--out", default="logs", help=out_help)
+    sp.add_argument("--strict", action="store_true", help="exit 1 when a verdict is disagree")
 
-    sp = sub.add_parser("campaign", help="run a campaign file (default: built-in) into a report")
-    sp.add_argument("file", nargs="?")
-    sp.add_argument("--executor", choices=("local", "dask"), default="local")
-    sp.add_argument("--scheduler")
-    sp.add_argument("--workers", type=int, default=None)
-    sp.add_argument("--out", default="logs")
-    sp.add_argument("--json", action="store_true")
+    sp = sub.add_parser("campaign", help="run a campaign file (default: built-in) into a report",
+                        description="Run every case of a campaign file (JSON or TOML; "
+                                    "default: the built-in campaign) as parallel jobs, reuse "
+                                    "results whose inputs did not change, and write one "
+                                    "report.")
+    sp.add_argument("file", nargs="?", help="campaign file, .json or .toml (default: built-in)")
+    sp.add_argument("--executor", choices=("local", "dask"), default="local",
+                    help="local process pool (default) or Dask distributed")
+    sp.add_argument("--scheduler", metavar="ADDR",
+                    help="address of a running Dask scheduler, e.g. tcp://host:8786 (with "
+                         "--executor dask; default: a LocalCluster on this machine)")
+    sp.add_argument("--workers", type=_positive_int("--workers"), default=None, metavar="N",
+                    help="parallel jobs (default 2)")
+    sp.add_argument("--out", default="logs", help=out_help)
+    sp.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     sp.add_argument("--timeout", type=_positive("--timeout"), metavar="S",
                     help="wall-clock limit per job unless its case sets timeout_s")
+    sp.add_argument("--verbose", action="store_true",
+                    help="show each job's engine messages (banners, warnings) as it finishes; "
+                         "they are always in the job's log and the report")
+    _budget_options(sp)
 
-    sp = sub.add_parser("bench", help="speed/accuracy (work-precision) sweep")
+    sp = sub.add_parser("bench", help="speed/accuracy (work-precision) sweep",
+                        description="Work-precision: each solver along its accuracy knob (step "
+                                    "or tolerance), error of the key channel's final value "
+                                    "against a tight reference, median wall time.")
     common(sp)
-    sp.add_argument("--repeats", type=int, default=3)
+    sp.add_argument("--repeats", type=_positive_int("--repeats"), default=3, metavar="N",
+                    help="timed runs per rung; the median counts (default 3)")
     sp.add_argument("--vary", metavar="NAME=V1,V2,...",
                     help="trade a model parameter instead of the step: each solver's default "
                          "settings at each value, errors against the reference at the --set "
                          "value (e.g. --vary stiffness=1e5,1e6)")
-    sp.add_argument("--out", default="logs")
+    sp.add_argument("--out", default="logs", help=out_help)
+    _budget_options(sp)
     return p
 
 
@@ -146,12 +241,17 @@ def cmd_show(args):
     from .scenes import get_scene
     sc = get_scene(args.scene)
     if args.json:
+        from .citations import papers_in
         emit_json({"scene": sc.name, "title": sc.title, "kind": sc.kind,
+                   "sources": papers_in(sc.source) or [sc.source],
                    "channels": list(sc.channels), "tolerances": sc.tolerances,
                    "params": [{"name": p.name, "default": p.default, "unit": p.unit,
                                "range": p.describe_range(), "doc": p.doc} for p in sc.params]})
         return 0
-    print(f"{sc.name}: {sc.title}\n  source: {sc.source}")
+    from .citations import papers_in
+    print(f"{sc.name}: {sc.title}")
+    for ref in papers_in(sc.source) or [sc.source]:
+        print(f"  source: {ref}")
     for p in sc.params:
         d = ",".join(f"{x:g}" for x in p.default) if p.kind == "vector" else p.default
         print(f"  {p.name:16s} = {str(d):14s} {p.unit:9s} {p.describe_range():18s} {p.doc}")
@@ -161,16 +261,24 @@ def cmd_show(args):
 
 
 def cmd_run(args):
+    from . import budget, runner, solvers
     from .scenes import get_scene
-    from . import solvers, runner
     sc = get_scene(args.scene)
     if sc.kind != "time":
         raise BadInput(f"scene {sc.name!r} is a frequency scene: use `xval modes {sc.name}`")
-    params = sc.resolve(parse_sets(args.set))
+    check_out(args.out)
+    overrides = parse_sets(args.set)
     chosen = solvers.pick(sc, args.solver)
+    # the size of the work before the grid is built (resolve allocates it)
+    budget.check_output(sc, overrides, len(chosen), args.max_output_gib)
+    params = sc.resolve(overrides)
     # settings are resolved (and checked) for every solver before anything runs
-    settings = {s.name: solvers.settings_for(s, sc.name, args.dt, args.rtol, args.integrator)
+    settings = {s.name: solvers.settings_for(s, sc.name, args.dt, args.rtol, args.integrator,
+                                             t_out=sc.output_grid(params))
                 for s in chosen}
+    for s in chosen:
+        budget.check_steps(s.name, s.leaf(sc.name), params, settings[s.name], args.max_steps)
+    make_out(args.out)
     if args.rtol is not None:
         for s in chosen:
             if not getattr(s.leaf(sc.name), "ADAPTIVE", ()):
@@ -204,6 +312,7 @@ def _finish(args, obj, results, comparisons):
 
 def cmd_modes(args):
     from .modes import run_modes
+    check_out(args.out)
     with stdout_to_stderr():
         obj, results, comparisons = run_modes(args.scene, args.solver, parse_sets(args.set),
                                               args.out, log=_log)
@@ -211,25 +320,39 @@ def cmd_modes(args):
 
 
 def cmd_campaign(args):
-    from .campaign import run_campaign
-    with stdout_to_stderr():
+    from .campaign import load_campaign, plan, run_campaign
+    from .progress import progress_view
+    check_out(args.out)
+    if args.scheduler and args.executor != "dask":
+        raise BadInput("--scheduler needs --executor dask")
+    # everything is validated before the output folder is made or anything runs
+    plan(load_campaign(args.file), args.file or "built-in campaign", args.timeout,
+         args.max_output_gib, args.max_steps)
+    make_out(args.out)
+    with stdout_to_stderr(), progress_view() as view:
         summary = run_campaign(args.file, args.out, executor=args.executor,
-                               scheduler=args.scheduler, workers=args.workers, log=_log,
-                               timeout_s=args.timeout)
+                               scheduler=args.scheduler, workers=args.workers,
+                               timeout_s=args.timeout, verbose=args.verbose,
+                               max_output_gib=args.max_output_gib, max_steps=args.max_steps,
+                               view=view)
     if args.json:
         emit_json(summary)
     else:
-        print(f"campaign: {summary['n_jobs']} jobs, {summary['n_skipped']} already done, "
-              f"{summary['n_failed']} with a failed solver")
+        print(f"campaign {summary['name']}: {summary['n_jobs']} jobs ({summary['n_run']} run, "
+              f"{summary['n_reused']} reused), {summary['n_failed']} cases with a failed "
+              f"solver, {summary['n_crashed']} crashed jobs; {summary['wall_s']:.1f} s")
         print(f"report: {summary['report']}")
     return 3 if summary["n_crashed"] else 0
 
 
 def cmd_bench(args):
     from .bench import run_bench
+    check_out(args.out)
     with stdout_to_stderr():
         obj = run_bench(args.scene, args.solver, parse_sets(args.set), args.out,
-                        repeats=args.repeats, log=_log, vary=args.vary)
+                        repeats=args.repeats, log=_log, vary=args.vary,
+                        max_output_gib=args.max_output_gib, max_steps=args.max_steps,
+                        make_out=make_out)
     if args.json:
         emit_json(obj)
     else:
@@ -245,6 +368,7 @@ COMMANDS = {"list": cmd_list, "show": cmd_show, "run": cmd_run, "modes": cmd_mod
 
 def main(argv=None):
     import warnings
+
     from numba.core.errors import NumbaPerformanceWarning
     warnings.simplefilter("ignore", NumbaPerformanceWarning)   # hints for us, noise for users
     try:

@@ -5,6 +5,7 @@ The physics is asserted elsewhere; here the numbers that count are the two engin
 """
 import json
 
+import pytest
 from conftest import xval
 
 
@@ -40,7 +41,7 @@ def test_campaign_runs_resumes_and_stops_jobs_at_their_time_limit(tmp_path):
     rc, so, se = xval("campaign", camp, "--out", out, "--json")
     assert rc == 0, se
     s = json.loads(so)
-    assert s["n_skipped"] == 2
+    assert s["n_skipped"] == 2, (s["reused"], se)
     assert json.loads(so)["cases"][0]["runs"][0]["wall_s"] == rotor["runs"][0]["wall_s"]
 
 
@@ -49,3 +50,34 @@ def test_campaign_bad_timeout_is_one_line_exit_2(tmp_path):
     rc, so, se = xval("campaign", camp, "--out", str(tmp_path / "logs"))
     assert rc == 2 and "timeout_s" in se and len(se.strip().splitlines()) == 1
     assert not (tmp_path / "logs").exists()
+
+
+def _final_omega(summary, case="spin"):
+    runs = next(c for c in summary["cases"] if c["case"] == case)["runs"]
+    return {r["solver"]: r["final"]["omega_norm"] for r in runs}
+
+
+def test_resume_reruns_a_job_whose_inputs_changed_and_reuses_it_when_they_come_back(tmp_path):
+    """The stale-resume defect: a job counted as done when a file with its case and solver name
+    existed, so torque 3.0 was reported with the trajectories of torque 1.5. Results are now
+    stored under the digest of their inputs. Over 1 s the rotor barely tilts, so |ω| is close
+    to the free ramp M·t/I_p (I_p = m R²/2 = 0.15625 kg·m²): 9.6 and 19.2 rad/s; measured
+    9.5908 and 19.1735 (deviation 1.0e-3 and 1.4e-3 relative, the tilt's share)."""
+    out = str(tmp_path / "logs")
+    finals = []
+    for torque in (1.5, 3.0, 1.5):
+        camp = _campaign(tmp_path, [{"name": "spin", "scene": "rotor-spinup",
+                                     "set": {"torque": torque, "t_end": 1},
+                                     "solvers": ["euler-vector", "quaternion"]}])
+        rc, so, se = xval("campaign", camp, "--out", out, "--json")
+        assert rc == 0, se
+        s = json.loads(so)
+        finals.append((s["n_reused"], _final_omega(s)))
+        for w in finals[-1][1].values():
+            assert w == pytest.approx(torque * 1.0 / (5 * 0.25 ** 2 / 2), rel=5e-3)
+    assert [n for n, _ in finals] == [0, 0, 2]          # changed: rerun; back: reused
+    assert finals[2][1] == finals[0][1]
+    case = next(c for c in s["cases"] if c["case"] == "spin")
+    assert sorted(case["reused"]) == ["euler-vector", "quaternion"]
+    assert "Reused stored results for spin" in (tmp_path / "logs" / "campaign" / "t" /
+                                                 "report.md").read_text()

@@ -12,6 +12,9 @@ from .trajectory import Modes, Trajectory
 
 @dataclass(frozen=True)
 class Comparison:
+    """One pair, one channel. The verdict weighs the deviation against what explains it: the
+    two solvers' own error estimates (from tighter reruns) plus the scene's modelling allowance.
+    `tolerance` is that bound relative to the scale."""
     a: str
     b: str
     channel: str
@@ -19,20 +22,26 @@ class Comparison:
     rms: float
     max_rel: float          # max |Δ| / scale
     scale: float            # the channel's scale: max |value| over both runs
-    tolerance: float        # relative to scale
+    tolerance: float        # (error_estimate + allowance) / scale: the bound that decided
     verdict: str            # agree | disagree | skipped
     decided_by: str         # the number that decided, in words
+    deviation: float = np.nan        # max |Δ| (SI), = max_abs
+    error_estimate: float | None = None   # max (err_a + err_b) over the run (SI), if estimated
+    allowance: float = np.nan        # the scene's modelling allowance (SI)
 
     def as_dict(self):
         return asdict(self)
 
 
 def deviation(a: Trajectory, b: Trajectory, channel: str,
-              tolerance: float | tuple) -> Comparison:
-    """Deviation of two trajectories on their common output grid, with the verdict."""
+              allowance: float | tuple) -> Comparison:
+    """Deviation of two trajectories on their common output grid, with the verdict.
+
+    `allowance`: relative to the channel's scale, or ("abs", bound) in SI units. The solvers'
+    own errors come from `Trajectory.errors` where estimated."""
     if a.status != "ok" or b.status != "ok":
         why = ", ".join(f"{t.solver} {t.status}" for t in (a, b) if t.status != "ok")
-        tol = tolerance[1] if isinstance(tolerance, tuple) else tolerance
+        tol = allowance[1] if isinstance(allowance, tuple) else allowance
         return Comparison(a.solver, b.solver, channel, np.nan, np.nan, np.nan, np.nan,
                           tol, "skipped", f"not compared: {why}")
     if len(a.t) != len(b.t) or np.max(np.abs(a.t - b.t)) > 1e-9 * max(a.t[-1], 1.0):
@@ -42,14 +51,17 @@ def deviation(a: Trajectory, b: Trajectory, channel: str,
     scale = float(max(np.max(np.abs(x)), np.max(np.abs(y)), 1e-300))
     max_abs = float(np.max(d))
     rel = max_abs / scale
-    if isinstance(tolerance, tuple):          # ("abs", bound): an absolute bound in SI units
-        tolerance = tolerance[1] / scale
-    verdict = "agree" if rel <= tolerance else "disagree"
+    allow = allowance[1] if isinstance(allowance, tuple) else allowance * scale
+    ea, eb = a.errors.get(channel), b.errors.get(channel)
+    err = float(np.nanmax(ea + eb)) if ea is not None and eb is not None else None
+    bound = allow + (err or 0.0)
+    verdict = "agree" if max_abs <= bound else "disagree"
+    why = (f"max|Δ| = {max_abs:.2e} (at t = {a.t[np.argmax(d)]:.4g} s) "
+           f"{'≤' if verdict == 'agree' else '>'} "
+           + (f"error estimates {err:.1e} + allowance {allow:.1e}" if err is not None
+              else f"allowance {allow:.1e} (no error estimate)"))
     return Comparison(a.solver, b.solver, channel, max_abs, float(np.sqrt(np.mean(d**2))), rel,
-                      scale, tolerance, verdict,
-                      f"max|Δ| = {max_abs:.2e} = {rel:.2e} of scale "
-                      f"{'≤' if verdict == 'agree' else '>'} {tolerance:.1e} "
-                      f"(at t = {a.t[np.argmax(d)]:.4g} s)")
+                      scale, bound / scale, verdict, why, max_abs, err, allow)
 
 
 def pairwise(trajectories: list[Trajectory], tolerances: dict) -> list[Comparison]:

@@ -61,16 +61,19 @@ def new_run_dir(out: str | Path, scene_name: str) -> Path:
 
 def run_scene(scene: Scene, params: dict, chosen: list[Solver], settings_for: Callable,
               out_dir: str | Path, record: bool = True, report: bool = True,
-              log: Callable | None = None, timeout_s: float | None = None) -> RunResult:
+              log: Callable | None = None, timeout_s: float | None = None,
+              estimate_errors: bool = True) -> RunResult:
     """Simulate `scene` with each solver in `chosen`; `settings_for(solver)` gives settings;
-    `timeout_s` bounds each solver's wall time."""
+    `timeout_s` bounds each solver's wall time; `estimate_errors` reruns each solver tighter
+    (where the scene allows) so the verdicts weigh its own error."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     trajectories, files = [], {}
     for s in chosen:
         if log:
             log(f"{scene.name}: running {s.name} …")
-        tr = solvers.simulate(scene, s, params, settings_for(s), timeout_s)
+        tr = solvers.simulate(scene, s, params, settings_for(s), timeout_s,
+                              estimate_errors and scene.error_estimate)
         files[s.name] = tr.save(out_dir / f"{s.name}.npz")
         if log:
             log(f"{scene.name}: {s.name} {tr.status} in {tr.wall_s:.3g} s"

@@ -211,11 +211,50 @@ def _time_limit(seconds):
         signal.signal(signal.SIGALRM, old)
 
 
+def tighter_settings(leaf: ModuleType, settings: dict) -> tuple[dict | None, float, str]:
+    """Settings for a solver's own error estimate and the factor that turns |y − y_tight| into
+    the error of the run: a tolerance 100× tighter (factor 1: the tight run is exact by
+    comparison), else half the step (factor 2: an order-p method's error is 2^p/(2^p − 1) ≤ 2
+    times that difference). None where neither knob exists (a stability-bound explicit step)."""
+    s = dict(settings)
+    if s.get("integrator") in getattr(leaf, "ADAPTIVE", ()) and \
+            isinstance(s.get("rtol"), (int, float)):
+        s["rtol"] = s["rtol"] / 100
+        if isinstance(s.get("atol"), (int, float)):
+            s["atol"] = s["atol"] / 100
+        return s, 1.0, f"rtol {s['rtol']:g}"
+    dt = s.get("dt")
+    if dt == "auto":
+        dt = getattr(leaf, "AUTO_DT", {}).get(s.get("integrator"))
+    if isinstance(dt, (int, float)) and dt > 0:
+        s["dt"] = dt / 2
+        return s, 2.0, f"dt {dt / 2:g}"
+    return None, 0.0, "no accuracy knob"
+
+
 def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
-             timeout_s: float | None = None) -> Trajectory:
+             timeout_s: float | None = None, estimate_error: bool = False) -> Trajectory:
     """Run one solver on one scene; always returns a Trajectory (status tells what happened).
     `timeout_s` bounds the wall time of the run (compile included): status "timeout". Settings
-    were checked before (`settings_for`); anything a leaf raises now is recorded as `error`."""
+    were checked before (`settings_for`); anything a leaf raises now is recorded as `error`.
+    `estimate_error`: rerun at tighter settings and keep factor·|Δ| per channel as the run's
+    own numerical error (`Trajectory.errors`), which the verdicts weigh."""
+    tr = _simulate(scene, solver, params, settings, timeout_s)
+    if estimate_error and tr.status == "ok":
+        tight, factor, how = tighter_settings(solver.leaf(scene), settings)
+        tr.stats["error_estimate_by"] = how
+        if tight is not None:
+            ref = _simulate(scene, solver, params, tight, timeout_s)
+            tr.stats["error_estimate_s"] = ref.wall_s
+            if ref.status == "ok":
+                tr.errors = {c: factor * np.abs(tr.channels[c] - ref.channels[c])
+                             for c in scene.channels}
+            else:
+                tr.stats["error_estimate_by"] = f"{how}: {ref.status} ({ref.reason})"
+    return tr
+
+
+def _simulate(scene, solver, params, settings, timeout_s):
     t_out = scene.output_grid(params)
     nan = {c: np.full(len(t_out), np.nan) for c in scene.channels}
     base = dict(scene=scene.name, solver=solver.name, t=t_out, versions=versions(solver),

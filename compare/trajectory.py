@@ -22,6 +22,8 @@ class Trajectory:
     versions: dict = field(default_factory=dict)
     invariants: dict = field(default_factory=dict)   # conserved quantity -> max relative drift
     extra: dict = field(default_factory=dict)        # auxiliary arrays (e.g. orientation)
+    # the solver's own numerical error per channel on t (from a tighter rerun), where estimated
+    errors: dict = field(default_factory=dict)
 
     def final(self):
         return {k: float(v[-1]) for k, v in self.channels.items()}
@@ -32,9 +34,11 @@ class Trajectory:
                                               "invariants")}
 
     def save(self, path):
-        """NumPy .npz: `t`, one array per channel, `extra.<name>` arrays, `meta` (JSON)."""
+        """NumPy .npz: `t`, one array per channel, `extra.<name>` and `error.<channel>` arrays,
+        `meta` (JSON)."""
         arrays = {"t": self.t, **self.channels,
                   **{f"extra.{k}": v for k, v in self.extra.items()},
+                  **{f"error.{k}": v for k, v in self.errors.items()},
                   "meta": np.array(json.dumps(self.meta(), default=_py))}
         with atomic_path(path) as tmp:
             with open(tmp, "wb") as f:
@@ -46,9 +50,10 @@ class Trajectory:
         with np.load(path, allow_pickle=False) as z:
             meta = json.loads(str(z["meta"]))
             channels = {k: z[k] for k in z.files if k not in ("t", "meta")
-                        and not k.startswith("extra.")}
+                        and not k.startswith(("extra.", "error."))}
             extra = {k[6:]: z[k] for k in z.files if k.startswith("extra.")}
-            return cls(t=z["t"], channels=channels, extra=extra, **meta)
+            errors = {k[6:]: z[k] for k in z.files if k.startswith("error.")}
+            return cls(t=z["t"], channels=channels, extra=extra, errors=errors, **meta)
 
 
 @dataclass

@@ -39,7 +39,9 @@ class Scene:
     # solver name -> leaf module serving this scene (the registry line of each solver)
     leaves: dict = field(default_factory=dict)
     channels: tuple[str, ...] = ()
-    # per-channel verdict tolerance, relative to the channel's scale (max |value| of the pair)
+    # per-channel modelling allowance, relative to the channel's scale (max |value| of the
+    # pair) or ("abs", SI): what the models may differ by beyond the solvers' own errors —
+    # each set from a measured deviation, with the reason, in the scene file
     tolerances: dict = field(default_factory=dict)
     key_channel: str = ""           # the channel whose final value the benchmark measures
     energy_channel: str | None = "energy_balance"
@@ -53,6 +55,9 @@ class Scene:
     # closed forms drawn with a channel: channel -> (trajectory extra key, label); plotted in
     # the report and recorded as `<channel>/<label>` next to the solvers
     analytic: dict = field(default_factory=dict)
+    # verdicts weigh each solver's own error from a tighter rerun (off where a rerun costs
+    # more than the scene can pay; the allowances then carry the verdict alone)
+    error_estimate: bool = True
     # the bench's reference: the first runs tightest, the second confirms it (names only)
     reference_solvers: tuple[str, ...] = ()
     check: Callable | None = None   # cross-parameter physical checks, raises BadInput

@@ -120,8 +120,14 @@ SPINUP = Scene(
     ),
     channels=("omega_norm", "spin_rate", "tilt", "work", "kinetic", "potential",
               "energy_balance"),
-    tolerances={"omega_norm": 1e-4, "tilt": 1e-4, "spin_rate": 1e-4, "work": 1e-4,
-                "kinetic": 1e-4},
+    # Modelling allowances (relative): the four solvers model one system with one spring law,
+    # so only the error estimates' own inaccuracy is allowed for. Measured (`xval run
+    # rotor-spinup`, 1.5 and 3.2 N·m): every pair's max|Δ| lies within the two solvers' error
+    # estimates except the custom pair, by at most 2.5e-12 of scale (kinetic, 1.5 N·m; the
+    # rtol/100 rerun is itself ~1e-2 of the estimate off); engines deviate 1e-9…4e-7 of scale,
+    # all within their estimates.
+    tolerances={c: 1e-10 for c in ("omega_norm", "spin_rate", "tilt", "work", "kinetic",
+                                   "potential")},
     key_channel="omega_norm",
     energy_scale_channels=("kinetic", "potential", "work"),
     reference_solvers=("euler-vector", "quaternion"),

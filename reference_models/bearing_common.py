@@ -83,11 +83,12 @@ def result(params: dict, t_out: np.ndarray, r_cm, v_cm, quat, omega, motor_work,
         q = quat[:k] / np.linalg.norm(quat[:k], axis=1, keepdims=True)
         ch = br.channels(params, t_out[:k], r_cm[:k], v_cm[:k], q, omega[:k],
                          motor_work[:k], dissipated[:k])
-        if status == "ok":
-            blow = energy_blowup(ch)
-            if blow is not None:
-                status, t_fail = "diverged", float(t_out[blow[0]])
-                reason = blow[1] + (stability_note(params, h) if h else "")
+        # also for a run already stopped: its last samples before the stop may be garbage
+        blow = energy_blowup(ch)
+        if blow is not None and (t_fail is None or t_out[blow[0]] < t_fail):
+            t_fail = float(t_out[blow[0]])
+            reason = blow[1] + (stability_note(params, h) if h else "")
+            status = "diverged"
         for name in filled:
             filled[name][:k] = ch[name]
         orient[:k] = q

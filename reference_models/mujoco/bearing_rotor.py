@@ -30,11 +30,14 @@ on the output grid. Each ends the run as `diverged` with t_fail and the reason.
 """
 from __future__ import annotations
 
+import ctypes
 import math
 import time
 
+import llvmlite.binding as llvm
 import mujoco
 import numpy as np
+from llvmlite import ir
 from numba import carray, cfunc, njit, types
 from numba.extending import intrinsic
 
@@ -98,38 +101,50 @@ def _python_callback(m, d):
 
 
 # --------------------------------------------------------------------- native callback
+# The cfunc reaches the arrays of the MjData being stepped through _ADDR; it finds _ADDR through
+# an external symbol resolved when the machine code is loaded (llvmlite add_symbol), not through
+# an address baked into the code, so numba can cache the compiled callback on disk.
 _ADDR = np.zeros(6, dtype=np.int64)     # qpos, qvel, qfrc_passive, ctrl, userdata, len(userdata)
+_ADDR_SYMBOL = "xval_bearing_rotor_mjdata_table"
+_ADDR_CELL = ctypes.c_int64(_ADDR.ctypes.data)     # the array is never rebound
 _NATIVE = {"cb": None, "error": None}
 
 
+@intrinsic
+def _table(typingctx):
+    def codegen(context, builder, signature, args):
+        gv = builder.module.globals.get(_ADDR_SYMBOL)
+        if gv is None:
+            gv = ir.GlobalVariable(builder.module, ir.IntType(64), name=_ADDR_SYMBOL)
+            gv.linkage = "external"
+        return builder.load(gv)
+    return types.int64(), codegen
+
+
+@intrinsic
+def _ptr(typingctx, addr):
+    def codegen(context, builder, signature, args):
+        return builder.inttoptr(args[0], context.get_value_type(types.CPointer(types.float64)))
+    return types.CPointer(types.float64)(addr), codegen
+
+
+@intrinsic
+def _iptr(typingctx, addr):
+    def codegen(context, builder, signature, args):
+        return builder.inttoptr(args[0], context.get_value_type(types.CPointer(types.int64)))
+    return types.CPointer(types.int64)(addr), codegen
+
+
 def _native_callback():
-    """The cfunc (compiled once per process), or None with _NATIVE['error'] set."""
+    """The cfunc (compiled once, cached on disk), or None with _NATIVE['error'] set."""
     if _NATIVE["cb"] is not None or _NATIVE["error"] is not None:
         return _NATIVE["cb"]
     try:
-        @intrinsic
-        def _ptr(typingctx, addr):
-            sig = types.CPointer(types.float64)(addr)
+        llvm.add_symbol(_ADDR_SYMBOL, ctypes.addressof(_ADDR_CELL))
 
-            def codegen(context, builder, signature, args):
-                return builder.inttoptr(args[0],
-                                        context.get_value_type(types.CPointer(types.float64)))
-            return sig, codegen
-
-        @intrinsic
-        def _iptr(typingctx, addr):
-            sig = types.CPointer(types.int64)(addr)
-
-            def codegen(context, builder, signature, args):
-                return builder.inttoptr(args[0],
-                                        context.get_value_type(types.CPointer(types.int64)))
-            return sig, codegen
-
-        table = int(_ADDR.ctypes.data)      # fixed for the process: the array is never rebound
-
-        @cfunc(types.void(types.voidptr, types.voidptr), nopython=True)
+        @cfunc(types.void(types.voidptr, types.voidptr), nopython=True, cache=True)
         def _cb(m, d):
-            a = carray(_iptr(table), (6,))
+            a = carray(_iptr(_table()), (6,))
             _passive(carray(_ptr(a[0]), (7,)), carray(_ptr(a[1]), (6,)),
                      carray(_ptr(a[2]), (6,)), carray(_ptr(a[3]), (2,)),
                      carray(_ptr(a[4]), (a[5],)))

@@ -1,7 +1,8 @@
 """MuJoCo reference model of the heliogyro blade deployment (scene `sail-deploy`, seed 004).
 
 Inertial frame, one blade (symmetric deployment: the hub carries J_hub/2, channels report both
-blades; see reference_models/sail_common.py for the shared scene definition and release law).
+blades; the scene physics — thread, payout, release law, breakpoints, channels — is
+compare/physics/sail.py).
 
 - Hub: a body on a hinge about world z (inertia J_hub/2 about z) with a site Q at (L_c, 0, r).
 - Nodes: n point-mass bodies, each on three world-aligned slide joints (body origin at Q in the
@@ -46,8 +47,9 @@ import time as _time
 import mujoco
 import numpy as np
 
-from ..sail_common import (channels, events, formula18, merge_settings, scene,
-                           stable_dt_explicit, t_full)
+from compare.physics import sail as phys
+
+from ..sail_common import settings_and_grid, stable_dt_explicit
 
 DEFAULT_SETTINGS = {"integrator": "euler", "dt": "auto", "stretch_limit": 0.5, "planar": True,
                     "stored": "hub"}
@@ -63,9 +65,9 @@ def _f(x):
 
 def build_xml(params, dt, integrator, planar=False, held=True):
     jac = "sparse" if held else "dense"
-    p, n, l0, m, _ = scene(params)
-    Lc, r = p["L_c"], p["r"]
-    Jh = 0.5 * p["J_hub"]
+    n, l0, m, _ = phys.thread(params)
+    Lc, r = params["L_c"], params["r"]
+    Jh = 0.5 * params["J_hub"]
     axes = ("1 0 0", "0 1 0") if planar else ("1 0 0", "0 1 0", "0 0 1")
     bodies = []
     for j in range(n):
@@ -83,8 +85,10 @@ def build_xml(params, dt, integrator, planar=False, held=True):
             f'actlimited="false"/>' for j in range(n)]
     eqs = [f'<connect name="e{j}" site1="n{j}" site2="Q" solref="{_f(2 * dt)} 1"/>'
            for j in range(n)] if held else []
+    integ = {"euler": "Euler", "rk4": "RK4"}[integrator]
     return f"""<mujoco model="sail">
-  <option timestep="{_f(dt)}" integrator="{ {"euler": "Euler", "rk4": "RK4"}[integrator]}" gravity="0 0 0" jacobian="{jac}" solver="Newton">
+  <option timestep="{_f(dt)}" integrator="{integ}" gravity="0 0 0" jacobian="{jac}"
+          solver="Newton">
     <flag contact="disable" autoreset="disable"/>
   </option>
   <worldbody>
@@ -101,149 +105,169 @@ def build_xml(params, dt, integrator, planar=False, held=True):
 </mujoco>"""
 
 
-def simulate(params, t_out, settings=None):
-    s, t_out = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS, t_out)
-    p, n, l0, m, t_rel = scene(params)
-    dt = s["dt"]
-    if dt is None or dt == "auto":
-        dt = stable_dt_explicit(p, _FACTOR[s["integrator"]])
-    dt = float(dt)
-    if s["stored"] not in STORED:
-        raise ValueError(f"stored must be one of {STORED}")
-    held = s["stored"] == "equality"
-    planar = bool(s["planar"])
-    nd = 2 if planar else 3
-    model = mujoco.MjModel.from_xml_string(build_xml(p, dt, s["integrator"], planar, held))
-    data = mujoco.MjData(model)
-    Lc, r, c, d = p["L_c"], p["r"], p["stiffness"], p["damping"]
-    rw = r * p["omega_spool"]
-    hub_q = model.jnt_qposadr[model.joint("hub").id]
-    hub_v = model.jnt_dofadr[model.joint("hub").id]
-    qa = np.array([model.jnt_qposadr[model.joint(f"n{j}_0").id] for j in range(n)])
-    va = np.array([model.jnt_dofadr[model.joint(f"n{j}_0").id] for j in range(n)])
-    Q0 = np.array([Lc, 0.0, r])
-    hub_body = model.body("hub").id
+class _Sail:
+    """build (model, data, the initial state with node 0 released) / release / step /
+    observe."""
 
-    def hub_inertia(b):
+    def __init__(self, p: dict, s: dict, dt: float, n_out: int):
+        self.p, self.s, self.dt = p, s, dt
+        self.n, self.l0, self.m, self.t_rel = phys.thread(p)
+        self.held = s["stored"] == "equality"
+        self.nd = 2 if bool(s["planar"]) else 3
+        self.model = model = mujoco.MjModel.from_xml_string(
+            build_xml(p, dt, s["integrator"], bool(s["planar"]), self.held))
+        self.data = data = mujoco.MjData(model)
+        self.rw = p["r"] * p["omega_spool"]
+        self.hub_q = model.jnt_qposadr[model.joint("hub").id]
+        self.hub_v = model.jnt_dofadr[model.joint("hub").id]
+        self.qa = np.array([model.jnt_qposadr[model.joint(f"n{j}_0").id] for j in range(self.n)])
+        self.va = np.array([model.jnt_dofadr[model.joint(f"n{j}_0").id] for j in range(self.n)])
+        self.Q0 = np.array([p["L_c"], 0.0, p["r"]])
+        self.hub_body = model.body("hub").id
+        self.b = 0
+        self.steps = 0
+        self.work = {"W": 0.0, "rate": self.rw}    # spool work on one blade; payout speed
+        self.out = {"psi": np.full(n_out, np.nan), "omega": np.full(n_out, np.nan),
+                    "X": np.full((n_out, self.n, 3), np.nan),
+                    "V": np.full((n_out, self.n, 3), np.nan),
+                    "b": np.full(n_out, -1), "W": np.full(n_out, np.nan)}
+        # initial state: everything co-rotating with the hub, node 0 released at t = 0
+        data.qvel[self.hub_v] = p["Omega0"]
+        self.set_hub_inertia(self.hub_inertia(-1))
+        for j in range(self.n):
+            data.qvel[self.va[j] + 1] = p["Omega0"] * p["L_c"] if self.held else 0.0
+        self.release(0)
+        mujoco.mj_forward(model, data)
+
+    def hub_inertia(self, b: int) -> float:
         """Half the hub plus, with stored="hub", the thread still stored (nodes > b)."""
-        return 0.5 * p["J_hub"] + (0.0 if held else float(m[b + 1:].sum()) * Lc**2)
+        extra = 0.0 if self.held else float(self.m[b + 1:].sum()) * self.p["L_c"]**2
+        return 0.5 * self.p["J_hub"] + extra
 
-    def set_hub_inertia(J):
+    def set_hub_inertia(self, J: float) -> None:
         # MuJoCo 4.0 keeps the hinge's mass-matrix entry from mj_setConst: a new body_inertia
         # takes effect only after it (measured: d.M unchanged by mj_forward alone)
-        model.body_inertia[hub_body, 2] = J
+        model, data = self.model, self.data
+        model.body_inertia[self.hub_body, 2] = J
         saved = data.qpos.copy(), data.qvel.copy(), data.act.copy()
         mujoco.mj_setConst(model, data)
         data.qpos[:], data.qvel[:], data.act[:] = saved
 
-    def node_state():
-        X = np.zeros((n, 3))
-        V = np.zeros((n, 3))
-        for j in range(n):
-            X[j, :nd] = data.qpos[qa[j]:qa[j] + nd]
-            V[j, :nd] = data.qvel[va[j]:va[j] + nd]
-        X += Q0
+    def node_state(self) -> tuple:
+        X = np.zeros((self.n, 3))
+        V = np.zeros((self.n, 3))
+        nd, data = self.nd, self.data
+        for j in range(self.n):
+            X[j, :nd] = data.qpos[self.qa[j]:self.qa[j] + nd]
+            V[j, :nd] = data.qvel[self.va[j]:self.va[j] + nd]
+        X += self.Q0
         return X, V
 
-    def release(j):
-        psi, Om = data.qpos[hub_q], data.qvel[hub_v]
-        cp, sp = np.cos(psi), np.sin(psi)
-        Q = np.array([Lc * cp, Lc * sp, r])
-        if held:
+    def release(self, j: int) -> None:
+        """Node j leaves Q by the shared release law; its actuator becomes the Q-spring."""
+        model, data, nd = self.model, self.data, self.nd
+        c, d = self.p["stiffness"], self.p["damping"]
+        q0, q1, q2, v0, v1, v2 = phys.release_state(data.qpos[self.hub_q], data.qvel[self.hub_v],
+                                                    self.p["L_c"], self.p["r"], self.rw)
+        if self.held:
             data.eq_active[j] = 0
         else:
-            set_hub_inertia(hub_inertia(j))
-        data.qpos[qa[j]:qa[j] + nd] = (Q - Q0)[:nd]
-        data.qvel[va[j]:va[j] + nd] = np.array([-Om * Q[1] + rw * cp, Om * Q[0] + rw * sp,
-                                                0.0])[:nd]
+            self.set_hub_inertia(self.hub_inertia(j))
+        data.qpos[self.qa[j]:self.qa[j] + nd] = (np.array([q0, q1, q2]) - self.Q0)[:nd]
+        data.qvel[self.va[j]:self.va[j] + nd] = np.array([v0, v1, v2])[:nd]
         model.actuator_gainprm[j, 0] = c
-        model.actuator_biasprm[j, :3] = (d * rw, -c, -d)
+        model.actuator_biasprm[j, :3] = (d * self.rw, -c, -d)
         data.act[j] = 0.0
-        data.ctrl[j] = rw
+        data.ctrl[j] = self.rw
         if j > 0:
             model.actuator_gainprm[j - 1, 0] = 0.0
             model.actuator_biasprm[j - 1, :3] = 0.0
             data.ctrl[j - 1] = 0.0
             model.tendon_stiffness[j - 1] = c
             model.tendon_damping[j - 1] = d
+        self.b = j
 
-    # initial state: everything co-rotating with the hub, node 0 released at t = 0
-    data.qvel[hub_v] = p["Omega0"]
-    set_hub_inertia(hub_inertia(-1))
-    for j in range(n):
-        data.qvel[va[j] + 1] = p["Omega0"] * Lc if held else 0.0     # held, or parked
-    release(0)
-    mujoco.mj_forward(model, data)
-
-    N = len(t_out)
-    psi_o, Om_o = np.full(N, np.nan), np.full(N, np.nan)
-    X_o, V_o = np.full((N, n, 3), np.nan), np.full((N, n, 3), np.nan)
-    b_o = np.full(N, -1)
-    W_o = np.full(N, np.nan)
-    b = 0
-    work = {"W": 0.0, "rate": rw}             # spool work on one blade; payout speed
-    af = data.actuator_force
-    t = 0.0
-    steps = 0
-    status, reason, t_fail = "ok", None, None
-    wall0 = _time.perf_counter()
-
-    def end_payout(j):
+    def end_payout(self) -> None:
         """Full payout: the spool stops (act stays at l0, damper on the true stretch rate) and
         the last node stays tied to Q, or its Q-spring is removed (last_node "released")."""
-        data.ctrl[j] = 0.0
-        work["rate"] = 0.0
-        keep = p["last_node"] == "attached"
-        model.actuator_gainprm[j, 0] = c if keep else 0.0
-        model.actuator_biasprm[j, :3] = (0.0, -c, -d) if keep else (0.0, 0.0, 0.0)
+        j, c, d = self.b, self.p["stiffness"], self.p["damping"]
+        self.data.ctrl[j] = 0.0
+        self.work["rate"] = 0.0
+        keep = self.p["last_node"] == "attached"
+        self.model.actuator_gainprm[j, 0] = c if keep else 0.0
+        self.model.actuator_biasprm[j, :3] = (0.0, -c, -d) if keep else (0.0, 0.0, 0.0)
 
-    for (te, io, jr) in events(t_out, t_rel, t_out[-1], t_full(p)):
+    def step_to(self, t: float, te: float) -> None:
+        """Steps of dt from t, the last one shortened to land on te; spool work summed at every
+        step. Raises FloatingPointError on a blow-up."""
+        model, data, dt, af = self.model, self.data, self.dt, self.data.actuator_force
+        K = int(np.floor((te - t) / dt * (1 + 1e-12)))
+        rem = te - t - K * dt
+        for _ in range(K):
+            mujoco.mj_step(model, data)
+            self.work["W"] += af[self.b] * self.work["rate"] * dt
+        self.steps += K
+        if rem > 1e-9 * dt:
+            model.opt.timestep = rem
+            mujoco.mj_step(model, data)
+            self.work["W"] += af[self.b] * self.work["rate"] * rem
+            model.opt.timestep = dt
+            self.steps += 1
+        bad = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0
+        if bad or not np.all(np.isfinite(data.qpos)) or not np.all(np.isfinite(data.qvel)):
+            raise FloatingPointError("MuJoCo bad QACC / non-finite state (unstable step?)")
+        X, _ = self.node_state()
+        seg = np.sqrt((np.diff(X[:self.b + 1], axis=0) ** 2).sum(1))
+        limit = self.s["stretch_limit"]
+        if seg.size and np.max(np.abs(seg - self.l0)) > limit * self.l0:
+            est = stable_dt_explicit(self.p, _FACTOR[self.s["integrator"]], 1.0)
+            raise FloatingPointError(f"unstable step: spring stretch beyond {limit}*l0 "
+                                     f"(dt={dt:.3g}, estimated limit {est:.3g})")
+
+    def observe(self, io: int) -> None:
+        o = self.out
+        X, V = self.node_state()
+        o["psi"][io], o["omega"][io] = self.data.qpos[self.hub_q], self.data.qvel[self.hub_v]
+        o["X"][io], o["V"][io], o["b"][io] = X, V, self.b
+        o["W"][io] = 2.0 * self.work["W"]                   # two blades
+
+
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> dict:
+    s, t_out = settings_and_grid(settings, DEFAULT_SETTINGS, INTEGRATORS, t_out)
+    dt = s["dt"]
+    if dt is None or dt == "auto":
+        dt = stable_dt_explicit(params, _FACTOR[s["integrator"]])
+    dt = float(dt)
+    if s["stored"] not in STORED:
+        raise ValueError(f"stored must be one of {STORED}")
+    run = _Sail(params, s, dt, len(t_out))
+    t = 0.0
+    status, reason, t_fail = "ok", None, None
+    wall0 = _time.perf_counter()
+    for te, io, jr, end in zip(*phys.breakpoints(params, t_out), strict=True):
         if te > t:
-            K = int(np.floor((te - t) / dt * (1 + 1e-12)))
-            rem = te - t - K * dt
-            if K > 0:
-                for _ in range(K):
-                    mujoco.mj_step(model, data)
-                    work["W"] += af[b] * work["rate"] * dt
-                steps += K
-            if rem > 1e-9 * dt:
-                model.opt.timestep = rem
-                mujoco.mj_step(model, data)
-                work["W"] += af[b] * work["rate"] * rem
-                model.opt.timestep = dt
-                steps += 1
+            try:
+                run.step_to(t, te)
+            except FloatingPointError as exc:
+                status, reason, t_fail = "diverged", str(exc), te
+                break
             t = te
-            bad = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0
-            if bad or not np.all(np.isfinite(data.qpos)) or not np.all(np.isfinite(data.qvel)):
-                status, t_fail = "diverged", t
-                reason = "MuJoCo bad QACC / non-finite state (unstable step?)"
-                break
-            X, _ = node_state()
-            seg = np.sqrt((np.diff(X[:b + 1], axis=0) ** 2).sum(1))
-            if seg.size and np.max(np.abs(seg - l0)) > s["stretch_limit"] * l0:
-                status, t_fail = "diverged", t
-                reason = (f"unstable step: spring stretch beyond {s['stretch_limit']}*l0 "
-                          f"(dt={dt:.3g}, estimated limit "
-                          f"{stable_dt_explicit(p, _FACTOR[s['integrator']], 1.0):.3g})")
-                break
         if jr > 0:
-            release(jr)
-            b = jr
-        elif io < 0 and jr < 0:
-            end_payout(b)
+            run.release(jr)
+        elif end:
+            run.end_payout()
         if io >= 0:
-            X, V = node_state()
-            psi_o[io], Om_o[io] = data.qpos[hub_q], data.qvel[hub_v]
-            X_o[io], V_o[io], b_o[io] = X, V, b
-            W_o[io] = 2.0 * work["W"]                   # two blades
+            run.observe(io)
     wall = _time.perf_counter() - wall0
-    ch, extra = channels(p, t_out, psi_o, Om_o, X_o, V_o, b_o, W_o)
+    o = run.out
+    ch, extra = phys.channels(params, t_out, o["psi"], o["omega"], o["X"], o["V"], o["b"],
+                              spool_work=o["W"])
     if t_fail is not None:
         for k in ch:
             ch[k][t_out > t_fail] = np.nan
-    extra["hub_rate_formula18"] = formula18(p, t_out)
-    extra["boundary_node"] = b_o.astype(float)
+    extra["hub_rate_formula18"] = phys.formula18(params, t_out)
+    extra["boundary_node"] = o["b"].astype(float)
+    evals = run.steps * (4 if s["integrator"] == "rk4" else 1)
     return {"channels": ch, "status": status, "t_fail": t_fail, "reason": reason,
-            "stats": {"steps": steps, "rhs_evals": steps * (4 if s["integrator"] == "rk4" else 1),
-                      "wall_s": wall},
+            "stats": {"steps": run.steps, "rhs_evals": evals, "integrate_s": wall},
             "settings": {**s, "dt": dt}, "extra": extra}

@@ -1,0 +1,220 @@
+"""Physics of the heliogyro blade deployment (scene `sail-deploy`, seed 004) that every solver
+must compute alike: the lumped thread, the payout law, the release law, the breakpoints, the
+closed forms (formula 18 as printed and rebuilt, its lumped version, the yo-yo despin) and the
+scene's channels from a common kinematic output. Numpy and numba only (leaves import it).
+
+Geometry (inertial frame, spin axis = z through the origin): the departure point
+Q = R_z(ψ)(L_c, 0, r). Node j (0 = tip … n−1 = root, m_j = ρ_L l0, the tip + m_k, l0 = L/n)
+is held at Q by the hub until its release time t_j = j Δφ/ω (Δφ = L/(n r)). It is then released
+with the hub-point velocity plus r ω along the rotated X1 axis — the spool's surface velocity at
+Q, radial: no moment about the axis, so angular momentum is continuous (the engines' and the
+conservative custom variant's release law; the paper's variant turns it, custom only).
+The last released node (the boundary) is tied to Q by a spring of rest length
+l0(t) = r ω (t − t_b) while the spool pays out.
+"""
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+CHANNELS = ("hub_rate", "deployed_length", "tip_angle", "angular_momentum", "energy_balance")
+
+
+def thread(params: dict) -> tuple:
+    """The lumped thread: (n, l0, masses m (n,), release times t_rel (n,), t_rel[0] = 0)."""
+    n = int(params["n"])
+    l0 = params["L"] / n
+    m = np.full(n, params["rho_L"] * l0)
+    m[0] += params["tip_mass"]
+    t_rel = (l0 / params["r"]) * np.arange(n) / params["omega_spool"]
+    return n, l0, m, t_rel
+
+
+def t_full(params: dict) -> float:
+    """End of payout: the whole blade is out at L/(r ω)."""
+    return params["L"] / (params["r"] * params["omega_spool"])
+
+
+@nb.njit(cache=True)
+def payout(t: float, L: float, rw: float, end_released: bool) -> tuple:
+    """(paid-out length, payout speed, Q-spring on) at time t. The spool pays out r·ω·t until the
+    whole blade is out at t_full = L/(r ω); then it stops and the last node stays tied to Q by a
+    spring of rest length l0 ("attached"), or leaves Q altogether ("released": the blade flies
+    free and the hub spins on at constant rate). rw = r ω."""
+    if rw * t < L:
+        return rw * t, rw, True
+    return L, 0.0, not end_released
+
+
+def payout_of(params: dict, t: float) -> tuple:
+    return payout(t, params["L"], params["r"] * params["omega_spool"],
+                  params["last_node"] == "released")
+
+
+@nb.njit(cache=True)
+def release_state(psi: float, omega: float, L_c: float, r: float, rw: float) -> tuple:
+    """The release law: a node leaves at Q = R_z(ψ)(L_c, 0, r) with the hub-point velocity
+    Ω e_z × Q plus r ω along the rotated X1 axis. Returns (Q (3), V (3)) as six floats."""
+    c, s = math.cos(psi), math.sin(psi)
+    q0, q1 = L_c * c, L_c * s
+    return q0, q1, r, -omega * q1 + rw * c, omega * q0 + rw * s, 0.0
+
+
+def breakpoints(params: dict, t_out: np.ndarray) -> tuple:
+    """Merged step breakpoints of a run: (times, output index or −1, node released there or −1,
+    end of payout there). Outputs, releases t_j (j ≥ 1) and the end of payout t_full, where the
+    payout speed drops to 0, so that no step straddles a kink; times within 1e-10 s merge."""
+    n, _, _, t_rel = thread(params)
+    t_end = t_out[-1]
+    ev = {}
+    for i, t in enumerate(t_out):
+        ev[round(float(t), 10)] = [float(t), i, -1, False]
+    extra = [(t_rel[j], j, False) for j in range(1, n)] + [(t_full(params), -1, True)]
+    for t, j, end in extra:
+        if t >= t_end - 1e-12:
+            continue
+        key = round(float(t), 10)
+        if key in ev:
+            ev[key][2] = max(ev[key][2], j)
+            ev[key][3] = ev[key][3] or end
+        else:
+            ev[key] = [float(t), -1, j, end]
+    rows = sorted(ev.values())
+    return (np.array([r[0] for r in rows]), np.array([r[1] for r in rows], np.int64),
+            np.array([r[2] for r in rows], np.int64), np.array([r[3] for r in rows], bool))
+
+
+def formula18(params: dict, t, printed: bool = False) -> np.ndarray:
+    """Rebuilt formula 18: hub spin from conservation of angular momentum, rigid straight radial
+    blades of deployed length ℓ(t) = min(r ω t, L) rooted at L_c from the axis, tip masses at
+    L_c + ℓ, the thread still on the spools counted at L_c (both blades):
+
+        I(ℓ) = J + 2[ρ_L (L − ℓ) L_c² + ρ_L ((L_c + ℓ)³ − L_c³)/3 + m_k (L_c + ℓ)²]
+        Ω(t) = I(0) Ω0 / I(ℓ(t)),   I(0) = J + 2 (ρ_L L + m_k) L_c².
+
+    Our copy of the paper prints (garbled) Ω = J Ω0 / (J + (2/3) ρ_L L³ + 2 m_k L²): no L_c, no
+    stored thread; `printed=True` returns that (with ℓ(t) in place of L)."""
+    J, rho, L, Lc = params["J_hub"], params["rho_L"], params["L"], params["L_c"]
+    mk, Om0 = params["tip_mass"], params["Omega0"]
+    ell = np.minimum(params["r"] * params["omega_spool"] * np.asarray(t, float), L)
+    if printed:
+        return J * Om0 / (J + 2.0 / 3.0 * rho * ell**3 + 2.0 * mk * ell**2)
+    I0 = J + 2.0 * (rho * L + mk) * Lc**2
+    I = J + 2.0 * (rho * (L - ell) * Lc**2 + rho * ((Lc + ell) ** 3 - Lc**3) / 3.0
+                   + mk * (Lc + ell) ** 2)
+    return I0 * Om0 / I
+
+
+def formula18_discrete(params: dict, t) -> np.ndarray:
+    """Formula 18 for the lumped thread itself: the released nodes on a straight radial line at
+    their unstretched positions (boundary node at l0(t) from Q, then every l0), stored nodes at
+    L_c, conservative bookkeeping. Differs from the continuous formula by O(l0) lumping."""
+    n, l0, m, _ = thread(params)
+    L, r, w, Lc = params["L"], params["r"], params["omega_spool"], params["L_c"]
+    J = params["J_hub"]
+    I0 = J + 2 * m.sum() * Lc**2
+    t = np.asarray(t, float)
+    out = np.empty_like(t)
+    for i, ti in enumerate(t):
+        phi = min(w * ti, L / r)
+        b = min(int(np.floor(phi * n * r / L + 1e-12)), n - 1)
+        lt = r * phi - l0 * b
+        R = Lc + lt + l0 * (b - np.arange(b + 1))
+        I = J + 2 * (np.sum(m[:b + 1] * R**2) + m[b + 1:].sum() * Lc**2)
+        out[i] = I0 * params["Omega0"] / I
+    return out
+
+
+def yoyo_despin(params: dict, ell) -> np.ndarray:
+    """Classic yo-yo despin closed form (two tip masses m on massless cords unwinding
+    tangentially from a hub of radius R = L_c, cords free — no spool): with
+    k² = (J + 2 m R²)/(2 m R²) and λ = ℓ/R, Ω = Ω0 (k² − λ²)/(k² + λ²); zero at ℓ = R k.
+    A comparison for light hubs only (our payout is prescribed, not free)."""
+    R, J, mk = params["L_c"], params["J_hub"], params["tip_mass"] + params["rho_L"] * params["L"]
+    k2 = (J + 2 * mk * R**2) / (2 * mk * R**2)
+    lam2 = (np.asarray(ell) / R) ** 2
+    return params["Omega0"] * (k2 - lam2) / (k2 + lam2)
+
+
+def channels(params: dict, t, psi, omega, X, V, b_out, dissipated=None, spool_work=None):
+    """The scene's channels from a solver's kinematic output in the inertial frame.
+
+    psi, omega: hub angle and rate (N,); X, V: node positions/velocities (N, n, 3) (origin on
+    the spin axis); b_out: boundary index (N,; −1 = no state). Stored nodes (j > b) are counted
+    at Q (inertia m L_c², velocity of the hub point).
+    hub_rate Ω; deployed_length: polyline length Q → boundary → … → tip (stretched arc, = r ω t
+    up to spring stretch); tip_angle Δu [19]: arccos of the X1 component of (x_tip − Q)/|…|
+    (unsigned, as printed; the signed in-plane angle atan2 in extra "tip_angle_signed", negative
+    = trailing); angular_momentum J Ω + 2[Σ_stored m L_c² Ω + Σ_released m (x × v)_z];
+    energy_balance T + U + D − W_spool − W_release (both blades): T kinetic, U elastic,
+    D = ∫ d·w² dissipated, W_spool the work of the prescribed payout on the Q-spring,
+    W_release = Σ ½ m (r ω)² per released node and blade (the spool throws each node off at
+    the payout speed). D and W_spool as the solver integrated them at every step where it
+    passes them (`dissipated`, `spool_work`, both blades), else by the trapezoid rule on the
+    output grid (which aliases the fast ringing of the boundary tension: 4e-4 J at 0.05 s
+    sampling for a 0.07 J system). Returns (channels, extra)."""
+    n, l0, m, _ = thread(params)
+    Lc, r, c, d = params["L_c"], params["r"], params["stiffness"], params["damping"]
+    rw = r * params["omega_spool"]
+    N = len(t)
+    out = {k: np.full(N, np.nan) for k in CHANNELS}
+    signed = np.full(N, np.nan)
+    kinetic = np.full(N, np.nan)
+    rate_D = np.zeros(N)
+    rate_W = np.zeros(N)
+    TU = np.full(N, np.nan)
+    wrel = np.zeros(N)
+    for i in range(N):
+        b = int(b_out[i])
+        if b < 0 or not np.isfinite(omega[i]):
+            continue
+        cp, sp = np.cos(psi[i]), np.sin(psi[i])
+        Q = np.array([Lc * cp, Lc * sp, r])
+        VQ = omega[i] * np.array([-Q[1], Q[0], 0.0])
+        x, v, mm = X[i, :b + 1], V[i, :b + 1], m[:b + 1]
+        ms = m[b + 1:].sum()
+        H = params["J_hub"] * omega[i] + 2 * (ms * Lc**2 * omega[i] + np.sum(
+            mm * (x[:, 0] * v[:, 1] - x[:, 1] * v[:, 0])))
+        T = (0.5 * params["J_hub"] * omega[i]**2 + ms * Lc**2 * omega[i]**2
+             + np.sum(mm * (v**2).sum(1)))
+        seg = np.diff(x, axis=0)
+        lens = np.sqrt((seg**2).sum(1))
+        e = seg / np.where(lens > 0, lens, 1.0)[:, None]
+        sd = (e * np.diff(v, axis=0)).sum(1)
+        dq = Q - x[b]
+        lq = np.sqrt(dq @ dq)
+        eq = dq / lq if lq > 1e-10 else -np.array([cp, sp, 0.0])
+        ldot = eq @ (VQ - v[b])
+        paid, rate, q_on = payout_of(params, t[i])
+        w = (ldot - rate) if q_on else 0.0
+        s = (lq - (paid - b * l0)) if q_on else 0.0
+        U = c * (np.sum((lens - l0) ** 2) + s * s)            # two blades
+        rate_D[i] = 2 * d * (np.sum(sd**2) + w * w)
+        rate_W[i] = -2 * (c * s + d * w) * rate
+        TU[i] = T + U
+        kinetic[i] = T
+        wrel[i] = np.sum(m[:b + 1]) * rw**2          # 2 blades x ½ m (rω)²
+        out["hub_rate"][i] = omega[i]
+        out["angular_momentum"][i] = H
+        out["deployed_length"][i] = lens.sum() + (lq if q_on else 0.0)
+        tip = x[0] - Q                                # Δu [19], in the body frame
+        tb = np.array([cp * tip[0] + sp * tip[1], -sp * tip[0] + cp * tip[1], tip[2]])
+        nt = np.sqrt(tb @ tb)
+        out["tip_angle"][i] = np.arccos(np.clip(tb[0] / nt, -1, 1)) if nt > 0 else 0.0
+        signed[i] = np.arctan2(tb[1], tb[0]) if nt > 0 else 0.0
+    ok = np.isfinite(TU)
+    dt = np.diff(t)
+    if dissipated is None:
+        D = np.zeros(N)
+        D[1:] = np.cumsum(0.5 * (rate_D[1:] + rate_D[:-1]) * dt)
+    else:
+        D = np.asarray(dissipated, float)
+    if spool_work is None:
+        W = np.zeros(N)
+        W[1:] = np.cumsum(0.5 * (rate_W[1:] + rate_W[:-1]) * dt)
+    else:
+        W = np.asarray(spool_work, float)
+    out["energy_balance"] = np.where(ok, TU + D - W - wrel, np.nan)
+    return out, {"tip_angle_signed": signed, "kinetic_energy": kinetic}

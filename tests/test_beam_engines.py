@@ -162,11 +162,13 @@ def test_shaft_whirl_labels(engine):
             "forward whirl 3", "backward whirl 3"]
 
 
+@pytest.mark.slow
 def test_chain_converges_at_second_order():
     """Without extrapolation the rigid-finite-element chain's error falls as 1/N²: differences
     of successive doublings N = 20, 40, 80 shrink by 4 — measured 3.996–4.006 at rest; at
     40 rad/s 3.82–4.00 (flap 1 approaches its asymptote more slowly under the centrifugal
-    tension, which is why Richardson from N = 40/20 leaves ≤ 5e-5 there)."""
+    tension, which is why Richardson from N = 40/20 leaves ≤ 5e-5 there). Slow: N = 80 plain
+    takes ~4 s alone, ~20 s on the loaded shared machine."""
     for speed, window in ((0, 0.05), (40, 0.25)):
         p = ROTATING_BEAM.resolve({"speed": speed})
         f = [mj_blade.modes(p, {"n_segments": n, "extrapolate": False}).frequencies_hz

@@ -67,3 +67,12 @@ def check_steps(solver_name, leaf, params, settings, max_steps=None, where=""):
         raise BadInput(f"{where}{solver_name}: {n:.3g} steps of dt = {dt:g} s over "
                        f"t_end = {params['t_end']:g} s exceed the budget of {max_steps:.3g} "
                        f"steps: raise --dt or pass --max-steps")
+
+
+def check_dt(params, dt, max_steps=None, where=""):
+    """A requested fixed step checked before any solver is loaded (t_end / dt steps)."""
+    max_steps = MAX_STEPS if max_steps is None else max_steps
+    if dt and params["t_end"] / dt > max_steps:
+        raise BadInput(f"{where}--dt {dt:g}: {params['t_end'] / dt:.3g} steps over t_end = "
+                       f"{params['t_end']:g} s exceed the budget of {max_steps:.3g} steps: "
+                       f"raise --dt or pass --max-steps")

@@ -272,6 +272,7 @@ def cmd_run(args):
     # the size of the work before the grid is built (resolve allocates it)
     budget.check_output(sc, overrides, len(chosen), args.max_output_gib)
     params = sc.resolve(overrides)
+    budget.check_dt(params, args.dt, args.max_steps)
     # settings are resolved (and checked) for every solver before anything runs
     settings = {s.name: solvers.settings_for(s, sc.name, args.dt, args.rtol, args.integrator,
                                              t_out=sc.output_grid(params))
@@ -368,9 +369,9 @@ COMMANDS = {"list": cmd_list, "show": cmd_show, "run": cmd_run, "modes": cmd_mod
 
 def main(argv=None):
     import warnings
-
-    from numba.core.errors import NumbaPerformanceWarning
-    warnings.simplefilter("ignore", NumbaPerformanceWarning)   # hints for us, noise for users
+    # numba's performance hints are for us, noise for users (matched by module: importing numba
+    # here to name the class would cost a second before every one-line answer)
+    warnings.filterwarnings("ignore", module=r"numba(\.|$)")
     try:
         args = build_parser().parse_args(argv)
         return COMMANDS[args.command](args)

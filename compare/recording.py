@@ -8,6 +8,7 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
+from .atomic import atomic_path
 from .report import analytic_curve
 
 PALETTE = [(31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189),
@@ -30,8 +31,11 @@ def blueprint(scene, with_3d):
 def write_run_recording(path, result):
     scene, trs = result.scene, result.trajectories
     draw = scene.draw_3d
-    with rr.RecordingStream("xval", recording_id=f"{scene.name}-{path.parent.name}") as rec:
-        rec.save(str(path), default_blueprint=blueprint(scene, draw is not None))
+    # written under a temporary name and renamed when complete (the `with` block finalises
+    # the file sink): a kill mid-write leaves the previous recording or none, never a cut one
+    with atomic_path(path) as tmp, \
+            rr.RecordingStream("xval", recording_id=f"{scene.name}-{path.parent.name}") as rec:
+        rec.save(str(tmp), default_blueprint=blueprint(scene, draw is not None))
         for i, tr in enumerate(trs):
             color = PALETTE[i % len(PALETTE)]
             for ch in scene.channels:

@@ -165,17 +165,18 @@ def first_order_solution(p, t):
 
 def test_agrees_with_an_independent_first_order_solver():
     """0.25 s of spin-up past the defect (11.6 rad); measured largest differences relative to
-    each channel's range: spin_rate 2.8e-12, spin_angle 2.3e-14, journal_a_y 4.9e-9,
-    journal_b_y 3.5e-9, journal_a_x/b_x 4.2e-8 (of a 7e-9 m range: 3e-16 m), motor_work 1.8e-14,
-    dissipated 2.4e-9."""
+    each channel's range: spin_rate 1.0e-11, spin_angle 9.8e-14, journal_a_y 1.9e-8,
+    journal_b_y 1.2e-8, journal_a_x/b_x 4.2e-8 (of a 7e-9 m range: 3e-16 m), motor_work 5.9e-14,
+    dissipated 3.2e-9 (the first three were 3-4x smaller before the kernels' arithmetic was
+    reordered for speed: these are round-off-level differences)."""
     p, t, res = run({"t_end": 0.25, "defect_angle": 2.0})
     ref = first_order_solution(p, t)
     assert res.status == "ok"
     assert ref["spin_angle"][-1] > 4.0 + 2 * np.pi       # the bump faces the load at 4.03 and
     # 10.3 rad (load at −π/2, bump at 2 rad): both passed
-    for name, tol in (("spin_rate", 3e-11), ("spin_angle", 2e-13), ("journal_a_y", 5e-8),
-                      ("journal_b_y", 3.5e-8), ("journal_a_x", 4e-7), ("journal_b_x", 4e-7),
-                      ("motor_work", 1.8e-13), ("dissipated", 2.4e-8)):
+    for name, tol in (("spin_rate", 1e-10), ("spin_angle", 1e-12), ("journal_a_y", 2e-7),
+                      ("journal_b_y", 1.2e-7), ("journal_a_x", 4e-7), ("journal_b_x", 4e-7),
+                      ("motor_work", 6e-13), ("dissipated", 3e-8)):
         scale = np.ptp(ref[name])
         assert np.max(np.abs(res.channels[name] - ref[name])) <= tol * scale, name
 
@@ -231,13 +232,15 @@ def ripple_amplitude(res):
 
 def test_ripple_amplitude_converges_as_the_tolerance_tightens(default_run):
     """Peak-to-peak spin ripple over the last 5 revolutions (0.036643 rad/s); measured
-    differences from rtol 1e-12: 4.9e-7 (1e-6), 1.2e-10 (1e-8), 5e-13 (1e-10) rad/s."""
+    differences from rtol 1e-12: 4.9e-7 (1e-6), 1.2e-10 (1e-8), 8.8e-12 (1e-10) rad/s. Below
+    ~1e-11 the amplitude is not monotone in rtol (1e-9 gave 6e-12): it is then read off samples
+    whose own spin-rate error is ~3e-10 rad/s."""
     _, _, ref = run(settings={"rtol": 1e-12})
     a_ref = ripple_amplitude(ref)
     diffs = [abs(ripple_amplitude(r) - a_ref) for r in
              (run(settings={"rtol": 1e-6})[2], run(settings={"rtol": 1e-8})[2], default_run[2])]
     assert diffs[0] > diffs[1] > diffs[2]
-    assert diffs[2] < 5e-12
+    assert diffs[2] < 8e-11
     assert 0.03 < a_ref < 0.04          # a visible ripple: ~5 % of what the bump's friction
     # impulse μ r_j k_b H · (2 w/ω) / J_p ≈ 0.06 rad/s could give at most
 
@@ -262,9 +265,9 @@ def test_spin_angle_is_the_integral_of_the_spin_rate(default_run):
 def test_projection_changes_nothing_but_the_norm(default_run):
     _, _, free = default_run
     _, _, proj = run(settings={"project": True})
-    assert free.invariants["quaternion_norm"] < 1e-12          # measured 2.4e-14
+    assert free.invariants["quaternion_norm"] < 1e-12          # measured 3.6e-14
     assert proj.invariants["quaternion_norm"] < 1e-12
-    for name, tol in (("spin_rate", 3e-11), ("journal_a_y", 6e-8)):   # measured 3.1e-12, 6.4e-9
+    for name, tol in (("spin_rate", 4e-11), ("journal_a_y", 9e-8)):   # measured 4.3e-12, 9.1e-9
         d = np.max(np.abs(free.channels[name] - proj.channels[name]))
         assert d <= tol * np.ptp(free.channels[name]), name
 
@@ -289,13 +292,14 @@ def test_recording_extras(default_run):
 
 
 # ------------------------------------------------------------------ extremes
-@pytest.mark.parametrize("overrides,t_end,tol", [({"k_b": 1e9}, 0.3, 4e-10),
-                                                 ({"c_b": 0}, 3.0, 3e-8),
+@pytest.mark.parametrize("overrides,t_end,tol", [({"k_b": 1e9}, 0.3, 4e-9),
+                                                 ({"c_b": 0}, 3.0, 4e-8),
                                                  ({"defect_height": 1e-3}, 3.0, 2.5e-7)])
 def test_extremes_stay_ok_with_a_closed_energy_balance(overrides, t_end, tol):
     """Stiff bearings (the adaptive step shrinks: 7551 steps in 0.3 s), no damping, and a 1 mm
     bump that throws journal a past the bearing centre (y > 0; it hangs 29 µm below at rest).
-    Measured energy residuals relative to the motor work: 3.7e-11, 2.7e-9, 2.3e-8."""
+    Measured energy residuals relative to the motor work: 4.2e-10, 3.7e-9, 2.4e-8 (the stiff
+    case is round-off: 3.7e-11 before the kernels' arithmetic was reordered)."""
     p, t, res = run({**overrides, "t_end": t_end})
     c = res.channels
     assert res.status == "ok"

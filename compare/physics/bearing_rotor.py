@@ -63,12 +63,45 @@ def pack(params: dict) -> np.ndarray:
 # ---------------------------------------------------------------- rotation and spin angle
 @nb.njit(cache=True)
 def quat_matrix(q):
-    """Rotation matrix of a quaternion (w, x, y, z), normalised on the fly."""
-    w, x, y, z = q / np.sqrt(q @ q)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+    """Rotation matrix of a quaternion (w, x, y, z), normalised on the fly (filled in place: a
+    nested np.array literal costs ~1 µs inside numba kernels)."""
+    s = 1.0 / (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    R = np.empty((3, 3))
+    R[0, 0] = 1 - 2 * s * (y * y + z * z)
+    R[0, 1] = 2 * s * (x * y - w * z)
+    R[0, 2] = 2 * s * (x * z + w * y)
+    R[1, 0] = 2 * s * (x * y + w * z)
+    R[1, 1] = 1 - 2 * s * (x * x + z * z)
+    R[1, 2] = 2 * s * (y * z - w * x)
+    R[2, 0] = 2 * s * (x * z - w * y)
+    R[2, 1] = 2 * s * (y * z + w * x)
+    R[2, 2] = 1 - 2 * s * (x * x + y * y)
+    return R
+
+
+@nb.njit(cache=True)
+def cross(a, b):
+    """a × b for 3-vectors (np.cross is several times slower inside numba kernels)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
+
+
+@nb.njit(cache=True)
+def dot(a, b):
+    """a·b by a loop (np.dot / @ call BLAS from numba: ~1 µs of overhead per call)."""
+    acc = 0.0
+    for i in range(a.shape[0]):
+        acc += a[i] * b[i]
+    return acc
+
+
+@nb.njit(cache=True)
+def transpose_times(R, v):
+    """Rᵀ v for a 3×3 R."""
+    return np.array([R[0, 0] * v[0] + R[1, 0] * v[1] + R[2, 0] * v[2],
+                     R[0, 1] * v[0] + R[1, 1] * v[1] + R[2, 1] * v[2],
+                     R[0, 2] * v[0] + R[1, 2] * v[1] + R[2, 2] * v[2]])
 
 
 @nb.njit(cache=True)
@@ -163,7 +196,7 @@ def shaft_torques(omega_z, Fa_radial_norm, Fb_radial_norm, p):
 def journals(r_cm, v_cm, R, omega, p):
     """Positions and velocities (fixed frame) of journals a (+l/2 e3) and b (−l/2 e3)."""
     arm = 0.5 * p[I_L] * R[:, 2]
-    w_arm = np.cross(omega, arm)
+    w_arm = cross(omega, arm)
     return r_cm + arm, v_cm + w_arm, r_cm - arm, v_cm - w_arm
 
 
@@ -172,16 +205,16 @@ def body_loads(r_cm, q, v_cm, omega, p):
     """Everything but gravity acting on the shaft, reduced to the centre of mass (fixed frame):
     (force (3,), moment (3,), motor power Ẇ, dissipation power Ḋ). ω in the fixed frame."""
     R = quat_matrix(q)
-    e3 = np.ascontiguousarray(R[:, 2])
+    e3 = np.array([R[0, 2], R[1, 2], R[2, 2]])
     r_a, v_a, r_b, v_b = journals(r_cm, v_cm, R, omega, p)
     phi = twist_angle(q)
     F_a, F_b = bearing_forces(r_a, v_a, r_b, v_b, phi, p)
     na = np.sqrt(F_a[0] ** 2 + F_a[1] ** 2)
     nb_ = np.sqrt(F_b[0] ** 2 + F_b[1] ** 2)
-    w_z = omega @ e3
+    w_z = dot(omega, e3)
     motor, friction = shaft_torques(w_z, na, nb_, p)
     force = F_a + F_b
-    moment = np.cross(r_a - r_cm, F_a) + np.cross(r_b - r_cm, F_b) + (motor + friction) * e3
+    moment = cross(r_a - r_cm, F_a) + cross(r_b - r_cm, F_b) + (motor + friction) * e3
     # Ḋ: dampers + friction + the lift's work k_b (δ_a − d_a)·ḋ_a (see module docstring)
     h = defect_lift(phi, p)
     dh = defect_lift_slope(phi, p) * twist_rate(q, omega)
@@ -201,8 +234,8 @@ def powers(r_cm, q, v_cm, omega, p):
 @nb.njit(cache=True)
 def kinetic_energy(v_cm, omega, R, p) -> float:
     """½ m |v|² + ½ ω·(R J Rᵀ)ω, ω in the fixed frame."""
-    wb = R.T @ omega
-    return 0.5 * p[I_M] * (v_cm @ v_cm) + 0.5 * (p[I_JT] * (wb[0] ** 2 + wb[1] ** 2)
+    wb = transpose_times(R, omega)
+    return 0.5 * p[I_M] * dot(v_cm, v_cm) + 0.5 * (p[I_JT] * (wb[0] ** 2 + wb[1] ** 2)
                                                  + p[I_JP] * wb[2] ** 2)
 
 

@@ -53,24 +53,11 @@ CASE_KEYS = ("name", "scene", "set", "sweep", "solvers", "dt", "rtol", "integrat
 
 
 def default_campaign() -> dict:
-    """The built-in campaign: every landed scene with all its solvers."""
-    return {
-        "name": "default",
-        "cases": [
-            {"name": "rotor-spinup-1.5Nm", "scene": "rotor-spinup"},
-            {"name": "rotor-spinup-3.2Nm", "scene": "rotor-spinup",
-             "set": {"torque": "3.2", "t_end": "5"}},
-            {"name": "rotor-whirl", "scene": "rotor-whirl"},
-            {"name": "press", "scene": "press"},
-            {"name": "press-cycle", "scene": "press-cycle"},
-            # full deployment: both custom variants and Exudyn (~4 min; MuJoCo needs ~15 min
-            # at k = 1e7 and checks the first 2 s here)
-            {"name": "sail-deploy-full", "scene": "sail-deploy",
-             "solvers": ["thread-spool", "thread-spool-conservative", "exudyn"],
-             "timeout_s": 3600},
-            {"name": "sail-deploy-2s", "scene": "sail-deploy", "set": {"t_end": 2}},
-        ],
-    }
+    """The built-in campaign: every scene's own default cases (`Scene.campaign_cases`)."""
+    from .scenes import SCENES
+    return {"name": "default",
+            "cases": [{"scene": sc.name, **case} for sc in SCENES.values()
+                      for case in sc.campaign_cases]}
 
 
 # --- the file -------------------------------------------------------------------------------
@@ -352,7 +339,7 @@ def plan(camp, src="built-in campaign", timeout_s=None, max_output_gib=None, max
                 continue
             for s in chosen:
                 extra = c.get("settings", {}).get(s.name)
-                settings = _prefixed(f"{at}.settings.{s.name}", _settings, sc, s, c, extra)
+                settings = _prefixed(f"{at}.settings.{s.name}", _settings, sc, s, c, extra, params)
                 _prefixed(where, budget.check_steps, s.name, s.leaf(sc.name), params, settings,
                           max_steps)
                 jobs.append(Job(pname, sc.name, params, overrides, s.name, (s.name,), settings,
@@ -360,13 +347,13 @@ def plan(camp, src="built-in campaign", timeout_s=None, max_output_gib=None, max
     return cases, jobs
 
 
-def _settings(sc, s, c, extra):
+def _settings(sc, s, c, extra, params):
     leaf = s.leaf(sc.name)
     unknown = sorted(set(extra or {}) - set(leaf.DEFAULT_SETTINGS))
     if unknown:
         raise BadInput(f"unknown settings {unknown} (known: {sorted(leaf.DEFAULT_SETTINGS)})")
     return solvers.settings_for(s, sc.name, c.get("dt"), c.get("rtol"), c.get("integrator"),
-                                extra)
+                                extra, t_out=sc.output_grid(params))
 
 
 # --- the jobs -------------------------------------------------------------------------------
@@ -389,7 +376,7 @@ def run_job(job: Job, store: str):
         else:
             sc = get_scene(job.scene)
             tr = solvers.simulate(sc, solvers.get_solver(job.solver), job.params, job.settings,
-                                  job.timeout_s)
+                                  job.timeout_s, estimate_error=sc.error_estimate)
             tr.stats["input_digest"] = job.digest
             tr.save(store / f"{job.key}.npz")
             status = tr.status

@@ -160,10 +160,11 @@ def test_cardan_variant_conserves_its_energy():
     out = rotor.simulate(params(torque=3.2), grid(5.0), {"spring": "cardan"})
     assert out.status == "ok" and out.settings["spring"] == "cardan"
     assert drift(out.channels) < 1e-3
-    cone = rotor.simulate(params(torque=3.2), grid(5.0), {})
-    # a different spring: close at small tilt, measurably different once tilted (~0.2 rad)
-    d = np.abs(out.channels["omega_norm"] - cone.channels["omega_norm"])
-    assert d[:150].max() < 1e-3 and 1e-3 < d[-1] < 1.0
+    # the MuJoCo probe of the notes used this Cardan spring: peak tilt 12.72° near 3.0 s and
+    # |ω(5 s)| = 90.742369775 rad/s (RK4 at 2.5e-5 s). Measured here at RK4 1 ms: 5.9e-5 rad/s
+    # off (the notes give 9e-6 for the step; the rest is an unstated detail of the probe)
+    assert out.channels["omega_norm"][-1] == pytest.approx(90.742369775, abs=1e-4)
+    assert np.degrees(np.max(out.channels["tilt"])) == pytest.approx(12.72, abs=0.01)
 
 
 def test_bad_settings_raise():

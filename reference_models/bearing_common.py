@@ -18,7 +18,8 @@ from compare.physics import bearing_rotor as br
 EXTRA_CHANNELS = ("kinetic", "potential", "motor_work", "dissipated")
 RK4_STABILITY = 2.785          # |h·λ| on the negative real axis / 2.83 on the imaginary axis
 ENERGY_JUMP = 0.05             # |ΔE| above this share of the energy scale: diverged
-JOURNAL_BOUND = 1.0            # a journal farther than this × l from its bearing: diverged
+JOURNAL_BOUND = 0.25           # a journal farther than this × l from its bearing: diverged
+                               # (k_b l/4 of force: garbage; keeps Exudyn's chart off its lock)
 OMEGA_BOUND = 1e5              # rad/s, |ω| beyond this: diverged
 
 

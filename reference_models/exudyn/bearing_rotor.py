@@ -21,9 +21,9 @@ step (adaptive DOPRI5/ODE23: their steps do not land on the grid; the coordinate
 it by cubic Hermite interpolation with the sensors' velocities and accelerations).
 
 Divergence: the user function stops the run on a non-finite state or a bound (a journal farther
-than l from its bearing, |ω| > 1e5 rad/s); an Exudyn solver exception (Newton failure, step size
-below the minimum) ends it too; the energy balance is checked on the grid. Each gives `diverged`
-with t_fail and the reason.
+than l/4 from its bearing, which also keeps the chart 60° from its lock; |ω| > 1e5 rad/s); an
+Exudyn solver exception (Newton failure, step size below the minimum) ends it too; the energy
+balance is checked on the grid. Each gives `diverged` with t_fail and the reason.
 """
 from __future__ import annotations
 
@@ -89,8 +89,8 @@ def generalised_forces(q, qt, p, r_bound, w_bound):
     if not math.isfinite(s):
         return out, 1.0
     quat, G, omega = rxyz_kinematics(q, qt)
-    if math.hypot(q[0], q[1]) + 0.5 * p[br.I_L] * abs(math.sin(q[4])) > r_bound \
-            or math.hypot(q[0], q[1]) > r_bound:
+    # |r_xy| + (l/2)|n_xy| bounds both journals' radial offsets (n = G[:, 2], the shaft axis)
+    if math.hypot(q[0], q[1]) + 0.5 * p[br.I_L] * math.hypot(G[0, 2], G[1, 2]) > r_bound:
         return out, 2.0
     if omega @ omega > w_bound * w_bound:
         return out, 3.0
@@ -102,7 +102,7 @@ def generalised_forces(q, qt, p, r_bound, w_bound):
     return out, 0.0
 
 
-_REASONS = {1.0: "non-finite state", 2.0: "journal left its bearing by more than l",
+_REASONS = {1.0: "non-finite state", 2.0: "journal left its bearing by more than l/4",
             3.0: "angular velocity bound exceeded"}
 
 

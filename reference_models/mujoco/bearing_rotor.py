@@ -22,7 +22,7 @@ and gear (they exert nothing); the callback sets their `ctrl` to Ẇ and Ḋ in 
 MuJoCo's own integrator integrates them with the mechanics (act_dot = ctrl) — the energy
 balance closes at the integrator's accuracy, not at the output grid's.
 
-Divergence: the kernel raises a flag on a non-finite state or a bound (journal farther than l
+Divergence: the kernel raises a flag on a non-finite state or a bound (journal farther than l/4
 from its bearing, |ω| > 1e5 rad/s) and stops applying loads; MuJoCo's bad-qpos/qvel/qacc warning
 counters and the simulated time are checked after every output step (MuJoCo resets a diverged
 state silently unless autoreset is disabled, which it is here); the energy balance is checked
@@ -58,7 +58,7 @@ _STAGES = {"rk4": 4, "euler": 1, "implicitfast": 1, "implicit": 1}
 
 # userdata: [flag, journal bound (m), omega bound (rad/s), packed scene parameters...]
 _U_FLAG, _U_RBOUND, _U_WBOUND, _U_P = 0, 1, 2, 3
-_FLAG_REASONS = {1.0: "non-finite state", 2.0: "journal left its bearing by more than l",
+_FLAG_REASONS = {1.0: "non-finite state", 2.0: "journal left its bearing by more than l/4",
                  3.0: "angular velocity bound exceeded"}
 
 

@@ -322,14 +322,16 @@ def test_too_coarse_a_fixed_step_ends_with_a_clear_status():
 @pytest.mark.slow
 def test_norm_drift_over_100_s_with_and_without_projection():
     """100 s with the defect (default settings, 1 ms output). Measured: the first integral
-    |q| = 1 drifts to 1.6e-11 unprojected; projected, the largest per-step correction is 1.9e-15;
-    the energy balance closes to 1.8e-9 / 2.3e-9 of the motor work (~900 J); ~25 s each."""
+    |q| = 1 drifts to 1.3e-10 unprojected (1.6e-11 before the kernels' arithmetic was reordered:
+    the drift is an accumulation of round-off-level step errors); projected, the largest
+    per-step correction is 2.0e-15; the energy balance closes to 1.5e-9 / 2.6e-9 of the motor
+    work (~900 J); ~25 s each."""
     out = {}
     for project in (False, True):
         p, t, res = run({"t_end": 100, "output_dt": 0.001}, {"project": project})
         assert res.status == "ok"
         e = res.channels["energy_balance"]
-        assert np.max(np.abs(e - e[0])) < 2.3e-8 * res.channels["motor_work"][-1]
+        assert np.max(np.abs(e - e[0])) < 2.5e-8 * res.channels["motor_work"][-1]
         out[project] = res.invariants["quaternion_norm"]
-    assert out[False] < 1.6e-10
+    assert out[False] < 1.3e-9
     assert out[True] < 2e-14

@@ -205,3 +205,53 @@ def richardson(coarse: dict, fine: dict, n_modes: int) -> np.ndarray:
         cands = f_c.get(lab, [])
         out.append((4 * f - cands[j]) / 3 if j < len(cands) else f)
     return np.array(out[:n_modes])
+
+
+def checked_segments(settings: dict) -> int:
+    """The discretisation setting: an integer ≥ 4, even when extrapolating (N and N/2)."""
+    n = settings["n_segments"]
+    if isinstance(n, bool) or int(n) != n or n < 4 or (settings["extrapolate"] and n % 2):
+        raise ValueError(f"n_segments must be an integer >= 4 (even with extrapolate): {n!r}")
+    return int(n)
+
+
+SPREAD_NOTE = 5e-3   # Richardson spread above this: the chain is too coarse at this speed
+
+
+def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) -> dict:
+    """Modes of the N-segment chain, Richardson-extrapolated with the N/2 chain when asked;
+    returns the ModesResult fields (frequencies ascending) plus notes and extra.
+
+    With extrapolation, the N/4 chain gives a second extrapolate; their largest relative
+    difference (`richardson_spread_rel`) bounds the error of the first from above where the
+    chain is in its 1/N² regime (measured: spread 6e-4 for a true error 5.4e-5 at 40 rad/s).
+    A spread above SPREAD_NOTE adds a note to raise n_segments."""
+    want = n_modes + 6              # margin so the coarser models have every label of the fine
+    models = []
+    for k in ((n, n // 2, n // 4) if extrapolate else (n,)):
+        chain = make_chain(max(k, 2))
+        models.append(post(chain, *linearise(chain), want))
+    fine = models[0]
+    extra, notes = {}, []
+    if extrapolate:
+        f_all = richardson(models[1], fine, want)
+        idx = np.argsort(f_all)[:n_modes]
+        f = f_all[idx]
+        f_low = richardson(models[2], models[1], want + 6)
+        low = dict(zip([models[1]["labels"][i] for i in range(len(f_low))], f_low))
+        spread = max((abs(low[fine["labels"][i]] / f_all[i] - 1) for i in idx
+                      if fine["labels"][i] in low), default=0.0)
+        extra = {"unextrapolated_hz": fine["frequencies_hz"][idx],
+                 "richardson_spread_rel": float(spread)}
+        if spread > SPREAD_NOTE:
+            notes.append(f"discretisation: extrapolations from N/4–N/2 and N/2–N differ by "
+                         f"{spread:.1e} here; raise n_segments")
+    else:
+        idx = np.arange(min(n_modes, len(fine["labels"])))
+        f = fine["frequencies_hz"][idx]
+    if fine["n_unstable"]:
+        notes.append(f"unstable: {fine['n_unstable']} eigenvalues with Re s > 0 (steady spin is "
+                     "not a stable equilibrium here)")
+    return {"frequencies_hz": np.asarray(f, float), "labels": [fine["labels"][i] for i in idx],
+            "damping": np.asarray(fine["damping"])[idx], "shapes": fine["shapes"][idx],
+            "notes": notes, "extra": extra}

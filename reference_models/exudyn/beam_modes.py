@@ -89,74 +89,44 @@ def _linearised(chain: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return M, K, D
 
 
-def _checked_n(s: dict) -> int:
-    n = s["n_segments"]
-    if int(n) != n or n < 4 or (s["extrapolate"] and n % 2):
-        raise ValueError(f"n_segments must be an integer >= 4 (even with extrapolate): {n!r}")
-    return int(n)
-
-
-def _solve(make_chain, post, n: int, extrapolate: bool, n_modes: int) -> tuple[dict, dict]:
-    fine = post(make_chain(n), *_linearised(make_chain(n)), n_modes + 6)
-    if not extrapolate:
-        return fine, {}
-    coarse = post(make_chain(n // 2), *_linearised(make_chain(n // 2)), n_modes + 6)
-    f = bc.richardson(coarse, fine, n_modes + 6)
-    order = np.argsort(f)
-    return fine, {"order": order, "f": f, "plain_hz": fine["frequencies_hz"]}
-
-
-def _result(fine: dict, ex: dict, n_modes: int, s: dict, notes: list, extra: dict
-            ) -> ModesResult:
-    if ex:
-        idx = ex["order"][:n_modes]
-        f = ex["f"][idx]
-        extra = {**extra, "unextrapolated_hz": ex["plain_hz"][idx]}
-    else:
-        idx = np.arange(min(n_modes, len(fine["labels"])))
-        f = fine["frequencies_hz"][idx]
-    if fine["n_unstable"]:
-        notes = notes + [f"unstable: {fine['n_unstable']} eigenvalues with Re s > 0 "
-                         "(steady spin is not a stable equilibrium here)"]
-    return ModesResult(frequencies_hz=np.asarray(f, float),
-                       labels=[fine["labels"][i] for i in idx],
-                       damping=np.asarray(fine["damping"])[idx], shapes=fine["shapes"][idx],
-                       settings=s, notes=notes, extra=extra)
+def _package(out: dict, settings: dict, note: str, extra: dict) -> ModesResult:
+    return ModesResult(frequencies_hz=out["frequencies_hz"], labels=out["labels"],
+                       damping=out["damping"], shapes=out["shapes"],
+                       settings=settings,
+                       notes=[note] + out["notes"], extra={**extra, **out["extra"]})
 
 
 def modes(params: dict, settings: dict | None = None) -> ModesResult:
     """Rotating blade: flap/lag/torsion frequencies (Hz, rotating frame) at params['speed']."""
     s = merge_settings(settings, MODES_SETTINGS, ())
-    n = _checked_n(s)
+    n = bc.checked_segments(s)
     if not s["rotary_inertia"] and params["speed"] != 0:
         raise ValueError("rotary_inertia=False (Euler–Bernoulli segments) is consistent only "
                          "at rest: spinning, its rigid sections have a spurious flap–torsion "
                          "coupling Ω·I_α")
     section = mstmm.blade_section_from(params)
     t0 = time.perf_counter()
-    fine, ex = _solve(lambda k: bc.blade_chain(params, section, k, bool(s["rotary_inertia"])),
-                      bc.blade_modes, n, bool(s["extrapolate"]), int(params["n_modes"]))
-    notes = ["rigid-segment chain (ObjectKinematicTree), linearised about steady spin, hub "
-             "speed held; lag modes carry the section's rotary inertia ρI_lag"]
-    return _result(fine, ex, int(params["n_modes"]), s, notes,
-                   {"stations_m": bc.stations(params["L"]),
-                    "linearise_s": time.perf_counter() - t0})
+    out = bc.solve(lambda k: bc.blade_chain(params, section, k, bool(s["rotary_inertia"])),
+                   _linearised, bc.blade_modes, n, bool(s["extrapolate"]), int(params["n_modes"]))
+    return _package(out, s, "rigid-segment chain (ObjectKinematicTree), linearised about steady "
+                    "spin, hub speed held; lag modes carry the section's rotary inertia ρI_lag",
+                    {"stations_m": bc.stations(params["L"]),
+                     "linearise_s": time.perf_counter() - t0})
 
 
 def shaft_modes(params: dict, settings: dict | None = None) -> ModesResult:
     """Spinning shaft: whirl frequencies (Hz, co-rotating frame) at Ω = spin_ratio·ω₀;
     extra['omega_star'] = ω/ω₀ (Table 2)."""
     s = merge_settings(settings, SHAFT_MODES_SETTINGS, ())
-    n = _checked_n(s)
+    n = bc.checked_segments(s)
     w0 = mstmm.spinning_shaft_omega0(params["EI_xx"], params["m"], params["L"])
     spin = params["spin_ratio"] * w0
     t0 = time.perf_counter()
-    fine, ex = _solve(lambda k: bc.shaft_chain(params, k, spin), bc.shaft_modes, n,
-                      bool(s["extrapolate"]), int(params["n_modes"]))
-    res = _result(fine, ex, int(params["n_modes"]), s,
-                  ["rigid-segment chain (ObjectKinematicTree) spinning about its axis, "
-                   "linearised about steady spin"],
-                  {"stations_m": bc.stations(params["L"]), "omega0_rad_s": w0,
-                   "linearise_s": time.perf_counter() - t0})
+    out = bc.solve(lambda k: bc.shaft_chain(params, k, spin), _linearised, bc.shaft_modes, n,
+                   bool(s["extrapolate"]), int(params["n_modes"]))
+    res = _package(out, s, "rigid-segment chain (ObjectKinematicTree) spinning about its axis, "
+                   "linearised about steady spin",
+                   {"stations_m": bc.stations(params["L"]), "omega0_rad_s": w0,
+                    "linearise_s": time.perf_counter() - t0})
     res.extra["omega_star"] = res.frequencies_hz * 2 * np.pi / w0
     return res

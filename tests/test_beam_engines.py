@@ -291,3 +291,15 @@ def test_southwell_growth_at_low_speed(engine):
     for label, k, tol in (("flap 1", k_flap, 4.3e-4), ("lag 1", k_lag, 7.7e-3)):
         measured = ((2 * math.pi * f[label]) ** 2 - (2 * math.pi * f0[label]) ** 2) / 0.25**2
         assert measured == pytest.approx(k, rel=tol), label
+
+
+def test_coarse_chain_says_so_at_high_speed():
+    """At 150 rad/s (Ω/ω₀ ≈ 100) N = 40 is not converged (flap 1 off by 1e-3 against N = 160):
+    the leaf's N/4–N/2–N spread exceeds 5e-3 and its notes say to raise n_segments; at 40 rad/s
+    the spread (measured 5.7e-4) stays below and bounds the true error (5.4e-5)."""
+    for engine in ("exudyn", "mujoco"):
+        hi = BLADE[engine].modes(ROTATING_BEAM.resolve({"speed": 150}), {})
+        assert any("raise n_segments" in n for n in hi.notes)
+        _, lo = blade(engine, 40)
+        assert 5.4e-5 < lo.extra["richardson_spread_rel"] < 5e-3
+        assert not any("raise n_segments" in n for n in lo.notes)

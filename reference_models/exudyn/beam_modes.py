@@ -25,8 +25,9 @@ raise n_segments where it exceeds 5e-3: the blade above ~100 rad/s at N = 40).
 
 Physics differences to the paper's Euler–Bernoulli model (all from the rigid section, see
 `beam_chain_common.blade_chain`): lag n carries the section rotary inertia ρI_lag (lag 1
-−1.34e-3, lag 2 −0.93 %, lag 3 −2.2 %), flap n the tiny ρI_flap (≤ 8e-4 up to flap 10),
-torsion's Ω² term is ρ(I_lag − I_flap) instead of I_α (−6.4e-4 at 40 rad/s); the chain is
+−1.34e-3, lag 2 −0.93 %, lag 3 −2.2 %), flap n the tiny ρI_flap (flap 1–3 ≤ 1.5e-4 against
+the custom mstmm; higher flap modes add the N = 40 discretisation: flap 8 −7.9e-4), torsion's
+Ω² term is ρ(I_lag − I_flap) instead of I_α (−6.4e-4 at 40 rad/s); the chain is
 inextensible, so the blade's axial modes (the first at 192 Hz) are absent.
 
 Wall time per `modes` call (defaults, N = 40 and 20): 0.1–0.3 s with OPENBLAS_NUM_THREADS=1;

@@ -219,10 +219,13 @@ def _build(params: dict, integrator: str, h: float):
     return m, d
 
 
+_BAD = tuple(int(w) for w in (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
+                                mujoco.mjtWarning.mjWARN_BADQACC))
+
+
 def _bad_warnings(d) -> int:
-    return sum(int(d.warning[int(w)].number) for w in (mujoco.mjtWarning.mjWARN_BADQPOS,
-                                                        mujoco.mjtWarning.mjWARN_BADQVEL,
-                                                        mujoco.mjtWarning.mjWARN_BADQACC))
+    w = d.warning
+    return sum(int(w[i].number) for i in _BAD)
 
 
 def simulate(params: dict, t_out: np.ndarray, settings: dict) -> LeafResult:
@@ -240,15 +243,9 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> LeafResult:
     n_sub, h = bc.step_plan(t_out, dt)
     m, d = _build(params, s["integrator"], h)
     n = len(t_out)
-    r_cm, v_cm, quat, omega = (np.full((n, k), np.nan) for k in (3, 3, 4, 3))
-    work, diss = np.full(n, np.nan), np.full(n, np.nan)
-
-    def record(i):
-        r_cm[i], v_cm[i], quat[i] = d.qpos[0:3], d.qvel[0:3], d.qpos[3:7]
-        omega[i] = br.quat_matrix(np.array(d.qpos[3:7])) @ d.qvel[3:6]
-        work[i], diss[i] = d.act[0], d.act[1]
-
-    record(0)
+    # raw states per output step (the kinematic output is formed after the run, vectorised)
+    qpos, qvel, act = np.full((n, 7), np.nan), np.full((n, 6), np.nan), np.full((n, 2), np.nan)
+    qpos[0], qvel[0], act[0] = d.qpos, d.qvel, d.act
     status, t_fail, reason, steps = "ok", None, None, 0
     ud = d.userdata
     wall0 = time.perf_counter()
@@ -256,21 +253,24 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> LeafResult:
         for i in range(1, n):
             mujoco.mj_step(m, d, n_sub)
             steps += n_sub
+            qpos[i], qvel[i], act[i] = d.qpos, d.qvel, d.act
             bad = None
             if ud[_U_FLAG] != 0.0:
                 bad = _FLAG_REASONS[float(ud[_U_FLAG])]
-            elif _bad_warnings(d):
-                bad = "MuJoCo reported a bad (NaN/huge) qpos/qvel/qacc"
-            elif not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))
-                      and np.all(np.isfinite(d.act))):
+            elif not math.isfinite(qpos[i].sum() + qvel[i].sum() + act[i].sum()):
                 bad = "non-finite state"
             elif abs(d.time - t_out[i]) > 1e-9 * max(1.0, t_out[i]):
                 bad = f"time did not advance as expected (MuJoCo reset?) t = {d.time:.6g} s"
+            elif i % 64 == 0 and _bad_warnings(d):
+                bad = "MuJoCo reported a bad (NaN/huge) qpos/qvel/qacc"
             if bad is not None:
                 status, t_fail = "diverged", float(t_out[i])
                 reason = bad + bc.stability_note(params, h)
+                qpos[i:] = qvel[i:] = act[i:] = np.nan
                 break
-            record(i)
+        if status == "ok" and _bad_warnings(d):
+            status, t_fail = "diverged", float(t_out[-1])
+            reason = "MuJoCo reported a bad (NaN/huge) qpos/qvel/qacc"
         kind = cbk.kind
     wall = time.perf_counter() - wall0
     used = {**s, "dt": h, "callback": kind}
@@ -279,5 +279,9 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> LeafResult:
     if kind != s["callback"]:
         used["callback_fallback_reason"] = _NATIVE["error"]
     stats = {"steps": steps, "rhs_evals": steps * _STAGES[s["integrator"]], "integrate_s": wall}
-    return bc.result(params, t_out, r_cm, v_cm, quat, omega, work, diss, status, t_fail, reason,
-                     stats, used, h)
+    quat = qpos[:, 3:7]
+    rot = np.array([br.quat_matrix(q) if np.all(np.isfinite(q)) else np.full((3, 3), np.nan)
+                    for q in quat])
+    omega = np.einsum("nij,nj->ni", rot, qvel[:, 3:6])       # body → fixed frame
+    return bc.result(params, t_out, qpos[:, 0:3], qvel[:, 0:3], quat, omega, act[:, 0],
+                     act[:, 1], status, t_fail, reason, stats, used, h)

@@ -39,13 +39,25 @@ def _worst(obj):
     return max(cs, key=lambda c: c["max_rel"] / c["tolerance"]) if cs else None
 
 
-def _comparison_rows(obj):
-    rows = ["| a | b | channel | max abs Δ | max rel Δ | tolerance (rel) | verdict |",
-            "|---|---|---|---|---|---|---|"]
-    for c in obj.get("comparisons", []):
-        rows.append(f"| {c['a']} | {c['b']} | {c['channel']} | {_num(c.get('max_abs'))} | "
-                    f"{_num(c.get('max_rel'), '.2e')} | {_num(c.get('tolerance'), '.1e')} | "
-                    f"**{c['verdict']}** |")
+def _comparison_rows(obj, full_up_to=12):
+    """Every comparison when there are few; else one row per channel with its worst pair
+    (closest to or furthest over the tolerance) and the verdict counts (the case report has
+    every pair)."""
+    cs = obj.get("comparisons", [])
+    if len(cs) <= full_up_to:
+        rows = ["| a | b | channel | max abs Δ | max rel Δ | tolerance (rel) | verdict |",
+                "|---|---|---|---|---|---|---|"]
+        return rows + [f"| {c['a']} | {c['b']} | {c['channel']} | {_num(c.get('max_abs'))} | "
+                       f"{_num(c.get('max_rel'), '.2e')} | {_num(c.get('tolerance'), '.1e')} | "
+                       f"**{c['verdict']}** |" for c in cs]
+    rows = ["| channel | worst pair | max abs Δ | max rel Δ | tolerance (rel) | verdicts of "
+            "all pairs |", "|---|---|---|---|---|---|"]
+    for ch in dict.fromkeys(c["channel"] for c in cs):
+        mine = [c for c in cs if c["channel"] == ch]
+        w = _worst({"comparisons": mine}) or mine[0]
+        rows.append(f"| {ch} | {w['a']} – {w['b']} | {_num(w.get('max_abs'))} | "
+                    f"{_num(w.get('max_rel'), '.2e')} | {_num(w.get('tolerance'), '.1e')} | "
+                    f"{_verdicts({'comparisons': mine})} |")
     return rows
 
 
@@ -156,7 +168,8 @@ def write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed, 
         md += _run_rows(c, obj)
         if obj.get("comparisons"):
             md += ["", "Agreement (max |Δ| relative to the channel's scale, against the "
-                   "scene's tolerance):", ""] + _comparison_rows(obj)
+                   "scene's tolerance; every pair in the case report):", ""]
+            md += _comparison_rows(obj)
         md += _findings(obj)
         md += _reuse_and_messages(c, jobs, reused, out_dir)
     for parent, points in sweeps.items():
@@ -183,10 +196,7 @@ def write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed, 
                       + (f"{w['channel']} {_num(w['max_rel'], '.1e')} / "
                          f"{_num(w['tolerance'], '.0e')}" if w else "—")
                       + f" | [report]({p.name}/report.md) |")
-        md += ["", "Findings per point:", ""]
-        for p in points:
-            for f in outcome.get(p.name, {}).get("findings", []):
-                md.append(f"- **{p.name.split('/', 1)[1]}** {f['text']}")
+        md += _findings_table(points, outcome)
         for p in points:
             md += _reuse_and_messages(p, jobs, reused, out_dir)
     report = out_dir / "report.md"
@@ -194,6 +204,32 @@ def write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed, 
     summary["report"] = str(report)
     write_json(out_dir / "summary.json", summary)
     return summary
+
+
+def _findings_table(points, outcome):
+    """The findings' numbers (first solver's value, as the scene states them) per point in
+    one table; the sentences with every solver's number in a collapsible list."""
+    names = list(dict.fromkeys(f["name"] for p in points
+                               for f in outcome.get(p.name, {}).get("findings", [])
+                               if isinstance(f.get("value"), (int, float))))
+    if not names:
+        return []
+    units = {f["name"]: f.get("unit") for p in points
+             for f in outcome.get(p.name, {}).get("findings", [])}
+    md = ["", "Findings per point (the number of the first solver; the sentences below give "
+          "every solver's):", "",
+          "| point | " + " | ".join(n + (f" [{units[n]}]" if units.get(n) else "")
+                                   for n in names) + " |",
+          "|---|" + "---|" * len(names)]
+    for p in points:
+        vals = {f["name"]: f.get("value") for f in outcome.get(p.name, {}).get("findings", [])}
+        md.append(f"| {p.name.split('/', 1)[1]} | "
+                  + " | ".join(_num(vals.get(n), ".6g") for n in names) + " |")
+    md += ["", "<details><summary>Findings as sentences</summary>", ""]
+    for p in points:
+        for f in outcome.get(p.name, {}).get("findings", []):
+            md.append(f"- **{p.name.split('/', 1)[1]}** {f['text']}")
+    return md + ["", "</details>"]
 
 
 def _changed_fixed(points):

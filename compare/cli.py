@@ -150,8 +150,8 @@ def build_parser():
     def common(sp):
         sp.add_argument("scene", help="scene name (see `xval list`)")
         sp.add_argument("--solver", action="append", default=[], metavar="NAME",
-                        help="run only this solver (repeatable; default: every solver of the "
-                             "scene)")
+                        help="run this solver; repeat for several (default: every solver of "
+                             "the scene)")
         sp.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                         help="override a scene parameter (repeatable; `xval show SCENE` "
                              "lists them), e.g. --set torque=3.2")
@@ -159,7 +159,7 @@ def build_parser():
                         help="print one JSON object on standard output (logs go to "
                              "standard error)")
 
-    out_help = "output folder (default: logs)"
+    out_help = "output folder, made if missing (default: logs)"
     sp = sub.add_parser("run", help="simulate a scene with several solvers and compare them",
                         description="Simulate a time-domain scene with each solver, compare "
                                     "the trajectories pairwise, record (rerun .rrd) and report "
@@ -174,7 +174,7 @@ def build_parser():
                         "solvers keep their step and say so)")
     sp.add_argument("--integrator", metavar="NAME",
                     help="integrator of every chosen solver (each must offer it)")
-    sp.add_argument("--out", default="logs", help=out_help)
+    sp.add_argument("--out", default="logs", metavar="DIR", help=out_help)
     sp.add_argument("--strict", action="store_true", help="exit 1 when a verdict is disagree")
     sp.add_argument("--no-record", action="store_true", help="skip the .rrd recording")
     sp.add_argument("--timeout", type=_positive("--timeout"), metavar="S",
@@ -185,7 +185,7 @@ def build_parser():
                         description="Natural frequencies from every solver that linearises, "
                                     "matched mode by mode; Campbell diagram for rotor scenes.")
     common(sp)
-    sp.add_argument("--out", default="logs", help=out_help)
+    sp.add_argument("--out", default="logs", metavar="DIR", help=out_help)
     sp.add_argument("--strict", action="store_true", help="exit 1 when a verdict is disagree")
 
     sp = sub.add_parser("campaign", help="run a campaign file (default: built-in) into a report",
@@ -201,7 +201,7 @@ def build_parser():
                          "--executor dask; default: a LocalCluster on this machine)")
     sp.add_argument("--workers", type=_positive_int("--workers"), default=None, metavar="N",
                     help="parallel jobs (default 2)")
-    sp.add_argument("--out", default="logs", help=out_help)
+    sp.add_argument("--out", default="logs", metavar="DIR", help=out_help)
     sp.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     sp.add_argument("--timeout", type=_positive("--timeout"), metavar="S",
                     help="wall-clock limit per job unless its case sets timeout_s")
@@ -221,7 +221,7 @@ def build_parser():
                     help="trade a model parameter instead of the step: each solver's default "
                          "settings at each value, errors against the reference at the --set "
                          "value (e.g. --vary stiffness=1e5,1e6)")
-    sp.add_argument("--out", default="logs", help=out_help)
+    sp.add_argument("--out", default="logs", metavar="DIR", help=out_help)
     _budget_options(sp)
     return p
 

@@ -223,7 +223,41 @@ def build_parser():
                          "value (e.g. --vary stiffness=1e5,1e6)")
     sp.add_argument("--out", default="logs", metavar="DIR", help=out_help)
     _budget_options(sp)
+
+    sp = sub.add_parser("extremes", help="numerical stability at the extremes of a scene",
+                        description="Run every extreme case of the scene's spec with every "
+                                    "solver: each ends within tolerance of an independent check "
+                                    "(energy balance, a second solver, a closed form) or with "
+                                    "an honest status (diverged / unstable / singular / "
+                                    "timeout) and the time and reason.")
+    sp.add_argument("scene", help="scene name (see `xval list`)")
+    sp.add_argument("--solver", action="append", default=[], metavar="NAME",
+                    help="run this solver; repeat for several (default: every solver)")
+    sp.add_argument("--all", action="store_true",
+                    help="include the long cases (e.g. a 1000 s horizon)")
+    sp.add_argument("--strict", action="store_true",
+                    help="exit 1 when a case FAILED (ok but the independent check fails)")
+    sp.add_argument("--timeout", type=_positive("--timeout"), metavar="S",
+                    help="wall-clock limit per solver run: status timeout")
+    sp.add_argument("--out", default="logs", metavar="DIR", help=out_help)
+    sp.add_argument("--json", action="store_true",
+                    help="print one JSON object on standard output")
     return p
+
+
+def cmd_extremes(args):
+    from .extremes import run_extremes
+    check_out(args.out)
+    with stdout_to_stderr():
+        obj = run_extremes(args.scene, args.solver, args.out, include_slow=args.all,
+                           timeout_s=args.timeout, log=_log)
+    if args.json:
+        emit_json(obj)
+    else:
+        for r in obj["results"]:
+            print(f"{r['case']:32s} {r['solver']:26s} {r['outcome']:18s} {r['detail']}")
+        print(f"report: {obj['report']}")
+    return 1 if args.strict and obj["n_failed"] else 0
 
 
 def cmd_list(args):
@@ -364,7 +398,7 @@ def cmd_bench(args):
 
 
 COMMANDS = {"list": cmd_list, "show": cmd_show, "run": cmd_run, "modes": cmd_modes,
-            "campaign": cmd_campaign, "bench": cmd_bench}
+            "campaign": cmd_campaign, "bench": cmd_bench, "extremes": cmd_extremes}
 
 
 def main(argv=None):

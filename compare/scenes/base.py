@@ -30,6 +30,29 @@ class Campbell:
 
 
 @dataclass(frozen=True)
+class Extreme:
+    """One extreme case of a scene's spec: parameter overrides (`set`), settings overrides for
+    the solvers that have those keys (e.g. a step above a stability limit), and the
+    independent check that an `ok` run must pass.
+
+    check: "energy" — the energy balance closes to `bound` of the energy scale (conservation
+    law); "reference" — the key channel agrees with the scene's first reference solver at its
+    accurate settings to `bound` of the channel's scale (a second solver); a callable
+    (params, trajectory) -> (passed, value, what) for a closed form. `expect` says what an
+    honest outcome is: "ok" (must pass the check), "status" (must end diverged / unstable /
+    singular — e.g. past a singularity), or "either" (ok and passing, or an honest status)."""
+    name: str
+    set: dict = field(default_factory=dict)
+    settings: dict = field(default_factory=dict)
+    check: str | Callable = "energy"
+    bound: float = 1e-6
+    expect: str = "either"
+    solvers: tuple = ()          # restrict to these (default: every solver of the scene)
+    slow: bool = False           # long: run by `xval extremes --all` and the slow tests
+    why: str = ""
+
+
+@dataclass(frozen=True)
 class Scene:
     name: str
     title: str
@@ -70,6 +93,8 @@ class Scene:
     draw_3d: Callable | None = None
     # the default campaign's cases of this scene: [{"name", "set", "solvers", "timeout_s"}]
     campaign_cases: tuple = ()
+    # the spec's extreme cases (`xval extremes`)
+    extremes: tuple = ()
     notes: str = ""
 
     def param(self, name):

@@ -5,7 +5,7 @@ from ..identify import fft_peak, matrix_pencil, transverse_components
 from ..metrics import first_crossing
 from ..params import Param, positive
 from ..physics.rotor import constants
-from .base import Campbell, Finding, Scene
+from .base import Campbell, Extreme, Finding, Scene
 
 SOURCE = "seed 000 (Euler-vector rotor), seed 001 (quaternion formulation)"
 
@@ -104,6 +104,47 @@ def draw_rotor(rec, params, traj, color, offset):
                      columns=rr.Transform3D.columns(translation=trans, quaternion=xyzw))
 
 
+def _free_spin_ramp(p, tr):
+    """Centred rotor spun from rest about its upright axis: no tilt is ever excited, so
+    |ω(t)| = M t / I_p exactly (I_p about the axis through O)."""
+    exact = p["torque"] * tr.t[-1] / (p["m"] * p["R"] ** 2 / 2)
+    rel = abs(tr.channels["omega_norm"][-1] - exact) / exact
+    return rel <= 1e-9, rel, f"|ω(t_end)| within {rel:.1e} of M t/I_p = {exact:.6g} rad/s"
+
+
+# The spec's extremes (scene-rotor.md). Bounds are claims set from the measured outcome of the
+# accurate default settings of all four solvers (`xval extremes rotor-spinup --all`).
+SPINUP_EXTREMES = (
+    Extreme("torque 0.05 N·m, 200 s", {"torque": 0.05, "t_end": 200, "output_dt": 0.1},
+            bound=1e-6, why="long slow spin-up below the critical speed"),
+    Extreme("torque 50 N·m", {"torque": 50, "t_end": 2}, check="reference", bound=1e-6,
+            why="violent passage"),
+    Extreme("k 10 (falls over)", {"k": 10, "t_end": 3}, why="k < m g l: the upright rotor "
+            "falls; through tilt π the spring −kγ is undefined: an honest status, or ok short "
+            "of it"),
+    Extreme("k 1e7 (stiff)", {"k": 1e7, "t_end": 1}, bound=1e-6,
+            why="tilt frequency 2744 rad/s: fixed steps above RK4's limit 2.78/ω must stop"),
+    Extreme("eccentricity 0", {"eccentricity": 0.0, "t_end": 5}, check=_free_spin_ramp,
+            expect="ok", why="no whirl is excited: the closed-form free ramp"),
+    Extreme("eccentricity 0.1", {"eccentricity": 0.1, "t_end": 5}, bound=1e-6,
+            why="large imbalance"),
+    Extreme("spin 1000 rad/s", {"spin0": 1000, "tilt0": 0.05, "torque": 0, "t_end": 1,
+                                "output_dt": 0.001}, bound=1e-6, why="fast gyroscopic top"),
+    Extreme("tilt0 3.0", {"tilt0": 3.0, "t_end": 2}, bound=1e-6,
+            why="starts near the split's singularity at tilt π"),
+    Extreme("tilt0 π − 2e-3", {"tilt0": float(np.pi - 2e-3), "t_end": 1},
+            why="1e-3 rad from where every solver stops (tilt π − 1e-3)"),
+    Extreme("1000 s horizon", {"t_end": 1000, "output_dt": 0.1}, bound=1e-6, slow=True,
+            why="energy drift growth over a long captured run"),
+    Extreme("rk4 below its stability limit", {"k": 1e7, "t_end": 0.2, "output_dt": 0.001},
+            {"integrator": "rk4", "dt": 2.5e-4}, bound=1e-6, expect="ok",
+            why="ω h = 0.69 < 2.78"),
+    Extreme("rk4 above its stability limit", {"k": 1e7, "t_end": 0.2, "output_dt": 0.005},
+            {"integrator": "rk4", "dt": 5e-3}, expect="status",
+            why="ω h = 13.7 > 2.78: must end diverged, never ok"),
+)
+
+
 SPINUP = Scene(
     name="rotor-spinup",
     title="Rotor on a spherical joint spun up through resonance",
@@ -133,6 +174,7 @@ SPINUP = Scene(
     reference_solvers=("euler-vector", "quaternion"),
     findings=spinup_findings,
     draw_3d=draw_rotor,
+    extremes=SPINUP_EXTREMES,
     campaign_cases=({"name": "rotor-spinup-1.5Nm"},
                     {"name": "rotor-spinup-3.2Nm", "set": {"torque": "3.2", "t_end": "5"}}),
     notes="Spring −kγ exactly as the paper defines it (U = ½k|γ|², γ the transverse Euler "

@@ -1,0 +1,52 @@
+"""`xval extremes`: every case × solver ends within tolerance of an independent check or with an
+honest status — never `ok` with a failing check. The default run keeps one fast case per scene
+that proves the detection; the full lists are `slow`."""
+import json
+
+import pytest
+
+from compare import cli
+from compare.extremes import run_case, run_extremes
+from compare.scenes import SCENES, get_scene
+from compare.solvers import solvers_for
+
+TIME_SCENES = [n for n, sc in SCENES.items() if sc.kind == "time" and sc.extremes]
+
+
+def _case(scene, name):
+    return next(c for c in scene.extremes if c.name == name)
+
+
+def test_a_step_above_the_stability_limit_ends_diverged_in_every_rotor_solver():
+    sc = get_scene("rotor-spinup")
+    rows = run_case(sc, _case(sc, "rk4 above its stability limit"), solvers_for(sc.name),
+                    log=lambda m: None)
+    assert {r["solver"] for r in rows} == set(sc.leaves)
+    for r in rows:
+        assert r["outcome"] == "diverged" and 0 < r["t_fail"] <= 0.2, r
+
+
+def test_closed_form_case_holds_in_every_rotor_solver():
+    sc = get_scene("rotor-spinup")
+    rows = run_case(sc, _case(sc, "eccentricity 0"), solvers_for(sc.name), log=lambda m: None)
+    assert all(r["outcome"] == "within tolerance" for r in rows), rows
+
+
+def test_cli_writes_the_table(tmp_path, capsys):
+    rc = cli.main(["extremes", "rotor-spinup", "--solver", "quaternion", "--json",
+                   "--out", str(tmp_path)])
+    obj = json.loads(capsys.readouterr().out)
+    assert rc == 0 and obj["n_failed"] == 0
+    names = {c.name for c in get_scene("rotor-spinup").extremes if not c.slow}
+    assert {r["case"] for r in obj["results"]} == names
+    assert all(r["outcome"] == "within tolerance" or r["outcome"] in ("diverged", "unstable",
+                                                                       "singular")
+               for r in obj["results"])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scene", TIME_SCENES)
+def test_no_extreme_case_returns_ok_with_a_failing_check(scene, tmp_path):
+    obj = run_extremes(scene, None, tmp_path, include_slow=True, log=lambda m: None)
+    bad = [r for r in obj["results"] if r["outcome"].startswith(("FAILED", "error"))]
+    assert not bad, bad

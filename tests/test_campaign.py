@@ -81,3 +81,56 @@ def test_resume_reruns_a_job_whose_inputs_changed_and_reuses_it_when_they_come_b
     assert sorted(case["reused"]) == ["euler-vector", "quaternion"]
     assert "Reused stored results for spin" in (tmp_path / "logs" / "campaign" / "t" /
                                                  "report.md").read_text()
+
+
+def _toml(tmp_path, text):
+    f = tmp_path / "camp.toml"
+    f.write_text(text)
+    return str(f)
+
+
+SWEEP_TOML = """# a comment: TOML campaign files may explain themselves
+name = "t"
+
+[[cases]]
+name = "spin"
+scene = "rotor-spinup"
+solvers = ["euler-vector"]
+set = {{ t_end = 0.5 }}
+sweep = {{ {sweep} }}
+"""
+
+
+@pytest.mark.parametrize("text, words", [
+    ("name = \"t\"\n[[cases]\nscene = 1\n", ["camp.toml", "TOML syntax", "line 2"]),
+    (SWEEP_TOML.format(sweep="nope = [1, 2]"), ["camp.toml", "cases[0].sweep", "nope"]),
+    (SWEEP_TOML.format(sweep="torque = [1.0, 2e4]"),
+     ["camp.toml", "cases[0].sweep.torque", "outside the admissible range"]),
+    (SWEEP_TOML.format(sweep="torque = []"), ["camp.toml", "cases[0].sweep.torque"]),
+    (SWEEP_TOML.format(sweep="torque = [1]").replace("rotor-spinup", "rotor-x"),
+     ["cases[0].scene", "unknown scene"]),
+    (SWEEP_TOML.format(sweep="torque = [1]").replace('"euler-vector"', '"nope"'),
+     ["cases[0].solvers", "unknown solver"]),
+    (SWEEP_TOML.format(sweep="torque = [1]").replace("scene = ", "scen = "),
+     ["cases[0].scen", "unknown key"]),
+    (SWEEP_TOML.format(sweep="torque = [1]").replace("t_end = 0.5", "t_end = -1"),
+     ["cases[0].set.t_end"]),
+    ("name = \"t\"\n", ["camp.toml", "cases", "missing"]),
+])
+def test_malformed_campaign_file_is_one_line_exit_2_and_writes_nothing(tmp_path, text, words):
+    rc, so, se = xval("campaign", _toml(tmp_path, text), "--out", str(tmp_path / "logs"))
+    assert rc == 2 and so == ""
+    lines = se.strip().splitlines()
+    assert len(lines) == 1, se
+    for w in words:
+        assert w in lines[0], lines[0]
+    assert not (tmp_path / "logs").exists()
+
+
+def test_json_syntax_error_names_the_line(tmp_path):
+    f = tmp_path / "camp.json"
+    f.write_text('{"name": "t",\n "cases": [\n {"scene": "rotor-spinup",}]}')
+    rc, so, se = xval("campaign", str(f), "--out", str(tmp_path / "logs"))
+    assert rc == 2 and len(se.strip().splitlines()) == 1
+    assert "camp.json" in se and "line 3" in se
+    assert not (tmp_path / "logs").exists()

@@ -123,6 +123,41 @@ def test_loads_do_the_work_the_energy_balance_books():
         assert F @ v + M @ w == pytest.approx(-dV + w_motor - d_diss, rel=1e-8)
 
 
+@pytest.mark.parametrize("gravity", ["0,-9.81,0", "3,-4,0", "0,0,-9.81", "1,2,-3"])
+def test_the_common_start_is_an_equilibrium(gravity):
+    """At rest at static_sag, with no drive and no defect, every acceleration of the leaf's
+    right-hand side vanishes (bearing and axial springs carry m g), for any gravity direction."""
+    p = SCENE.resolve({"gravity": gravity, "motor_stall_torque": 0, "defect_height": 0})
+    y0 = leaf.initial_state(p)
+    pk = np.concatenate([phys.pack(p), [0.0, 0.1 * p["l"]]])
+    dy = leaf.rhs(0.0, y0, pk)
+    g = np.linalg.norm(p["gravity"])
+    # centre of mass: measured 0 radially; 3e-12 m/s² axially = round-off of (z + l/2) − l/2
+    # (~5e-17 m) times k_axial/m
+    assert np.max(np.abs(dy[3:6])) < 1e-11 * g
+    assert np.max(np.abs(dy[10:14])) < 1e-12             # quaternion: measured 0
+
+
+def test_module_steady_spin_matches_the_balance_solved_here():
+    p = SCENE.resolve({"mu": 0.2, "bearing_drag": 3e-3})
+    m_g = 6.0 * 9.81
+
+    def net(w):
+        return 1.0 * (1 - w / 80.0) - 3e-3 * w - 0.2 * 0.02 * m_g * np.tanh(w / 0.1)
+
+    assert phys.steady_spin_rate(p) == pytest.approx(brentq(net, 1.0, 80.0, xtol=1e-14),
+                                                     rel=1e-12)
+
+
+def test_spin_angle_unwraps_a_coarse_grid_with_the_rate():
+    """4 rad per sample: np.unwrap alone cannot tell the branch; with the rate it can."""
+    t = np.linspace(0, 1, 21)
+    rate = 80.0 + 10 * t                               # angle 80 t + 5 t²
+    angle = 80 * t + 5 * t ** 2
+    quats = np.array([qmul(qaxis([1, 1, 0], 1e-3), qaxis([0, 0, 1], a)) for a in angle])
+    assert np.allclose(phys.spin_angle(quats, t, rate), angle, atol=1e-9)
+
+
 # ------------------------------------------------------------------ the quaternion equation
 def test_second_order_quaternion_equation_matches_first_order_kinematics():
     """q̈ of the leaf equals d/dt(½ q∘Ω) = ½ q̇∘Ω + ½ q∘Ω̇ for q̇ = ½ q∘Ω (unit q); the rates

@@ -22,8 +22,13 @@ V_b = ½k_b|δ_a − d_a|² + ½k_b|δ_b|² + ½k_axial (z_a − l/2)², Ẇ_mot
 Ḋ = c_b(|δ̇_a|² + |δ̇_b|²) − M_friction ω_z + k_b (δ_a − d_a)·ḋ_a.
 The last term is the work of the prescribed lift: the bump moves the spring's anchor but the
 force law puts no reaction moment on the shaft, so the lift is not conservative; its work is
-booked in D ("dissipated" = dampers + friction + defect lift) so the balance closes exactly.
-Solvers integrate Ẇ_motor and Ḋ (from `powers`) along with their state.
+booked in D ("dissipated" = dampers + friction + defect lift) so the balance closes exactly
+(D need not grow monotonically: the lift can feed energy in).
+
+For solvers: every one starts from `initial_state` (defect-free static sag, unrotated, at rest);
+`body_loads` gives everything but gravity reduced to the centre of mass plus Ẇ_motor and Ḋ,
+which each solver integrates along with its state; `channels` turns the common kinematic output
+into the scene's channels.
 """
 from __future__ import annotations
 

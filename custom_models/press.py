@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from compare.contract import merge_settings
+from compare.contract import LeafResult, merge_settings
 from compare.physics import press as phys
 
 from .integrators import ADAPTIVE_TABLEAUS, FAIL_REASONS, FIXED_TABLEAUS, LA_REASONS
@@ -54,13 +54,15 @@ REASONS = {**FAIL_REASONS, **LA_REASONS,
 
 def settings_of(defaults: dict, settings: dict | None) -> dict:
     """The caller's settings over the leaf's defaults (the one shared merge), plus the checks
-    of this model's own keys."""
+    of this model's own keys (ValueError with one line; nothing runs)."""
     s = merge_settings(settings, defaults, INTEGRATORS)
     if s["integrator"] == "wilson" and not float(s["theta"]) >= 1.0:
         raise ValueError(f"theta must be >= 1, got {s['theta']!r}")
     for k in ("dphi_deg", "dpsi_deg"):
         if k in s and not float(s[k]) > 0.0:
             raise ValueError(f"{k} must be > 0, got {s[k]!r}")
+    if s["integrator"] not in ADAPTIVE and not (s["dt"] and float(s["dt"]) > 0.0):
+        raise ValueError(f"dt must be > 0, got {s['dt']!r}")
     return s
 
 
@@ -128,7 +130,7 @@ def _used_settings(solver: str, s: dict, used: dict, cycle: bool) -> dict:
 
 
 def simulate(solver: str, defaults: dict, params: dict, t_out: np.ndarray,
-             settings: dict | None) -> dict:
+             settings: dict | None) -> LeafResult:
     """The leaf contract for both solvers: `press-cycle` when the parameters carry the lock."""
     cycle = phys.is_cycle(params)
     s = settings_of(defaults, settings)
@@ -143,9 +145,9 @@ def simulate(solver: str, defaults: dict, params: dict, t_out: np.ndarray,
         # the start itself sits at (or, for the finite differences, too near) the double root
         Y = np.full((n, len(y0)), np.nan)
         Y[0] = y0
-        return {"channels": {k: np.full(n, np.nan) for k in CHANNELS}, "status": "diverged",
-                "t_fail": 0.0, "reason": _reason(code0, Y, p) + " at the initial state",
-                "stats": {"steps": 0, "rhs_evals": 0}, "settings": dict(s), "extra": {}}
+        return LeafResult(channels={k: np.full(n, np.nan) for k in CHANNELS}, status="diverged",
+                t_fail=0.0, reason=_reason(code0, Y, p) + " at the initial state",
+                stats={"steps": 0, "rhs_evals": 0}, settings=dict(s), extra={})
     t0 = time.perf_counter()
     extra = {}
     if cycle:
@@ -162,10 +164,10 @@ def simulate(solver: str, defaults: dict, params: dict, t_out: np.ndarray,
     ch = channels(params, Y, modes, p, t_out, lost)
     extra.update({"motor_work": Y[:, 4].copy(), "damper_loss": Y[:, 5].copy()})
     ok = code == 0
-    return {"channels": ch, "status": "ok" if ok else "diverged",
-            "t_fail": None if ok else float(t_fail),
-            "reason": None if ok else _reason(code, Y, p),
-            "stats": stats, "settings": _used_settings(solver, s, used, cycle), "extra": extra}
+    return LeafResult(channels=ch, status="ok" if ok else "diverged",
+            t_fail=None if ok else float(t_fail),
+            reason=None if ok else _reason(code, Y, p),
+            stats=stats, settings=_used_settings(solver, s, used, cycle), extra=extra)
 
 
 def linearised_modes(params: dict, q=None) -> tuple:

@@ -8,6 +8,8 @@ only)), dt or rtol/atol, newton_tol, max_iter, singular_tol, energy_jump, event_
 """
 import numpy as np
 
+from compare.contract import LeafResult
+
 from . import press
 
 DEFAULT_SETTINGS = {**press.COMMON_SETTINGS, "integrator": "rk4", "dt": 1e-5}
@@ -16,5 +18,10 @@ ADAPTIVE = press.ADAPTIVE          # error-controlled (press only, not press-cyc
 CHANNELS = press.CHANNELS
 
 
-def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> dict:
+def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
+    """The settings merged and checked before anything runs (ValueError with one line)."""
+    return press.settings_of(DEFAULT_SETTINGS, settings)
+
+
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> LeafResult:
     return press.simulate("exact", DEFAULT_SETTINGS, params, t_out, settings)

@@ -8,6 +8,8 @@ Settings: as `press_exact`, plus dphi_deg, dpsi_deg (paper: 0.1°).
 """
 import numpy as np
 
+from compare.contract import LeafResult
+
 from . import press
 
 DEFAULT_SETTINGS = {**press.COMMON_SETTINGS, "integrator": "linacc", "dt": 1e-5, "dphi_deg": 0.1,
@@ -17,5 +19,10 @@ ADAPTIVE = press.ADAPTIVE          # error-controlled (press only, not press-cyc
 CHANNELS = press.CHANNELS
 
 
-def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> dict:
+def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
+    """The settings merged and checked before anything runs (ValueError with one line)."""
+    return press.settings_of(DEFAULT_SETTINGS, settings)
+
+
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> LeafResult:
     return press.simulate("partial", DEFAULT_SETTINGS, params, t_out, settings)

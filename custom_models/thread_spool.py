@@ -79,11 +79,11 @@ import time
 
 import numpy as np
 
-from compare.contract import merge_settings
+from compare.contract import LeafResult, merge_settings
 from compare.physics import sail as phys
 
 from .thread_spool_driver import FAIL_NONFINITE, FAIL_STRETCH, REASONS, run_imr, run_rk4
-from .thread_spool_model import LC, NN, OFF, OM0, RR, WSP, pack, stable_dt_rk4
+from .thread_spool_model import LC, NN, OFF, OM0, RR, WSP, pack, stable_dt_rk4, variant_switches
 
 CHANNELS = phys.CHANNELS
 INTEGRATORS = ("rk4", "imr")
@@ -127,9 +127,21 @@ def _initial_state(P: np.ndarray, n: int, inertial: bool) -> np.ndarray:
     return y0
 
 
-def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> dict:
-    """Leaf contract: the scene's resolved parameters, the output grid, the settings."""
+def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
+    """The settings merged and checked before anything runs (ValueError with one line)."""
     s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
+    variant_switches(s)
+    for k in ("stretch_limit", "newton_tol", "eps_fallback"):
+        if not float(s[k]) > 0.0:
+            raise ValueError(f"{k} must be > 0, got {s[k]!r}")
+    if s["dt"] not in (None, "auto") and not float(s["dt"]) > 0:
+        raise ValueError(f"dt must be > 0 or 'auto', got {s['dt']!r}")
+    return s
+
+
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> LeafResult:
+    """Leaf contract: the scene's resolved parameters, the output grid, the settings."""
+    s = check_settings(settings)
     t_out = np.asarray(t_out, float)
     if t_out[0] != 0.0 or np.any(np.diff(t_out) <= 0):
         raise ValueError("t_out must start at 0 and be strictly increasing")
@@ -169,6 +181,6 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> d
                   "boundary_node": b_out.astype(float), "dissipated": 2 * Y[:, 2],
                   # spool work on the Q-springs + the release work Σ m (r ω)² (both blades)
                   "payout_work": 2 * Y[:, 3] + np.cumsum(m)[b_out] * (P[RR] * P[WSP]) ** 2})
-    return {"channels": ch, "status": status,
-            "t_fail": None if code == 0 else float(t_fail), "reason": reason,
-            "stats": stats, "settings": {**s, **used, "dt": dt}, "extra": extra}
+    return LeafResult(channels=ch, status=status,
+            t_fail=None if code == 0 else float(t_fail), reason=reason,
+            stats=stats, settings={**s, **used, "dt": dt}, extra=extra)

@@ -1,6 +1,6 @@
 """What the engine leaves of `sail-deploy` share beyond the scene physics (which lives in
 compare/physics/sail.py: thread, payout, release law, breakpoints, formula 18, channels): the
-one settings merge with the output-grid check, and the explicit engines' stable step.
+output-grid check and the explicit engines' stable step.
 
 The engines model ONE blade in the inertial frame with half the hub inertia (two symmetric
 blades: J Ω' = 2 M_blade  <=>  (J/2) Ω' = M_blade) and report both blades' totals; the boundary
@@ -12,18 +12,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from compare.contract import merge_settings
 from compare.physics.sail import thread
 
 
-def settings_and_grid(settings: dict | None, defaults: dict, integrators: tuple,
-                      t_out) -> tuple:
-    """Settings over the leaf's defaults (the one shared merge) and the checked output grid."""
-    s = merge_settings(settings, defaults, integrators)
+def check_grid(t_out) -> np.ndarray:
     t_out = np.asarray(t_out, float)
     if np.any(np.diff(t_out) <= 0):
         raise ValueError("t_out must be strictly increasing")
-    return s, t_out
+    return t_out
 
 
 def stable_dt_explicit(params: dict, factor: float = 2.0, safety: float = 0.8) -> float:

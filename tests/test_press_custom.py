@@ -155,14 +155,14 @@ def test_energy_balance_and_closure_over_the_paper_run():
                     (press_partial, {"integrator": "rk4", "dt": 1e-5, "dphi_deg": 0.01,
                                      "dpsi_deg": 0.01})):
         r = mod.simulate(DEFAULT, T_OUT, st)
-        assert r["status"] == "ok"
-        eb = r["channels"]["energy_balance"]
-        work = r["extra"]["motor_work"][-1]
+        assert r.status == "ok"
+        eb = r.channels["energy_balance"]
+        work = r.extra["motor_work"][-1]
         assert work > 1.0
         assert np.max(np.abs(eb - eb[0])) <= 1e-6 * work
-        assert np.max(r["channels"]["loop_violation"]) < 1e-15
-        assert set(r["channels"]) == set(PRESS.channels)
-        assert all(len(v) == len(T_OUT) for v in r["channels"].values())
+        assert np.max(r.channels["loop_violation"]) < 1e-15
+        assert set(r.channels) == set(PRESS.channels)
+        assert all(len(v) == len(T_OUT) for v in r.channels.values())
 
 
 def test_partial_minus_exact_is_second_order_in_the_virtual_step():
@@ -172,7 +172,7 @@ def test_partial_minus_exact_is_second_order_in_the_virtual_step():
     for d in ds:
         r = press_partial.simulate(DEFAULT, T_OUT, {"integrator": "rk4", "dt": 1e-5,
                                                "dphi_deg": d, "dpsi_deg": d})
-        dev.append(np.max(np.abs(r["channels"]["crank_rate"] - ref["channels"]["crank_rate"])))
+        dev.append(np.max(np.abs(r.channels["crank_rate"] - ref.channels["crank_rate"])))
     slopes = np.diff(np.log(dev)) / np.diff(np.log(ds))
     assert np.all(np.abs(slopes - 2.0) < 0.1), slopes
 
@@ -182,11 +182,11 @@ def test_start_at_the_double_root_is_reported_not_nan():
     # chart runs until the rod reaches singular_tol
     for mod in (press_partial, press_exact):
         r = mod.simulate(PRESS.resolve({"psi0": 62.0}), T_OUT, {"integrator": "rk4", "dt": 1e-5})
-        assert r["status"] == "diverged"
-        assert "singular" in r["reason"]
-        ok = np.isfinite(r["channels"]["crank_rate"])
+        assert r.status == "diverged"
+        assert "singular" in r.reason
+        ok = np.isfinite(r.channels["crank_rate"])
         assert not ok[-1]
-        assert r["t_fail"] is not None and r["t_fail"] >= 0.0
+        assert r.t_fail is not None and r.t_fail >= 0.0
 
 
 def test_bad_settings_raise():
@@ -203,8 +203,8 @@ def test_bad_settings_raise():
 def test_old_integrator_spellings_are_accepted():
     a = press_exact.simulate(DEFAULT, T_OUT[:3], {"integrator": "rk44", "dt": 1e-4})
     b = press_exact.simulate(DEFAULT, T_OUT[:3], {"integrator": "rk4", "dt": 1e-4})
-    assert a["settings"]["integrator"] == "rk4"
-    np.testing.assert_array_equal(a["channels"]["crank_rate"], b["channels"]["crank_rate"])
+    assert a.settings["integrator"] == "rk4"
+    np.testing.assert_array_equal(a.channels["crank_rate"], b.channels["crank_rate"])
 
 
 def test_motor_characteristic_is_the_kloss_law():
@@ -267,12 +267,12 @@ def test_press_linear_acceleration_threshold_from_linearised_modes():
         dt = ratio * t_min
         t = np.arange(301) * dt
         r = press_exact.simulate(QUIET, t, {"integrator": "linacc", "dt": dt})
-        assert (r["status"] == "ok") == stable, (ratio, r["reason"])
+        assert (r.status == "ok") == stable, (ratio, r.reason)
         if not stable:
-            assert r["reason"].startswith("unstable")
+            assert r.reason.startswith("unstable")
     t = np.arange(301) * 2.0 * t_min
     r = press_exact.simulate(QUIET, t, {"integrator": "wilson", "theta": 1.4, "dt": 2 * t_min})
-    assert r["status"] == "ok"
+    assert r.status == "ok"
 
 
 @pytest.mark.slow
@@ -281,19 +281,19 @@ def test_press_cycle_lock_event_and_impact_loss():
     t = PRESS_CYCLE.output_grid(cyc)
     runs = [press_exact.simulate(cyc, t, {"integrator": "rk4", "dt": dt}) for dt in (1e-4, 1e-5)]
     for r in runs:
-        assert r["status"] == "ok"
-        eb = r["channels"]["energy_balance"]
-        assert np.max(np.abs(eb - eb[0])) < 1e-5 * (eb[0] + r["extra"]["press_work"][-1])
-    t_lock = runs[1]["extra"]["t_lock"][0]
+        assert r.status == "ok"
+        eb = r.channels["energy_balance"]
+        assert np.max(np.abs(eb - eb[0])) < 1e-5 * (eb[0] + r.extra["press_work"][-1])
+    t_lock = runs[1].extra["t_lock"][0]
     assert cyc["lock_after"] < t_lock < cyc["release_after"]
-    assert abs(runs[0]["extra"]["t_lock"][0] - t_lock) < 1e-8
+    assert abs(runs[0].extra["t_lock"][0] - t_lock) < 1e-8
     # plastic impact keeping p_φ: loss = ½ ψ'² (A22 − A12²/A11) at the lock state; the rate
     # jump φ'+ − φ'- = (A12/A11) ψ'-; check that they are consistent with each other
-    loss = runs[1]["extra"]["lock_energy_loss"][0]
-    w_before, w_after = runs[1]["extra"]["crank_rate_at_lock"]
+    loss = runs[1].extra["lock_energy_loss"][0]
+    w_before, w_after = runs[1].extra["crank_rate_at_lock"]
     assert loss > 0.0 and w_after != w_before
-    locked = runs[1]["extra"]["locked"] == 1
-    psi = runs[1]["channels"]["rocker_angle"][locked]
+    locked = runs[1].extra["locked"] == 1
+    psi = runs[1].channels["rocker_angle"][locked]
     assert np.allclose(psi, math.radians(cyc["lock_angle"]), atol=1e-7)
 
 
@@ -301,9 +301,9 @@ def test_press_cycle_lock_event_and_impact_loss():
 def test_stiff_slider_1e9_energy():
     r = press_exact.simulate(PRESS.resolve({"slider_stiffness": 1e9}), T_OUT,
                              {"integrator": "rk4", "dt": 1e-6})
-    eb = r["channels"]["energy_balance"]
-    assert r["status"] == "ok"
-    assert np.max(np.abs(eb - eb[0])) < 1e-6 * r["extra"]["motor_work"][-1]
+    eb = r.channels["energy_balance"]
+    assert r.status == "ok"
+    assert np.max(np.abs(eb - eb[0])) < 1e-6 * r.extra["motor_work"][-1]
 
 
 @pytest.mark.slow
@@ -311,8 +311,8 @@ def test_hundred_crank_revolutions_energy_drift():
     par = PRESS.resolve({"slider_stiffness": 1e8, "slider_damping": 1e5, "t_end": 6.0})
     t = PRESS.output_grid(par)
     r = press_exact.simulate(par, t, {"integrator": "rk4", "dt": 1e-5})
-    c = r["channels"]
-    assert r["status"] == "ok"
+    c = r.channels
+    assert r.status == "ok"
     assert (c["crank_angle"][-1] - c["crank_angle"][0]) / (2 * math.pi) > 100
     eb = c["energy_balance"]
-    assert np.max(np.abs(eb - eb[0])) < 1e-6 * r["extra"]["motor_work"][-1]
+    assert np.max(np.abs(eb - eb[0])) < 1e-6 * r.extra["motor_work"][-1]

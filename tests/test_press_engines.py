@@ -45,13 +45,13 @@ def rod_length(ch):
 @pytest.mark.parametrize("engine", [ex, mj], ids=["exudyn", "mujoco"])
 def test_contract_and_initial_state(engine):
     r = run(engine)
-    assert r["status"] == "ok" and r["t_fail"] is None and r["reason"] is None
-    assert set(r["channels"]) == {"crank_angle", "crank_rate", "crank_accel", "rocker_angle",
+    assert r.status == "ok" and r.t_fail is None and r.reason is None
+    assert set(r.channels) == {"crank_angle", "crank_rate", "crank_accel", "rocker_angle",
                                   "slider_x", "loop_violation", "energy_balance"}
-    for v in r["channels"].values():
+    for v in r.channels.values():
         assert v.shape == T_OUT.shape and np.all(np.isfinite(v))
-    assert r["stats"]["steps"] > 0
-    c = r["channels"]
+    assert r.stats["steps"] > 0
+    c = r.channels
     assert c["crank_angle"][0] == pytest.approx(math.radians(PHI0), abs=1e-12)
     assert c["rocker_angle"][0] == pytest.approx(math.radians(PSI0), abs=1e-12)
     assert c["crank_rate"][0] == pytest.approx(OMEGA0, abs=1e-9)
@@ -66,7 +66,7 @@ def test_consistent_initial_velocities(engine):
     ẋ_B = v_A·(B − A)/(x_B − x_A) with ẏ_B = 0.  Finite differences on a micro-grid."""
     h = 1e-7
     t = np.array([0.0, h, 2 * h])
-    c = run(engine, settings={"dt": h / 4}, t_out=t)["channels"]
+    c = run(engine, settings={"dt": h / 4}, t_out=t).channels
     phi, psi = math.radians(PHI0), math.radians(PSI0)
     A = np.array([L1 * math.cos(phi), L1 * math.sin(phi)])
     B = np.array([c["slider_x"][0] + L3 * math.cos(psi), L3 * math.sin(psi)])
@@ -80,7 +80,7 @@ def test_consistent_initial_velocities(engine):
 
 
 def test_engines_agree_idle():
-    a, b = run(ex)["channels"], run(mj)["channels"]
+    a, b = run(ex).channels, run(mj).channels
     assert np.max(np.abs(a["crank_angle"] - b["crank_angle"])) <= 1e-4
     assert np.max(np.abs(a["crank_rate"] - b["crank_rate"])) <= 1e-3
     assert np.max(np.abs(a["slider_x"] - b["slider_x"])) <= 1e-7
@@ -93,7 +93,7 @@ def test_engines_agree_idle():
 
 @pytest.mark.parametrize("engine", [ex, mj], ids=["exudyn", "mujoco"])
 def test_loop_closure_and_energy(engine):
-    c = run(engine)["channels"]
+    c = run(engine).channels
     assert np.max(c["loop_violation"]) <= 1e-8
     length, dx = rod_length(c)
     assert np.max(np.abs(length - L2)) <= 1e-8
@@ -104,7 +104,7 @@ def test_loop_closure_and_energy(engine):
 
 def test_assembly_2_engines_agree():
     p = {"assembly": 2}
-    a, b = run(ex, p)["channels"], run(mj, p)["channels"]
+    a, b = run(ex, p).channels, run(mj, p).channels
     _, dx = rod_length(a)
     assert np.all(dx < 0)
     assert np.max(np.abs(a["crank_angle"] - b["crank_angle"])) <= 1e-4
@@ -114,13 +114,13 @@ def test_assembly_2_engines_agree():
 
 def test_press_cycle_engines_agree():
     ra, rb = run(ex, CYCLE), run(mj, CYCLE)
-    assert ra["status"] == rb["status"] == "ok"
-    ta, tb = ra["extra"]["lock_time"][0], rb["extra"]["lock_time"][0]
+    assert ra.status == rb.status == "ok"
+    ta, tb = ra.extra["lock_time"][0], rb.extra["lock_time"][0]
     assert CYCLE["lock_after"] < ta < CYCLE["release_after"]
     assert abs(ta - tb) <= 1e-7
-    ea, eb = ra["extra"]["lock_energy_loss"][0], rb["extra"]["lock_energy_loss"][0]
+    ea, eb = ra.extra["lock_energy_loss"][0], rb.extra["lock_energy_loss"][0]
     assert ea > 0 and ea == pytest.approx(eb, rel=1e-5)
-    a, b = ra["channels"], rb["channels"]
+    a, b = ra.channels, rb.channels
     locked = (T_OUT > ta) & (T_OUT < CYCLE["release_after"])
     assert locked.sum() >= 5
     for c in (a, b):
@@ -133,23 +133,23 @@ def test_press_cycle_engines_agree():
     assert np.max(np.abs(a["crank_rate"] - b["crank_rate"])) <= 1e-3
     assert np.max(np.abs(a["slider_x"] - b["slider_x"])) <= 1e-7
     # the working load does work while locked (same on both)
-    assert ra["extra"]["press_work"][0] == pytest.approx(rb["extra"]["press_work"][0], rel=1e-5)
+    assert ra.extra["press_work"][0] == pytest.approx(rb.extra["press_work"][0], rel=1e-5)
 
 
 def test_mujoco_divergence_is_reported_and_callbacks_reset():
     import mujoco
     r = mj.simulate(PRESS.resolve({"slider_stiffness": 1e10}), T_OUT, {"dt": 1e-3})
-    assert r["status"] == "diverged" and r["t_fail"] is not None and r["reason"]
-    bad = T_OUT >= r["t_fail"]
-    for v in r["channels"].values():
+    assert r.status == "diverged" and r.t_fail is not None and r.reason
+    bad = T_OUT >= r.t_fail
+    for v in r.channels.values():
         assert np.all(np.isnan(v[bad])) and np.all(np.isfinite(v[~bad]))
     assert mujoco.get_mjcb_passive() is None and mujoco.get_mjcb_act_dyn() is None
 
 
 def test_exudyn_solver_failure_is_reported():
     r = ex.simulate(PRESS.resolve({}), T_OUT, {"newton_tol": 1e-30, "newton_abs_tol": 1e-30})
-    assert r["status"] == "diverged" and r["reason"]
-    assert np.all(np.isnan(r["channels"]["crank_angle"][T_OUT > r["t_fail"]]))
+    assert r.status == "diverged" and r.reason
+    assert np.all(np.isnan(r.channels["crank_angle"][T_OUT > r.t_fail]))
 
 
 @pytest.mark.parametrize("engine", [ex, mj], ids=["exudyn", "mujoco"])
@@ -167,7 +167,7 @@ def test_bad_settings_raise(engine):
 @pytest.mark.parametrize("params", [{"mass_model": "midpoint"}, {"gear_ratio": 3.4},
                                     {"slider_damping": 2000.0}, {"rocker_rate0": -10.0}])
 def test_variants_engines_agree(params):
-    a, b = run(ex, params)["channels"], run(mj, params)["channels"]
+    a, b = run(ex, params).channels, run(mj, params).channels
     assert np.max(np.abs(a["crank_angle"] - b["crank_angle"])) <= 1e-4
     assert np.max(np.abs(a["crank_rate"] - b["crank_rate"])) <= 1e-3
     assert np.max(np.abs(a["slider_x"] - b["slider_x"])) <= 1e-7
@@ -180,7 +180,7 @@ def test_variants_engines_agree(params):
 @pytest.mark.slow
 def test_step_refinement_converges_to_the_other_engine():
     """Halving Exudyn's step moves it towards MuJoCo at tight settings (2nd order GA)."""
-    ref = run(mj, settings={"dt": 2e-5, "solref_factor": 8})["channels"]["crank_angle"]
-    errs = [np.max(np.abs(run(ex, settings={"dt": h})["channels"]["crank_angle"] - ref))
+    ref = run(mj, settings={"dt": 2e-5, "solref_factor": 8}).channels["crank_angle"]
+    errs = [np.max(np.abs(run(ex, settings={"dt": h}).channels["crank_angle"] - ref))
             for h in (1e-4, 5e-5)]
     assert errs[1] < 0.5 * errs[0]

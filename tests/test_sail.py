@@ -38,9 +38,9 @@ def test_conservative_variant_conserves_angular_momentum_over_full_fast_deployme
     p = scene(omega_spool=35.0, n=10)
     t = grid(14.2857)
     r = ts.simulate(p, t, {"variant": "conservative", "integrator": "imr", "dt": 1e-3})
-    assert r["status"] == "ok"
-    assert r["extra"]["boundary_node"][-1] == 9              # every node released
-    assert rel_drift(r["channels"]["angular_momentum"]) < 1e-10
+    assert r.status == "ok"
+    assert r.extra["boundary_node"][-1] == 9              # every node released
+    assert rel_drift(r.channels["angular_momentum"]) < 1e-10
 
 
 def test_energy_balance_constant_across_a_release():
@@ -48,7 +48,7 @@ def test_energy_balance_constant_across_a_release():
     # (default spool speed; release of node 1 at 7.14 s)
     t = grid(10.0)
     r = ts.simulate(BASE, t, {"dt": 1e-3})
-    E = r["channels"]["energy_balance"]
+    E = r.channels["energy_balance"]
     T0 = 0.5 * BASE["J_hub"] * BASE["Omega0"] ** 2
     assert np.max(np.abs(E - E[0])) < 1e-6 * T0
 
@@ -60,8 +60,8 @@ def test_paper_variant_does_not_conserve_angular_momentum():
     t = grid(14.2857)
     rp = ts.simulate(p, t, {"variant": "paper"})
     rc = ts.simulate(p, t, {"variant": "conservative"})
-    assert rel_drift(rp["channels"]["angular_momentum"]) > 1e-4
-    assert rel_drift(rc["channels"]["angular_momentum"]) < 1e-10
+    assert rel_drift(rp.channels["angular_momentum"]) > 1e-4
+    assert rel_drift(rc.channels["angular_momentum"]) < 1e-10
 
 
 def test_deployed_length_follows_payout_kinematics():
@@ -69,7 +69,7 @@ def test_deployed_length_follows_payout_kinematics():
     r = ts.simulate(BASE, t, {})
     L_kin = BASE["r"] * BASE["omega_spool"] * t
     # the stretched polyline exceeds r*omega*t only by the elastic stretch (tension/c ~ 1e-8 m)
-    assert np.max(np.abs(r["channels"]["deployed_length"] - L_kin)) < 1e-6
+    assert np.max(np.abs(r.channels["deployed_length"] - L_kin)) < 1e-6
 
 
 def test_rotating_frame_rk4_matches_inertial_frame_implicit_midpoint():
@@ -78,7 +78,7 @@ def test_rotating_frame_rk4_matches_inertial_frame_implicit_midpoint():
     t = grid(1.0)
     r1 = ts.simulate(BASE, t, {"integrator": "rk4", "dt": "auto"})
     r2 = ts.simulate(BASE, t, {"integrator": "imr", "dt": 5e-5})
-    c1, c2 = r1["channels"], r2["channels"]
+    c1, c2 = r1.channels, r2.channels
     assert np.max(np.abs(c1["hub_rate"] - c2["hub_rate"]) / c1["hub_rate"]) < 1e-7
     assert np.max(np.abs(c1["tip_angle"] - c2["tip_angle"])) < 1e-6
 
@@ -97,7 +97,7 @@ def test_hub_rate_follows_rigid_blade_formula_while_spin_is_high():
     # trails by ~0.23 rad, which changes the inertia by < 1e-2 in the first 30 s
     t = grid(30.0)
     r = ts.simulate(BASE, t, {})
-    Om = r["channels"]["hub_rate"]
+    Om = r.channels["hub_rate"]
     f = phys.formula18_discrete(BASE, t)
     assert np.max(np.abs(Om - f) / f) < 5e-3
 
@@ -117,13 +117,13 @@ def test_unstable_explicit_step_is_reported_not_silent():
     # (the estimate uses the lightest node; with only the heavier tip out the true limit is
     # ~5x larger, hence the factor 10)
     r = ts.simulate(BASE, t, {"integrator": "rk4", "dt": 10.0 * dt_stable})
-    assert r["status"] == "diverged"
-    assert "unstable step" in r["reason"]
-    assert r["t_fail"] is not None and 0 < r["t_fail"] <= 0.2
-    assert np.all(np.isnan(r["channels"]["hub_rate"][t > r["t_fail"]]))
+    assert r.status == "diverged"
+    assert "unstable step" in r.reason
+    assert r.t_fail is not None and 0 < r.t_fail <= 0.2
+    assert np.all(np.isnan(r.channels["hub_rate"][t > r.t_fail]))
     # and the automatic step is stable
     r2 = ts.simulate(BASE, t, {"integrator": "rk4", "dt": "auto"})
-    assert r2["status"] == "ok"
+    assert r2.status == "ok"
 
 
 def test_stiff_springs_with_implicit_integrator():
@@ -132,9 +132,9 @@ def test_stiff_springs_with_implicit_integrator():
     t = grid(10.0)
     r9 = ts.simulate(scene(stiffness=1e9), t, {"dt": 1e-3})
     r7 = ts.simulate(BASE, t, {"dt": 1e-3})
-    assert r9["status"] == "ok"
-    assert rel_drift(r9["channels"]["angular_momentum"]) < 1e-10
-    assert np.max(np.abs(r9["channels"]["tip_angle"] - r7["channels"]["tip_angle"])) < 1e-3
+    assert r9.status == "ok"
+    assert rel_drift(r9.channels["angular_momentum"]) < 1e-10
+    assert np.max(np.abs(r9.channels["tip_angle"] - r7.channels["tip_angle"])) < 1e-3
 
 
 def test_bad_settings_raise():
@@ -149,8 +149,8 @@ def test_bad_settings_raise():
 
 def test_old_setting_spellings_are_accepted():
     r = xs.simulate(BASE, grid(0.1), {"integrator": "rk44", "rho_inf": 0.7})
-    assert r["status"] == "ok"
-    assert r["settings"]["integrator"] == "rk4" and r["settings"]["spectral_radius"] == 0.7
+    assert r.status == "ok"
+    assert r.settings["integrator"] == "rk4" and r.settings["spectral_radius"] == 0.7
 
 
 @pytest.mark.slow
@@ -158,8 +158,8 @@ def test_full_deployment_conserves_angular_momentum_n20_n40():
     t = grid(142.857)
     for n in (20, 40):
         r = ts.simulate(scene(n=n), t, {"variant": "conservative"})
-        assert r["status"] == "ok"
-        assert rel_drift(r["channels"]["angular_momentum"]) < 1e-8
+        assert r.status == "ok"
+        assert rel_drift(r.channels["angular_momentum"]) < 1e-8
 
 
 # --- engines ------------------------------------------------------------------------------------
@@ -193,8 +193,8 @@ def test_engine_matches_conservative_custom_solver(engine, settings, drift, tip_
     t = grid(T_ENGINE)                                     # covers the release at 14.29 s
     r = leaf.simulate(FAST_ENGINE, t, settings)
     rc = ts.simulate(FAST_ENGINE, t, {"variant": "conservative", "dt": 2.5e-4})
-    assert r["status"] == "ok"
-    c, cc = r["channels"], rc["channels"]
+    assert r.status == "ok"
+    c, cc = r.channels, rc.channels
     assert rel_drift(c["angular_momentum"]) < drift
     assert np.max(np.abs(c["hub_rate"] - cc["hub_rate"]) / cc["hub_rate"]) < 1e-4
     assert np.max(np.abs(c["tip_angle"] - cc["tip_angle"])) < tip_tol
@@ -209,7 +209,7 @@ def test_mujoco_unstable_step_is_reported():
     t = grid(0.2, 0.01)
     dt = 10 * ms.stable_dt_explicit(BASE, 2.0)
     r = ms.simulate(BASE, t, {"dt": dt})
-    assert r["status"] == "diverged" and r["t_fail"] is not None
+    assert r.status == "diverged" and r.t_fail is not None
 
 
 @pytest.mark.slow
@@ -220,10 +220,10 @@ def test_engines_first_30s_default_scene():
     t = grid(30.0)
     runs = {name: leaf.simulate(BASE, t, {}) for name, leaf in LEAVES.items()}
     runs["conservative"] = ts.simulate(BASE, t, {"variant": "conservative", "dt": 2.5e-4})
-    paper = ts.simulate(BASE, t, {"variant": "paper"})["channels"]
-    cc = runs["conservative"]["channels"]
+    paper = ts.simulate(BASE, t, {"variant": "paper"}).channels
+    cc = runs["conservative"].channels
     for name, r in runs.items():
-        c = r["channels"]
+        c = r.channels
         assert rel_drift(c["angular_momentum"]) < 1e-8, name
         assert np.max(np.abs(c["hub_rate"] - cc["hub_rate"]) / cc["hub_rate"]) < 1e-3, name
         assert np.max(np.abs(c["tip_angle"] - cc["tip_angle"])) < 1e-3, name
@@ -236,15 +236,15 @@ def test_exudyn_full_deployment_conserves_angular_momentum():
     """Acceptance: the full 142.9 s deployment at n = 20, k = 1e7 (≈ 4.5 min wall)."""
     t = grid(142.9)
     r = xs.simulate(BASE, t, {})
-    assert r["status"] == "ok"
-    assert rel_drift(r["channels"]["angular_momentum"]) < 1e-8
+    assert r.status == "ok"
+    assert rel_drift(r.channels["angular_momentum"]) < 1e-8
 
 
 def test_exudyn_unstable_explicit_step_is_reported():
     t = grid(0.2, 0.01)
     dt = 10 * xs.stable_dt_explicit(BASE, 2.0)
     r = xs.simulate(BASE, t, {"dt": dt})
-    assert r["status"] == "diverged" and "stability limit" in r["reason"]
+    assert r.status == "diverged" and "stability limit" in r.reason
 
 
 # End of deployment: the spool stops at t_full = L/(r ω) = 71.43 s here. Released, the blade
@@ -262,36 +262,36 @@ def _end_runs(last):
     for name in ("exudyn", "mujoco"):
         runs[name] = LEAVES[name].simulate(p, t, {})
     for name, r in runs.items():                  # every model conserves angular momentum
-        assert r["status"] == "ok", name
-        assert rel_drift(r["channels"]["angular_momentum"]) < 1e-8, name
+        assert r.status == "ok", name
+        assert rel_drift(r.channels["angular_momentum"]) < 1e-8, name
     return runs, t > T_FULL + 1e-9
 
 
 def test_released_last_node_leaves_the_hub_spinning_at_constant_rate():
     runs, after = _end_runs("released")
     for name, r in runs.items():
-        Om = r["channels"]["hub_rate"][after]
+        Om = r.channels["hub_rate"][after]
         assert np.ptp(Om) < 1e-9 * Om.mean(), name
         # (n − 1) springs of rest l0 remain
-        np.testing.assert_allclose(r["channels"]["deployed_length"][after], 4.0, atol=1e-6)
+        np.testing.assert_allclose(r.channels["deployed_length"][after], 4.0, atol=1e-6)
 
 
 def test_attached_last_node_keeps_the_blade_and_closes_the_energy_balance():
     runs, after = _end_runs("attached")
     for name, r in runs.items():
-        np.testing.assert_allclose(r["channels"]["deployed_length"][after], END["L"],
+        np.testing.assert_allclose(r.channels["deployed_length"][after], END["L"],
                                    atol=1e-4, err_msg=name)
     # midpoint rule with discrete-gradient springs: O(h²) only from the moving Q (measured
     # 2.5e-9 J at dt 2.5e-4); the wave holds ~1e-5 J, so a blade's springs left out of U shows
-    E = runs["custom"]["channels"]["energy_balance"]
+    E = runs["custom"].channels["energy_balance"]
     assert np.max(np.abs(E - E[0])) < 1e-7
     for name in ("exudyn", "mujoco"):                       # explicit: bounded energy error
-        E = runs[name]["channels"]["energy_balance"]
+        E = runs[name].channels["energy_balance"]
         assert np.max(np.abs(E - E[0])) < 1e-5, name
     # the two engines and the custom solver agree on the spin after the stop
-    ref = runs["custom"]["channels"]["hub_rate"]
+    ref = runs["custom"].channels["hub_rate"]
     for name in ("exudyn", "mujoco"):
-        assert np.max(np.abs(runs[name]["channels"]["hub_rate"] - ref)) < 2e-3 * ref[0], name
+        assert np.max(np.abs(runs[name].channels["hub_rate"] - ref)) < 2e-3 * ref[0], name
 
 
 def _first_zero(t, x):
@@ -317,10 +317,10 @@ def test_light_hub_spin_reverses_alike_in_every_solver():
     zero = {}
     before = t < 14.0
     for name, r in runs.items():
-        ch = r["channels"]
-        assert r["status"] == "ok", name
+        ch = r.channels
+        assert r.status == "ok", name
         assert rel_drift(ch["angular_momentum"]) < 1e-8, name
-        tip_ref = runs["custom"]["channels"]["tip_angle"]
+        tip_ref = runs["custom"].channels["tip_angle"]
         assert np.max(np.abs(ch["tip_angle"] - tip_ref)[before]) < 1e-6, name
         zero[name] = _first_zero(t, ch["hub_rate"])
     assert max(zero.values()) - min(zero.values()) < 0.1, zero

@@ -28,6 +28,7 @@ import exudyn as exu
 import numpy as np
 from exudyn import itemInterface as ii
 
+from compare.contract import LeafResult
 from compare.physics import press as phys
 
 from .. import press_common as pc
@@ -45,7 +46,9 @@ class _Diverged(Exception):
         self.t, self.reason = t, reason
 
 
-def _check_settings(s: dict) -> dict:
+def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
+    """The settings merged and checked before anything runs (ValueError with one line)."""
+    s = pc.fixed_step_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
     rho = float(s["spectral_radius"])
     if not 0.0 <= rho <= 1.0:
         raise ValueError(f"spectral_radius must be in [0, 1], got {rho!r}")
@@ -415,10 +418,10 @@ def _run(model, p: dict, t_out: np.ndarray, rows: dict, extra: dict) -> tuple:
     return "ok", None, None, work
 
 
-def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> dict:
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> LeafResult:
     """Run `press` (idle) or, when the parameters carry the lock, `press-cycle`."""
-    cycle, s, t_out, st = pc.prepare(params, t_out, settings, DEFAULT_SETTINGS, INTEGRATORS)
-    s = _check_settings(s)
+    s = check_settings(settings)
+    cycle, t_out, st = pc.prepare(params, t_out, s)
     prev = exu.config.printToConsole
     exu.config.printToConsole = False      # the failure banner would otherwise go to stdout
     rows = {k: np.full(len(t_out), np.nan) for k in COLUMNS}
@@ -438,6 +441,6 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> d
         extra.setdefault("lock_energy_loss", np.array([np.nan]))
         extra["motor_work"] = np.array([work[0]])
         extra["press_work"] = np.array([work[2]])
-    return {"channels": ch, "status": status, "t_fail": t_fail, "reason": reason,
-            "stats": {"steps": model.steps, "rhs_evals": -1}, "settings": dict(s),
-            "extra": extra}
+    return LeafResult(channels=ch, status=status, t_fail=t_fail, reason=reason,
+            stats={"steps": model.steps, "rhs_evals": -1}, settings=dict(s),
+            extra=extra)

@@ -67,9 +67,10 @@ from exudyn.itemInterface import (
     SpringDamper,
 )
 
+from compare.contract import LeafResult, merge_settings
 from compare.physics import sail as phys
 
-from ..sail_common import settings_and_grid, stable_dt_explicit
+from ..sail_common import check_grid, stable_dt_explicit
 
 DEFAULT_SETTINGS = {"integrator": "velocity_verlet", "dt": "auto", "spectral_radius": 0.8,
                     "newton_tol": 1e-6, "newton_abs_tol": 1e-8, "modified_newton": True,
@@ -283,8 +284,21 @@ def _run(model: _Sail, p: dict, t_out: np.ndarray, h: float) -> tuple:
     return "ok", None, None, steps
 
 
-def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> dict:
-    s, t_out = settings_and_grid(settings, DEFAULT_SETTINGS, INTEGRATORS, t_out)
+def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
+    """The settings merged and checked before anything runs (ValueError with one line)."""
+    s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
+    if not 0.0 <= float(s["spectral_radius"]) <= 1.0:
+        raise ValueError(f"spectral_radius must be in [0, 1], got {s['spectral_radius']!r}")
+    for k in ("newton_tol", "newton_abs_tol", "fine_dt", "fine_newton_tol"):
+        if not float(s[k]) > 0.0:
+            raise ValueError(f"{k} must be > 0, got {s[k]!r}")
+    if s["dt"] not in (None, "auto") and not float(s["dt"]) > 0:
+        raise ValueError(f"dt must be > 0 or 'auto', got {s['dt']!r}")
+    return s
+
+
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> LeafResult:
+    s, t_out = check_settings(settings), check_grid(t_out)
     explicit = s["integrator"] in _EXPLICIT
     h_stable = stable_dt_explicit(params, _EXPLICIT[s["integrator"]][1]) if explicit else None
     h = (h_stable if explicit else AUTO_DT[s["integrator"]]) if s["dt"] in (None, "auto") \
@@ -303,7 +317,7 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> d
                               spool_work=o["W"])
     extra["hub_rate_formula18"] = phys.formula18(params, t_out)
     extra["boundary_node"] = o["b"].astype(float)
-    return {"channels": ch, "status": status, "t_fail": t_fail, "reason": reason,
-            "stats": {"steps": int(steps), "rhs_evals": -1, "retries": model.retries,
+    return LeafResult(channels=ch, status=status, t_fail=t_fail, reason=reason,
+            stats={"steps": int(steps), "rhs_evals": -1, "retries": model.retries,
                       "integrate_s": wall},
-            "settings": {**s, "dt": float(h)}, "extra": extra}
+            settings={**s, "dt": float(h)}, extra=extra)

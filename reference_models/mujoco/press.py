@@ -27,6 +27,7 @@ import math
 import mujoco
 import numpy as np
 
+from compare.contract import LeafResult
 from compare.physics import press as phys
 
 from .. import press_common as pc
@@ -38,7 +39,9 @@ INTEGRATORS = ("rk4", "euler", "implicitfast", "implicit")
 _BISECT_TOL = 1e-9   # s
 
 
-def _check_settings(s: dict) -> dict:
+def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
+    """The settings merged and checked before anything runs (ValueError with one line)."""
+    s = pc.fixed_step_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
     s["solref_factor"] = float(s["solref_factor"])
     if not s["solref_factor"] > 0:
         raise ValueError("solref_factor must be > 0")
@@ -291,10 +294,10 @@ def _run(run: _Press, params: dict, t_out: np.ndarray) -> tuple:
     return "ok", None, None
 
 
-def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> dict:
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> LeafResult:
     """Run `press` (idle) or, when the parameters carry the lock, `press-cycle`."""
-    cycle, s, t_out, st = pc.prepare(params, t_out, settings, DEFAULT_SETTINGS, INTEGRATORS)
-    s = _check_settings(s)
+    s = check_settings(settings)
+    cycle, t_out, st = pc.prepare(params, t_out, s)
     run = _Press(params, st, s, cycle, len(t_out))
     prev_warning = mujoco.get_mju_user_warning()
     mujoco.set_mju_user_warning(run.warnings.append)     # no stdout, no MUJOCO_LOG.TXT
@@ -320,6 +323,6 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> d
         extra["motor_work"] = np.array([run.d.act[0]])
         extra["press_work"] = np.array([run.d.act[2]])
     evals = 4 * run.steps if s["integrator"] == "rk4" else run.steps
-    return {"channels": ch, "status": status, "t_fail": t_fail, "reason": reason,
-            "stats": {"steps": run.steps, "rhs_evals": evals}, "settings": dict(s),
-            "extra": extra}
+    return LeafResult(channels=ch, status=status, t_fail=t_fail, reason=reason,
+            stats={"steps": run.steps, "rhs_evals": evals}, settings=dict(s),
+            extra=extra)

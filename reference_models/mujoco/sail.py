@@ -47,9 +47,10 @@ import time as _time
 import mujoco
 import numpy as np
 
+from compare.contract import LeafResult, merge_settings
 from compare.physics import sail as phys
 
-from ..sail_common import settings_and_grid, stable_dt_explicit
+from ..sail_common import check_grid, stable_dt_explicit
 
 DEFAULT_SETTINGS = {"integrator": "euler", "dt": "auto", "stretch_limit": 0.5, "planar": True,
                     "stored": "hub"}
@@ -232,14 +233,22 @@ class _Sail:
         o["W"][io] = 2.0 * self.work["W"]                   # two blades
 
 
-def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> dict:
-    s, t_out = settings_and_grid(settings, DEFAULT_SETTINGS, INTEGRATORS, t_out)
+def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
+    """The settings merged and checked before anything runs (ValueError with one line)."""
+    s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
+    if s["stored"] not in STORED:
+        raise ValueError(f"stored must be one of {STORED}, got {s['stored']!r}")
+    if s["dt"] not in (None, "auto") and not float(s["dt"]) > 0:
+        raise ValueError(f"dt must be > 0 or 'auto', got {s['dt']!r}")
+    return s
+
+
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> LeafResult:
+    s, t_out = check_settings(settings), check_grid(t_out)
     dt = s["dt"]
     if dt is None or dt == "auto":
         dt = stable_dt_explicit(params, _FACTOR[s["integrator"]])
     dt = float(dt)
-    if s["stored"] not in STORED:
-        raise ValueError(f"stored must be one of {STORED}")
     run = _Sail(params, s, dt, len(t_out))
     t = 0.0
     status, reason, t_fail = "ok", None, None
@@ -268,6 +277,6 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> d
     extra["hub_rate_formula18"] = phys.formula18(params, t_out)
     extra["boundary_node"] = o["b"].astype(float)
     evals = run.steps * (4 if s["integrator"] == "rk4" else 1)
-    return {"channels": ch, "status": status, "t_fail": t_fail, "reason": reason,
-            "stats": {"steps": run.steps, "rhs_evals": evals, "integrate_s": wall},
-            "settings": {**s, "dt": dt}, "extra": extra}
+    return LeafResult(channels=ch, status=status, t_fail=t_fail, reason=reason,
+            stats={"steps": run.steps, "rhs_evals": evals, "integrate_s": wall},
+            settings={**s, "dt": dt}, extra=extra)

@@ -6,8 +6,8 @@ Euler-vector tensors follow the paper (seed 000) and Zhilin's notation:
 written here in the equivalent Rodrigues form E + a θ× + b (θ×)², with series near θ = 0 so no
 0/0 is ever formed. Quaternions are (w, x, y, z) and rotate body vectors into the fixed frame.
 """
-import numpy as np
 import numba as nb
+import numpy as np
 
 _SMALL = 1e-4   # below this |θ| the coefficient series are exact to round-off
 
@@ -125,3 +125,76 @@ def transverse_vector(n):
     th = np.arctan2(s, n[2])
     f = 1.0 + th * th / 6.0 if th < _SMALL else th / s
     return np.array([-n[1] * f, n[0] * f, 0.0])
+
+
+# --- Scalar (allocation-free) forms for right-hand sides called millions of times ------------
+# A 3×3 matrix is a row-major 9-tuple, a vector a 3-tuple: numba keeps both in registers, so a
+# right-hand side built from these allocates nothing (an np.empty(3) costs more than the maths).
+
+@nb.njit(cache=True)
+def rodrigues_t(t0, t1, t2, c1, c2):
+    """E + c1·θ× + c2·(θ×)² as a 9-tuple, (θ×)² = θ⊗θ − |θ|²E."""
+    d = 1.0 - c2 * (t0 * t0 + t1 * t1 + t2 * t2)
+    return (d + c2 * t0 * t0, c2 * t0 * t1 - c1 * t2, c2 * t0 * t2 + c1 * t1,
+            c2 * t1 * t0 + c1 * t2, d + c2 * t1 * t1, c2 * t1 * t2 - c1 * t0,
+            c2 * t2 * t0 - c1 * t1, c2 * t2 * t1 + c1 * t0, d + c2 * t2 * t2)
+
+
+@nb.njit(cache=True)
+def rotation_t(t0, t1, t2):
+    """L(θ) as a 9-tuple (see `rotation_tensor`)."""
+    a, b, _, _ = _coefficients(np.sqrt(t0 * t0 + t1 * t1 + t2 * t2))
+    return rodrigues_t(t0, t1, t2, a, b)
+
+
+@nb.njit(cache=True)
+def zhilin_inverse_t(t0, t1, t2):
+    """Z⁻¹(θ) as a 9-tuple (see `zhilin_inverse`)."""
+    _, _, _, d = _coefficients(np.sqrt(t0 * t0 + t1 * t1 + t2 * t2))
+    return rodrigues_t(t0, t1, t2, -0.5, d)
+
+
+@nb.njit(cache=True)
+def quat_matrix_t(w, x, y, z):
+    """Rotation matrix of a (not necessarily unit) quaternion as a 9-tuple."""
+    s = 2.0 / (w * w + x * x + y * y + z * z)
+    return (1.0 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y),
+            s * (x * y + w * z), 1.0 - s * (x * x + z * z), s * (y * z - w * x),
+            s * (x * z - w * y), s * (y * z + w * x), 1.0 - s * (x * x + y * y))
+
+
+@nb.njit(cache=True)
+def mat_vec_t(M, a, b, c):
+    return (M[0] * a + M[1] * b + M[2] * c, M[3] * a + M[4] * b + M[5] * c,
+            M[6] * a + M[7] * b + M[8] * c)
+
+
+@nb.njit(cache=True)
+def mat_tvec_t(M, a, b, c):
+    """Mᵀ·v."""
+    return (M[0] * a + M[3] * b + M[6] * c, M[1] * a + M[4] * b + M[7] * c,
+            M[2] * a + M[5] * b + M[8] * c)
+
+
+@nb.njit(cache=True)
+def cross_t(a0, a1, a2, b0, b1, b2):
+    return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+
+
+@nb.njit(cache=True)
+def transverse_t(nx, ny, nz):
+    """(γ_x, γ_y) of `transverse_vector` (γ_z = 0) for the unit axis n."""
+    s = np.sqrt(nx * nx + ny * ny)
+    th = np.arctan2(s, nz)
+    f = 1.0 + th * th / 6.0 if th < _SMALL else th / s
+    return -ny * f, nx * f
+
+
+@nb.njit(cache=True)
+def matrices_to_quats(Rs):
+    """(n, 3, 3) rotation matrices → (n, 4) unit quaternions (w ≥ 0); NaN rows stay NaN."""
+    out = np.full((Rs.shape[0], 4), np.nan)
+    for i in range(Rs.shape[0]):
+        if np.all(np.isfinite(Rs[i])):
+            out[i] = matrix_to_quat(Rs[i])
+    return out

@@ -4,6 +4,11 @@ Shared by the two custom formulations (`rotor_euler`, `rotor_quaternion`): param
 the spring moment −kγ and the driver around the shared integrators. Each
 formulation supplies only its right-hand side, its initial state and the map from its state to
 (rotation, angular velocity, work).
+
+The integrators are the dense-output drivers (`integrators.dense`): the adaptive step is set by
+the tolerance alone (no cap at the output interval unless `h_max` is given) and a fixed step
+need not divide the output interval. The right-hand sides write into a given array and are
+fused scalar code (`rotation.*_t` helpers): no allocation per evaluation.
 """
 import time
 
@@ -13,18 +18,14 @@ import numpy as np
 from compare.contract import LeafResult, merge_settings
 from compare.physics import rotor as physics
 
-from .integrators import (
-    ADAPTIVE_TABLEAUS,
-    FAIL_REASONS,
-    FIXED_TABLEAUS,
-    integrate_adaptive,
-    integrate_fixed,
-)
-from .rotation import matrix_to_quat, rotation_tensor, transverse_vector
+from .integrators import FAIL_REASONS, FIXED_TABLEAUS
+from .integrators.dense import DENSE_TABLEAUS, integrate_adaptive_dense, integrate_fixed_dense
+from .rotation import matrices_to_quats, rotation_tensor
 
-INTEGRATORS = tuple(ADAPTIVE_TABLEAUS) + tuple(FIXED_TABLEAUS)
-ADAPTIVE = tuple(ADAPTIVE_TABLEAUS)          # integrators that take rtol
-# atol defaults to rtol/100; h_max to the output step; max_steps bounds a runaway adaptive run
+INTEGRATORS = tuple(DENSE_TABLEAUS) + tuple(FIXED_TABLEAUS)
+ADAPTIVE = tuple(DENSE_TABLEAUS)          # integrators that take rtol
+# atol defaults to rtol/100; h_max (no cap by default) bounds the adaptive step; max_steps
+# bounds a runaway adaptive run
 DEFAULT_SETTINGS = {"integrator": "dop853", "rtol": 1e-11, "dt": None, "atol": None,
                     "h_max": None, "max_steps": 10**8}
 
@@ -55,27 +56,20 @@ def initial_motion(params, p):
 
 
 @nb.njit(cache=True)
-def spring_moment(R, p):
-    """−kγ, γ the transverse Euler vector carrying e_z to the body axis R·e_z."""
-    return -p[K_] * transverse_vector(R[:, 2])
+def tilt_guard_z(n_z):
+    """FAIL_TILT once the body axis' z component n_z = cos(tilt) is within TILT_LIMIT of π."""
+    return FAIL_TILT if np.arccos(min(1.0, max(-1.0, n_z))) > TILT_LIMIT else 0
 
 
-@nb.njit(cache=True)
-def tilt_guard(R):
-    n_z = min(1.0, max(-1.0, R[2, 2]))
-    return FAIL_TILT if np.arccos(n_z) > TILT_LIMIT else 0
-
-
-def check_settings(settings, t_out):
-    """The settings merged and checked before anything runs (a fixed step must divide the
-    output step into whole steps: the drivers write the grid without interpolation)."""
+def check_settings(settings, t_out=None):
+    """The settings merged and checked before anything runs."""
     s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
-    if s["integrator"] in FIXED_TABLEAUS and t_out is not None and len(t_out) > 1:
-        dt_out = t_out[1] - t_out[0]
-        dt = s["dt"] or 1e-3
-        substeps = int(round(dt_out / dt))
-        if substeps < 1 or abs(substeps * dt - dt_out) > 1e-9 * dt_out:
-            raise ValueError(f"dt={dt:g} must divide output_dt={dt_out:g} into whole steps")
+    for key in ("dt", "rtol", "atol", "h_max"):
+        v = s[key]
+        if v is not None and not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
+            raise ValueError(f"{key} must be a positive number, got {v!r}")
+    if not s["rtol"] < 1:
+        raise ValueError(f"rtol must be in (0, 1), got {s['rtol']!r}")
     return s
 
 
@@ -84,24 +78,26 @@ def integrate(rhs, guard, y0, p, t_out, settings):
     s = check_settings(settings, t_out)
     name = s["integrator"]
     if name in FIXED_TABLEAUS:
-        dt_out = t_out[1] - t_out[0]
-        substeps = int(round(dt_out / (s["dt"] or 1e-3)))
         tb = FIXED_TABLEAUS[name]
+        dt = float(s["dt"] or 1e-3)
         t0 = time.perf_counter()
-        Y, steps, evals, t_fail, code = integrate_fixed(rhs, guard, y0, p, t_out, substeps,
-                                                        tb["A"], tb["B"], tb["C"])
-        used = {"integrator": name, "dt": dt_out / substeps}
+        Y, steps, evals, t_fail, code = integrate_fixed_dense(rhs, guard, y0, p, t_out, dt,
+                                                              tb["A"], tb["B"], tb["C"])
+        span = t_out[-1] - t_out[0]
+        used = {"integrator": name, "dt": span / steps if code == 0 and span > 0 else dt}
         stats = {"steps": int(steps), "rhs_evals": int(evals)}
-    elif name in ADAPTIVE_TABLEAUS:
-        tb = ADAPTIVE_TABLEAUS[name]
+    else:
+        tb = DENSE_TABLEAUS[name]
         rtol = float(s["rtol"])
         atol = float(s["atol"] or rtol * 1e-2)
-        h_max = float(s["h_max"] or (t_out[1] - t_out[0]))
+        h_max = float(s["h_max"] or 0.0)           # 0: no cap, the tolerance sets the step
         t0 = time.perf_counter()
-        Y, steps, evals, rej, t_fail, code = integrate_adaptive(
+        Y, steps, evals, rej, t_fail, code = integrate_adaptive_dense(
             rhs, guard, y0, p, t_out, rtol, atol, h_max, int(s["max_steps"]),
-            tb["A"], tb["B"], tb["C"], tb["E"], tb["E3"], tb["err_order"])
-        used = {"integrator": name, "rtol": rtol, "atol": atol}
+            tb["A"], tb["B"], tb["C"], tb["E"], tb["E3"], tb["err_order"],
+            tb["dense"], tb["P"], tb["AX"], tb["CX"], tb["D"])
+        used = {"integrator": name, "rtol": rtol, "atol": atol,
+                **({"h_max": h_max} if h_max > 0 else {})}
         stats = {"steps": int(steps), "rhs_evals": int(evals), "rejected": int(rej)}
     stats["integrate_s"] = time.perf_counter() - t0
     return Y, stats, (None if code == 0 else float(t_fail)), REASONS.get(int(code)), used
@@ -110,9 +106,7 @@ def integrate(rhs, guard, y0, p, t_out, settings):
 def result(params, t_out, Y, stats, t_fail, reason, used, motion, p, invariants=None):
     """Assemble the LeafResult; rows after a failure stay NaN."""
     Rs, omegas, work = motion(Y, p)
-    ok = np.isfinite(Y).all(axis=1)
-    quats = np.full((len(t_out), 4), np.nan)
-    quats[ok] = [matrix_to_quat(R) for R in Rs[ok]]
+    quats = matrices_to_quats(Rs)
     return LeafResult(channels=physics.channels(params, Rs, omegas, work), stats=stats,
                       settings=used, status="ok" if t_fail is None else "diverged",
                       t_fail=t_fail, reason=reason, extra={"orientation": quats},

@@ -1,0 +1,295 @@
+"""Runge–Kutta drivers with dense output: the step is set by the tolerance (or `dt`) alone.
+
+The drivers in `explicit` land a step on every output time, so an adaptive run can never take
+a step longer than the output interval (the rotor's DOP853 took 1004 steps at rtol 1e-5, 1e-7
+and 1e-9 alike). Here the step runs free and the output grid is filled by each method's
+continuous extension, evaluated only for the outputs inside an accepted step:
+
+- DOP853: the 7th-order extension of Hairer, Nørsett & Wanner (three extra stages, computed only
+  for a step that contains an output; scipy's public `DOP853.A_EXTRA`, `C_EXTRA`, `D`);
+- Dopri5 / RK23: the 4th- / 3rd-order interpolants of scipy's public `RK45.P`, `RK23.P`;
+- fixed-step methods: cubic Hermite through (y, f) at both ends of the step (f at the step's end
+  is the next step's first stage, so it costs no extra evaluation). Where the step divides the
+  output interval, the outputs are the step ends themselves, bit for bit.
+
+The guard is checked on every accepted step (at its end), before the outputs inside the step
+are written: after a failure every later row stays NaN and the failure time is the step's end.
+
+The right-hand side writes into a given array: `f(t, y, p, dy)` (type `RHS_INTO`), so one
+evaluation allocates nothing. Like `explicit`, the drivers are compiled once for first-class
+function types (cached on disk); `explicit`'s drivers stay for the models that use them.
+"""
+import numba as nb
+import numpy as np
+from numba import types as nt
+from scipy.integrate import DOP853 as _DOP853
+from scipy.integrate import RK23 as _RK23
+from scipy.integrate import RK45 as _RK45
+
+from .explicit import (
+    _MAT,
+    _VEC,
+    ADAPTIVE_TABLEAUS,
+    FAIL_MAX_STEPS,
+    FAIL_NONFINITE,
+    FAIL_OK,
+    FAIL_STEP_UNDERFLOW,
+    FIXED_TABLEAUS,
+    GUARD,
+)
+
+RHS_INTO = nt.FunctionType(nt.void(nt.float64, _VEC, _VEC, _VEC))    # f(t, y, p, dy)
+
+DENSE_POLY, DENSE_DOP853 = 1, 2
+_NONE, _NONE_1D = np.zeros((0, 0)), np.zeros(0)
+
+
+def _dense(kind, P=_NONE, AX=_NONE, CX=_NONE_1D, D=_NONE):
+    c = np.ascontiguousarray
+    return {"dense": kind, "P": c(P, float), "AX": c(AX, float), "CX": c(CX, float),
+            "D": c(D, float)}
+
+
+# The adaptive tableaus of `explicit` with their continuous extensions.
+DENSE_TABLEAUS = {
+    "rk23": {**ADAPTIVE_TABLEAUS["rk23"], **_dense(DENSE_POLY, P=_RK23.P)},
+    "dopri5": {**ADAPTIVE_TABLEAUS["dopri5"], **_dense(DENSE_POLY, P=_RK45.P)},
+    "dop853": {**ADAPTIVE_TABLEAUS["dop853"],
+               **_dense(DENSE_DOP853, AX=_DOP853.A_EXTRA, CX=_DOP853.C_EXTRA, D=_DOP853.D)},
+}
+FIXED = FIXED_TABLEAUS
+
+
+@nb.njit(cache=True)
+def _stage_state(y, h, A, K, s, ys):
+    """ys = y + h Σ_r<s A[s, r] K[r]."""
+    for j in range(y.shape[0]):
+        acc = 0.0
+        for r in range(s):
+            acc += A[s, r] * K[r, j]
+        ys[j] = y[j] + h * acc
+
+
+@nb.njit(cache=True)
+def _combine(y, h, B, K, out):
+    """out = y + h Σ_s B[s] K[s]."""
+    for j in range(y.shape[0]):
+        acc = 0.0
+        for s in range(B.shape[0]):
+            acc += B[s] * K[s, j]
+        out[j] = y[j] + h * acc
+
+
+@nb.njit(cache=True)
+def _hermite(y0, f0, y1, f1, h, x, out):
+    x2 = x * x
+    x3 = x2 * x
+    a0, a1 = 2 * x3 - 3 * x2 + 1.0, -2 * x3 + 3 * x2
+    b0, b1 = (x3 - 2 * x2 + x) * h, (x3 - x2) * h
+    for j in range(y0.shape[0]):
+        out[j] = a0 * y0[j] + b0 * f0[j] + a1 * y1[j] + b1 * f1[j]
+
+
+@nb.njit(nt.Tuple((_MAT, nt.int64, nt.int64, nt.float64, nt.int64))(
+    RHS_INTO, GUARD, _VEC, _VEC, _VEC, nt.float64, _MAT, _VEC, _VEC), cache=True)
+def integrate_fixed_dense(f, guard, y0, p, t_out, dt, A, B, C):
+    """Fixed step h = (t_end − t0)/N, N = ⌈(t_end − t0)/dt⌉ (h = dt when dt divides the span);
+    outputs by cubic Hermite inside a step. Returns (Y, steps, rhs_evals, t_fail, code)."""
+    n_out, ny, n_st = t_out.shape[0], y0.shape[0], B.shape[0]
+    Y = np.full((n_out, ny), np.nan)
+    K = np.empty((n_st, ny))
+    ys = np.empty(ny)
+    y = y0.copy()
+    y_new = np.empty(ny)
+    f_new = np.empty(ny)
+    t0, t_end = t_out[0], t_out[n_out - 1]
+    n_steps = max(1, int(np.ceil((t_end - t0) / dt - 1e-9)))
+    h = (t_end - t0) / n_steps
+    Y[0] = y
+    f(t0, y, p, K[0])
+    evals = 1
+    i_out = 1
+    for k in range(n_steps):
+        t = t0 + k * h
+        t_new = t_end if k == n_steps - 1 else t0 + (k + 1) * h
+        for s in range(1, n_st):
+            _stage_state(y, h, A, K, s, ys)
+            f(t + C[s] * h, ys, p, K[s])
+        _combine(y, h, B, K, y_new)
+        if not np.all(np.isfinite(y_new)):
+            return Y, k + 1, evals + n_st - 1, t_new, FAIL_NONFINITE
+        code = guard(t_new, y_new, p)
+        if code != 0:
+            return Y, k + 1, evals + n_st - 1, t_new, code
+        f(t_new, y_new, p, f_new)
+        evals += n_st
+        while i_out < n_out and t_out[i_out] <= t_new + 1e-12 * abs(t_new):
+            if t_out[i_out] >= t_new - 1e-12 * abs(t_new):
+                Y[i_out] = y_new
+            else:
+                _hermite(y, K[0], y_new, f_new, h, (t_out[i_out] - t) / h, Y[i_out])
+            i_out += 1
+        y[:] = y_new
+        K[0] = f_new
+    return Y, n_steps, evals, np.nan, FAIL_OK
+
+
+@nb.njit(cache=True)
+def _error_norm(K, h, scale, E, E3):
+    ny = scale.shape[0]
+    e5 = 0.0
+    e3 = 0.0
+    for j in range(ny):
+        a = 0.0
+        for s in range(E.shape[0]):
+            a += E[s] * K[s, j]
+        e5 += (a / scale[j]) ** 2
+        if E3.shape[0] > 0:
+            b = 0.0
+            for s in range(E3.shape[0]):
+                b += E3[s] * K[s, j]
+            e3 += (b / scale[j]) ** 2
+    if E3.shape[0] == 0:           # ordinary embedded pair: RMS norm
+        return abs(h) * np.sqrt(e5 / ny)
+    if e5 == 0.0 and e3 == 0.0:    # DOP853's 5th/3rd-order blend (Hairer & Wanner)
+        return 0.0
+    return abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * ny)
+
+
+@nb.njit(cache=True)
+def _prepare_dense(f, p, t, y, y_new, h, K, n_st, A, dense, P, AX, CX, D, F, ys):
+    """Coefficients F of the step's interpolant; returns the extra evaluations it took."""
+    ny = y.shape[0]
+    if dense == DENSE_POLY:          # F[k] = Σ_s P[s, k] K[s]  (y = y0 + h Σ_k F[k] x^(k+1))
+        for k in range(P.shape[1]):
+            for j in range(ny):
+                acc = 0.0
+                for s in range(P.shape[0]):
+                    acc += P[s, k] * K[s, j]
+                F[k, j] = acc
+        return 0
+    n_k = n_st + 1                   # DOP853: three extra stages, then scipy's F rows
+    for e in range(AX.shape[0]):
+        s = n_k + e
+        for j in range(ny):
+            acc = 0.0
+            for r in range(s):
+                acc += AX[e, r] * K[r, j]
+            ys[j] = y[j] + h * acc
+        f(t + CX[e] * h, ys, p, K[s])
+    for j in range(ny):
+        dy = y_new[j] - y[j]
+        F[0, j] = dy
+        F[1, j] = h * K[0, j] - dy
+        F[2, j] = 2.0 * dy - h * (K[n_st, j] + K[0, j])
+    for r in range(D.shape[0]):
+        for j in range(ny):
+            acc = 0.0
+            for s in range(D.shape[1]):
+                acc += D[r, s] * K[s, j]
+            F[3 + r, j] = h * acc
+    return AX.shape[0]
+
+
+@nb.njit(cache=True)
+def _eval_dense(y, h, x, dense, F, n_f, out):
+    ny = y.shape[0]
+    if dense == DENSE_POLY:
+        for j in range(ny):
+            acc = 0.0
+            for k in range(n_f - 1, -1, -1):     # Horner in x
+                acc = (acc + F[k, j]) * x
+            out[j] = y[j] + h * acc
+        return
+    for j in range(ny):                          # scipy's Dop853DenseOutput
+        acc = 0.0
+        for i in range(n_f):
+            acc += F[n_f - 1 - i, j]
+            acc *= x if i % 2 == 0 else 1.0 - x
+        out[j] = y[j] + acc
+
+
+@nb.njit(nt.Tuple((_MAT, nt.int64, nt.int64, nt.int64, nt.float64, nt.int64))(
+    RHS_INTO, GUARD, _VEC, _VEC, _VEC, nt.float64, nt.float64, nt.float64, nt.int64,
+    _MAT, _VEC, _VEC, _VEC, _VEC, nt.int64, nt.int64, _MAT, _MAT, _VEC, _MAT), cache=True)
+def integrate_adaptive_dense(f, guard, y0, p, t_out, rtol, atol, h_max, max_steps,
+                             A, B, C, E, E3, err_order, dense, P, AX, CX, D):
+    """Error-controlled embedded RK (FSAL) with dense output; `h_max` ≤ 0 means no cap.
+
+    Returns (Y, steps, rhs_evals, rejected, t_fail, code)."""
+    n_out, ny, n_st = t_out.shape[0], y0.shape[0], B.shape[0]
+    Y = np.full((n_out, ny), np.nan)
+    K = np.empty((n_st + 1 + AX.shape[0], ny))
+    n_f = P.shape[1] if dense == DENSE_POLY else 3 + D.shape[0]
+    F = np.empty((n_f, ny))
+    ys = np.empty(ny)
+    y = y0.copy()
+    y_new = np.empty(ny)
+    scale = np.empty(ny)
+    t0, t_end = t_out[0], t_out[n_out - 1]
+    if h_max <= 0.0:
+        h_max = np.inf
+    Y[0] = y
+    t = t0
+    f(t, y, p, K[0])
+    fy = K[0].copy()
+    evals = 1
+    steps = 0
+    rejected = 0
+    expo = -1.0 / (err_order + 1)
+    # initial step from the scale of y and f (Hairer's simple estimate)
+    d0 = 0.0
+    d1 = 0.0
+    for j in range(ny):
+        sc = atol + abs(y[j]) * rtol
+        d0 += (y[j] / sc) ** 2
+        d1 += (fy[j] / sc) ** 2
+    d0 = np.sqrt(d0 / ny)
+    d1 = np.sqrt(d1 / ny)
+    h = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+    h = min(h, h_max)
+    i_out = 1
+    while i_out < n_out:
+        if steps + rejected >= max_steps:
+            return Y, steps, evals, rejected, t, FAIL_MAX_STEPS
+        last = t + h >= t_end - 1e-12 * abs(t_end)
+        h_try = t_end - t if last else h
+        if h_try < 10.0 * np.abs(np.nextafter(t, np.inf) - t):
+            return Y, steps, evals, rejected, t, FAIL_STEP_UNDERFLOW
+        K[0] = fy
+        for s in range(1, n_st):
+            _stage_state(y, h_try, A, K, s, ys)
+            f(t + C[s] * h_try, ys, p, K[s])
+        _combine(y, h_try, B, K, y_new)
+        f(t + h_try, y_new, p, K[n_st])
+        evals += n_st
+        for j in range(ny):
+            scale[j] = atol + max(abs(y[j]), abs(y_new[j])) * rtol
+        err = _error_norm(K, h_try, scale, E, E3)
+        if not np.isfinite(err):
+            err = 1e10           # a NaN trial step: retry smaller, fail by underflow
+        if err >= 1.0:
+            rejected += 1
+            h = h_try * max(0.2, 0.9 * err ** expo)
+            continue
+        t_new = t_end if last else t + h_try
+        steps += 1
+        code = guard(t_new, y_new, p)
+        if code != 0:
+            return Y, steps, evals, rejected, t_new, code
+        if t_out[i_out] < t_new - 1e-12 * abs(t_new):      # an output inside the step
+            evals += _prepare_dense(f, p, t, y, y_new, h_try, K, n_st, A, dense, P, AX, CX, D,
+                                    F, ys)
+        while i_out < n_out and t_out[i_out] <= t_new + 1e-12 * abs(t_new):
+            if t_out[i_out] >= t_new - 1e-12 * abs(t_new):
+                Y[i_out] = y_new
+            else:
+                _eval_dense(y, h_try, (t_out[i_out] - t) / h_try, dense, F, n_f, Y[i_out])
+            i_out += 1
+        t = t_new
+        y[:] = y_new
+        fy[:] = K[n_st]
+        fac = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** expo)
+        # a clipped last step says little about the next one: keep h unless it grew
+        h = min(h_max, max(h, h_try * fac) if last else h_try * fac)
+    return Y, steps, evals, rejected, np.nan, FAIL_OK

@@ -95,6 +95,8 @@ class Scene:
     campaign_cases: tuple = ()
     # the spec's extreme cases (`xval extremes`)
     extremes: tuple = ()
+    # the channels the recording's first screen shows (default: key channel and energy)
+    view_channels: tuple[str, ...] = ()
     notes: str = ""
 
     def param(self, name):
@@ -127,8 +129,10 @@ class Scene:
 
 @dataclass(frozen=True)
 class Finding:
-    """One statement of the report, with the number that backs it."""
+    """One statement of the report, with the number that backs it; `at` (solver -> time in s)
+    for an event, which the recording puts on the timeline."""
     name: str
     value: float | None
     unit: str
     text: str
+    at: dict | None = None

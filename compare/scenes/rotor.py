@@ -49,7 +49,7 @@ def spinup_findings(p, trajectories):
                    f"(k_eff = {c['k_eff']:.6g} N·m/rad)")]
     out.append(Finding("t_first_pass_omega_tilt", t_c, "s",
                        f"|ω| first passes {c['omega_tilt']:.4f} rad/s at t = "
-                       + fmt(cross, " s", 6)))
+                       + fmt(cross, " s", 6), at={s: v for s, v in cross.items() if v}))
     t_end = ref.t[-1]
     w_end = per_solver(lambda tr: float(w[tr.solver][-1]))
     # after the first passage: does the spin keep up with the drive or stall near resonance?
@@ -170,6 +170,7 @@ SPINUP = Scene(
     tolerances={c: 1e-10 for c in ("omega_norm", "spin_rate", "tilt", "work", "kinetic",
                                    "potential")},
     key_channel="omega_norm",
+    view_channels=("omega_norm", "tilt", "energy_balance"),
     energy_scale_channels=("kinetic", "potential", "work"),
     reference_solvers=("euler-vector", "quaternion"),
     findings=spinup_findings,

@@ -98,8 +98,9 @@ def test_a_crashing_solver_is_recorded_and_hides_nothing(tmp_path, monkeypatch, 
         raise RuntimeError("model exploded")
     broken.simulate = simulate
     monkeypatch.setitem(sys.modules, "broken_leaf", broken)
-    monkeypatch.setitem(solvers.REGISTRY, "broken",
-                        solvers.Solver("broken", "test", {"rotor-spinup": "broken_leaf"}, "numpy"))
+    from compare.scenes.rotor import SPINUP
+    monkeypatch.setitem(solvers.REGISTRY, "broken", solvers.Solver("broken", "test", "numpy"))
+    monkeypatch.setitem(SPINUP.leaves, "broken", "broken_leaf")
     rc = cli.main(["run", "rotor-spinup", "--solver", "broken", "--solver", "quaternion",
                    "--set", "t_end=0.5", "--json", "--no-record", "--out", str(tmp_path)])
     obj = json.loads(capsys.readouterr().out)

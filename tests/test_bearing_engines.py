@@ -219,3 +219,35 @@ def test_long_run_energy_and_agreement():
         assert max(np.max(np.abs(c[k] - ref[k])) for k in JOURNALS) <= 4.5e-10, engine
         assert np.max(np.abs(c["spin_rate"] - ref["spin_rate"])) <= 1.6e-6, engine
         assert np.max(np.abs(c["spin_angle"] - ref["spin_angle"])) <= 1.2e-7, engine
+
+
+def test_mujoco_threads_do_not_share_the_global_callback():
+    """MuJoCo's passive callback is process-global: two runs in threads (as under Dask) must
+    give what each gives alone."""
+    from concurrent.futures import ThreadPoolExecutor
+    cases = [{"t_end": 0.05}, {"t_end": 0.05, "k_b": 2e6}]
+    alone = [run(mujoco_leaf, **c)[2].channels for c in cases]
+    with ThreadPoolExecutor(2) as pool:
+        both = list(pool.map(lambda c: run(mujoco_leaf, **c)[2].channels, cases))
+    for a, b in zip(alone, both):
+        assert all(np.array_equal(a[k], b[k]) for k in a)
+
+
+def test_mujoco_run_stops_if_its_callback_is_taken_away(monkeypatch):
+    """Another leaf's simulation in another thread may replace the global passive callback:
+    the run must end `diverged`, not go on without its bearing forces."""
+    import mujoco
+
+    real_step = mujoco.mj_step
+    calls = {"n": 0}
+
+    def step_then_steal(m, d, n=1):
+        real_step(m, d, n)
+        calls["n"] += 1
+        if calls["n"] == 20:
+            mujoco.set_mjcb_passive(None)
+
+    monkeypatch.setattr(mujoco, "mj_step", step_then_steal)
+    params, t, res = run(mujoco_leaf, t_end=0.05)
+    assert res.status == "diverged" and "callback was replaced" in res.reason
+    assert res.t_fail == pytest.approx(t[20])

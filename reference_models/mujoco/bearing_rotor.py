@@ -11,7 +11,8 @@ The callback is, by default, a numba `cfunc` installed as a raw C function point
 re-enters Python). It finds the arrays of the one `MjData` being stepped through a small address
 table (`_ADDR`) that `simulate` fills before stepping, so no knowledge of the `mjData` struct
 layout is needed. `settings["callback"] = "python"` installs a Python callable that runs the same
-numba kernel (about 5x slower). The callback is process-global: one simulation at a time.
+numba kernel. MuJoCo's passive callback is process-global, so simulations of this leaf hold a
+lock (threads of one process, e.g. Dask workers, run them one at a time).
 
 Free-joint conventions: qvel[0:3] is the world velocity of the body frame (the centre of mass),
 qvel[3:6] the angular velocity in the body frame; qfrc_passive[0:3] takes the world force and
@@ -32,6 +33,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+import threading
 import time
 
 import llvmlite.binding as llvm
@@ -97,17 +99,23 @@ def _passive(qpos, qvel, qfrc, ctrl, ud):
 
 
 def _python_callback(m, d):
-    _passive(d.qpos, d.qvel, d.qfrc_passive, d.ctrl, d.userdata)
+    if d._address == _ADDR[6]:        # only the MjData being stepped (see _ADDR)
+        _passive(d.qpos, d.qvel, d.qfrc_passive, d.ctrl, d.userdata)
 
 
 # --------------------------------------------------------------------- native callback
 # The cfunc reaches the arrays of the MjData being stepped through _ADDR; it finds _ADDR through
 # an external symbol resolved when the machine code is loaded (llvmlite add_symbol), not through
-# an address baked into the code, so numba can cache the compiled callback on disk.
-_ADDR = np.zeros(6, dtype=np.int64)     # qpos, qvel, qfrc_passive, ctrl, userdata, len(userdata)
+# an address baked into the code, so numba can cache the compiled callback on disk. The callback
+# acts only on the MjData whose address is _ADDR[6]: MuJoCo calls the (process-global) passive
+# callback for any model, e.g. while another thread compiles one (mj_setConst), and writing
+# that call's forces into the stepped arrays would corrupt a running simulation silently.
+# _ADDR: qpos, qvel, qfrc_passive, ctrl, userdata, len(userdata), address of the stepped mjData
+_ADDR = np.zeros(7, dtype=np.int64)
 _ADDR_SYMBOL = "xval_bearing_rotor_mjdata_table"
 _ADDR_CELL = ctypes.c_int64(_ADDR.ctypes.data)     # the array is never rebound
 _NATIVE = {"cb": None, "error": None}
+_LOCK = threading.Lock()              # one simulation per process at a time (global callback)
 
 
 @intrinsic
@@ -129,6 +137,13 @@ def _ptr(typingctx, addr):
 
 
 @intrinsic
+def _address(typingctx, ptr):
+    def codegen(context, builder, signature, args):
+        return builder.ptrtoint(args[0], ir.IntType(64))
+    return types.int64(ptr), codegen
+
+
+@intrinsic
 def _iptr(typingctx, addr):
     def codegen(context, builder, signature, args):
         return builder.inttoptr(args[0], context.get_value_type(types.CPointer(types.int64)))
@@ -144,7 +159,9 @@ def _native_callback():
 
         @cfunc(types.void(types.voidptr, types.voidptr), nopython=True, cache=True)
         def _cb(m, d):
-            a = carray(_iptr(_table()), (6,))
+            a = carray(_iptr(_table()), (7,))
+            if _address(d) != a[6]:
+                return
             _passive(carray(_ptr(a[0]), (7,)), carray(_ptr(a[1]), (6,)),
                      carray(_ptr(a[2]), (6,)), carray(_ptr(a[3]), (2,)),
                      carray(_ptr(a[4]), (a[5],)))
@@ -166,14 +183,21 @@ class _Callback:
         cb = _native_callback() if self.kind == "native" else None
         if cb is None:
             self.kind = "python"
-        else:
-            d = self.d
-            _ADDR[:] = (d.qpos.ctypes.data, d.qvel.ctypes.data, d.qfrc_passive.ctypes.data,
-                        d.ctrl.ctypes.data, d.userdata.ctypes.data, len(d.userdata))
+        d = self.d
+        _ADDR[:] = (d.qpos.ctypes.data, d.qvel.ctypes.data, d.qfrc_passive.ctypes.data,
+                    d.ctrl.ctypes.data, d.userdata.ctypes.data, len(d.userdata), d._address)
         self._prev = mujoco.get_mju_user_warning()
         mujoco.set_mju_user_warning(self.warnings.append)    # no stdout, no MUJOCO_LOG.TXT
         mujoco.set_mjcb_passive(cb.ctypes if cb is not None else _python_callback)
         return self
+
+    def intact(self) -> bool:
+        """Whether our callback is still the installed one (another leaf in another thread may
+        have replaced or removed it: the run would then go on without its forces)."""
+        g = mujoco.get_mjcb_passive()
+        if self.kind == "python":
+            return g is _python_callback
+        return g is not None and ctypes.cast(g, ctypes.c_void_p).value == _NATIVE["cb"].address
 
     def __exit__(self, *exc):
         mujoco.set_mjcb_passive(None)
@@ -239,7 +263,12 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> LeafResult:
         raise ValueError(f"dt must be a positive number, got {s['dt']!r}") from None
     if not (math.isfinite(dt) and dt > 0):
         raise ValueError(f"dt must be a positive number, got {s['dt']!r}")
-    t_out = np.asarray(t_out, float)
+    # the lock also covers the compile: MuJoCo calls the global passive callback while compiling
+    with _LOCK:
+        return _simulate(params, np.asarray(t_out, float), s, dt)
+
+
+def _simulate(params: dict, t_out: np.ndarray, s: dict, dt: float) -> LeafResult:
     n_sub, h = bc.step_plan(t_out, dt)
     m, d = _build(params, s["integrator"], h)
     n = len(t_out)
@@ -261,6 +290,8 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> LeafResult:
                 bad = "non-finite state"
             elif abs(d.time - t_out[i]) > 1e-9 * max(1.0, t_out[i]):
                 bad = f"time did not advance as expected (MuJoCo reset?) t = {d.time:.6g} s"
+            elif not cbk.intact():
+                bad = "the passive callback was replaced (another MuJoCo model in this process)"
             elif i % 64 == 0 and _bad_warnings(d):
                 bad = "MuJoCo reported a bad (NaN/huge) qpos/qvel/qacc"
             if bad is not None:

@@ -37,9 +37,6 @@ DEFAULT_SETTINGS = {"integrator": "generalized_alpha", "dt": 2e-5, "spectral_rad
                     "newton_tol": 1e-10, "newton_abs_tol": 1e-12}
 INTEGRATORS = ("generalized_alpha", "trapezoidal")
 
-_BISECT_TOL = 1e-9   # s, width of the final lock-time bracket
-
-
 class _Diverged(Exception):
     def __init__(self, t, reason):
         super().__init__(reason)
@@ -317,19 +314,11 @@ def _find_lock(model, rec, h, psi_lock, work) -> float | None:
     j = int(hit[0])
     work += _integrate_records(model, rec[:j + 1], model.locked)
     ta, qa, va = rec[j][0], rec[j][1], rec[j][2]
-    lo, hi = 0.0, h
-    nb = 0
-    last = None
-    while hi - lo > _BISECT_TOL:
-        mid = 0.5 * (lo + hi)
+    def advance(dt):
         model.set_initial(qa, va)
-        r2 = model.solve(ta, ta + mid, 1)
-        nb += 1
-        gm = _rocker_angle(model, r2[-1][1]) - psi_lock
-        if np.sign(gm) == np.sign(g[j]) and gm != 0.0:
-            lo = mid
-        else:
-            hi, last = mid, r2
+        r2 = model.solve(ta, ta + dt, 1)
+        return _rocker_angle(model, r2[-1][1]) - psi_lock, r2
+    hi, nb, last = pc.bisect_event(advance, g[j], h)
     if last is None or abs(last[-1][0] - (ta + hi)) > 1e-15:
         model.set_initial(qa, va)
         last = model.solve(ta, ta + hi, 1)

@@ -36,9 +36,6 @@ DEFAULT_SETTINGS = {"integrator": "rk4", "dt": 1e-4, "solref_factor": 4.0,
                     "solimp": (0.9999, 0.9999, 0.001, 0.5, 2.0)}
 INTEGRATORS = ("rk4", "euler", "implicitfast", "implicit")
 
-_BISECT_TOL = 1e-9   # s
-
-
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
     s = pc.fixed_step_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
@@ -204,18 +201,11 @@ class _Press:
         g1 = self.psi_of(d.qpos) - psi_lock
         if not (g0 == 0.0 or np.sign(g1) != np.sign(g0)):
             return False
-        lo, hi = 0.0, h
-        nb = 0
-        while hi - lo > _BISECT_TOL:
-            mid = 0.5 * (lo + hi)
+        def advance(dt):
             mujoco.mj_setState(m, d, saved, self.spec)
-            self.step(mid)
-            nb += 1
-            gm = self.psi_of(d.qpos) - psi_lock
-            if gm != 0.0 and np.sign(gm) == np.sign(g0):
-                lo = mid
-            else:
-                hi = mid
+            self.step(dt)
+            return self.psi_of(d.qpos) - psi_lock, None
+        hi, nb, _ = pc.bisect_event(advance, g0, h)
         mujoco.mj_setState(m, d, saved, self.spec)
         self.step(hi)
         self.lock(nb)

@@ -251,3 +251,18 @@ def test_mujoco_run_stops_if_its_callback_is_taken_away(monkeypatch):
     params, t, res = run(mujoco_leaf, t_end=0.05)
     assert res.status == "diverged" and "callback was replaced" in res.reason
     assert res.t_fail == pytest.approx(t[20])
+
+
+def test_mujoco_auto_step_follows_the_bearing_stiffness():
+    """k_b = 1e10: the RK4 limit falls to 28 µs, below MuJoCo's default 50 µs step (the run says
+    `diverged` with the reason); dt="auto" takes half the limit (14 µs) and runs."""
+    params, t, res = run(mujoco_leaf, k_b=1e10, t_end=0.2)
+    assert res.status == "diverged" and "stability limit ~2.79e-05 s" in res.reason
+    params, t, res = run(mujoco_leaf, {"dt": "auto"}, k_b=1e10, t_end=0.2)
+    assert res.status == "ok", res.reason
+    assert res.settings["dt"] == pytest.approx(0.5 * 2.785 / math.sqrt(1e10 * 0.6**2 / 2 / 0.1806),
+                                               rel=0.05)
+    assert np.max(res.channels["journal_a_y"]) > 1e-5        # the bump passed
+    assert energy_closure(res) <= 3.7e-6                      # measured 3.7e-7
+    # at the default stiffness "auto" is the accurate default step
+    assert run(mujoco_leaf, {"dt": "auto"}, t_end=0.01)[2].settings["dt"] == 5e-5

@@ -441,13 +441,13 @@ def run_campaign(path, out, executor="local", scheduler=None, workers=None, time
             outcome[c.name] = finish_case(c, jobs, store, out_dir, crashed, reused, view)
     if todo:
         ex, client = make_executor(executor, scheduler, workers)
+        t_start = time.time()
         try:
             futures = {ex.submit(run_job, j, str(store)): j for j in todo}
             left = set(futures)
             while left:
                 done, left = wait(left, timeout=0.5, return_when=FIRST_COMPLETED)
-                view.running([futures[f].label for f in left if f.running()]
-                             or ([f"{len(left)} queued"] if left else []))
+                view.running(_started([futures[f] for f in left], store, t_start))
                 for f in done:
                     j = futures[f]
                     try:
@@ -462,7 +462,7 @@ def run_campaign(path, out, executor="local", scheduler=None, workers=None, time
                     pending[j.case].discard(j.label)
                     if not pending[j.case]:
                         case = next(c for c in cases if c.name == j.case)
-                        view.running(["report " + case.name])
+                        view.note(f"writing the report of {case.name}")
                         outcome[case.name] = finish_case(case, jobs, store, out_dir, crashed,
                                                          reused, view)
         finally:
@@ -472,6 +472,19 @@ def run_campaign(path, out, executor="local", scheduler=None, workers=None, time
     from .campaign_report import write_campaign_report
     return write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed,
                                  time.perf_counter() - t0)
+
+
+def _started(jobs, store, since):
+    """Jobs a worker has begun: their log was (re)created after `since`. An executor's own
+    `running()` also counts jobs merely queued for a worker."""
+    out = []
+    for j in jobs:
+        try:
+            if (store / f"{j.key}.log").stat().st_mtime >= since - 1:
+                out.append(j.label)
+        except OSError:
+            pass
+    return out
 
 
 # --- one case's comparison, recording and report ------------------------------------------------

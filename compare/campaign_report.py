@@ -256,6 +256,6 @@ def _reuse_and_messages(case, jobs, reused, out_dir):
     msgs = _messages(case, jobs, out_dir)
     if msgs:
         out += ["", f"<details><summary>Engine messages of {case.name} "
-                f"({len(msgs)} distinct lines)</summary>", "", "```"]
+                f"({len(msgs)} distinct line{'s' if len(msgs) != 1 else ''})</summary>", "", "```"]
         out += [m.strip() for m in msgs] + ["```", "", "</details>"]
     return out

@@ -35,6 +35,10 @@ class PlainProgress:
     def running(self, names):
         pass
 
+    def note(self, text):
+        """What the main process is doing between jobs (e.g. writing a case's report)."""
+        self.log(text)
+
     def finished(self, label, status, wall_s=None):
         self.done += 1
         wall = f" in {wall_s:.3g} s" if wall_s is not None else ""
@@ -57,11 +61,15 @@ class RichProgress(PlainProgress):
             TimeElapsedColumn,
             TimeRemainingColumn,
         )
+        from rich.table import Column
         self.console = Console(file=self.stream)
-        self.bar = Progress(TextColumn("[bold]campaign"), BarColumn(), MofNCompleteColumn(),
-                            TextColumn("jobs"), TimeElapsedColumn(), TextColumn("ETA"),
-                            TimeRemainingColumn(), TextColumn("{task.description}"),
-                            console=self.console, transient=False, refresh_per_second=4)
+        self.bar = Progress(TextColumn("[bold]campaign"), BarColumn(bar_width=24),
+                            MofNCompleteColumn(), TextColumn("jobs ·"), TimeElapsedColumn(),
+                            TextColumn("elapsed · ETA"), TimeRemainingColumn(),
+                            TextColumn("{task.description}", table_column=Column(
+                                no_wrap=True, overflow="ellipsis", ratio=1)),
+                            console=self.console, transient=False, refresh_per_second=4,
+                            expand=True)
         self.task = None
 
     def __enter__(self):
@@ -80,9 +88,11 @@ class RichProgress(PlainProgress):
         self.task = self.bar.add_task("", total=total, completed=reused)
 
     def running(self, names):
-        shown = ", ".join(names[:3]) + (f" +{len(names) - 3}" if len(names) > 3 else "")
-        self.bar.update(self.task, description=f"· running {len(names)}: {shown}" if names
-                        else "· writing reports")
+        self.bar.update(self.task, description=f"· running {len(names)}: {', '.join(names)}"
+                        if names else "· waiting for a worker")
+
+    def note(self, text):
+        self.bar.update(self.task, description=f"· {text}")
 
     def finished(self, label, status, wall_s=None):
         self.done += 1

@@ -105,6 +105,9 @@ def plot_channels(result, path):
         ax.grid(alpha=0.3)
     for ax in axes.flat[len(chs):]:
         ax.axis("off")
+        above = axes.flat[list(axes.flat).index(ax) - ncol]      # its time axis is the last
+        above.xaxis.set_tick_params(labelbottom=True)
+        above.set_xlabel("t [s]")
     axes.flat[0].legend(fontsize=8)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")

@@ -1,0 +1,243 @@
+"""Element transfer matrices of the MSTMM (seed 002), numba-compiled.
+
+State at a cut, in the element's local axes (x along the beam):
+    Z = [X, Y, Z, Θx, Θy, Θz, Mx, My, Mz, Qx, Qy, Qz]
+displacements, small rotations (right-handed), and the section resultants: the moment M and
+force Q that the part beyond the cut (larger x) exerts on the part before it. With these
+signs a free end has M = Q = 0 and a rigid body simply adds the resultants of its inputs.
+
+Beam kinematics and resultants (T(x) the axial tension, e.g. centrifugal):
+    flap  (w = Z):  Θy = −w',  My = −EI w'',  Qz = −EI w''' + T w'
+    lag   (v = Y):  Θz =  v',  Mz =  EI v'',  Qy = −EI v''' + T v'
+    torsion:        Mx = GJ Θx',  Mx' + I_α(ω² − Ω²) Θx = 0       (paper eq. 30)
+    axial (u = X):  Qx = EA u',   Qx' + m̄(ω² + Ω²) u = 0        (spin softening)
+and the bending equation EI y'''' − (T y')' − k y = 0 with k = m̄ω² (flap) or m̄(ω² + Ω²)
+(lag, the paper's eq. 28 with its −Ω² m̄ y term).
+
+The rotating-blade bending matrix is the paper's D(l2)D(l1)⁻¹ by the Frobenius power series
+(eqs. 16-27), taken per segment: the series is expanded at each segment's start (where D is
+the identity up to the resultant map) and the blade is cut into segments short enough that the
+series keeps its digits (≤ 1.5 wavelengths/2π per segment, see `n_segments`). The paper's
+single series over the whole blade loses all digits near the 20th mode (terms ~ e^{βL}/…).
+"""
+import numba as nb
+import numpy as np
+
+# state indices (paper order)
+X, Y, Z, TX, TY, TZ, MX, MY, MZ, QX, QY, QZ = range(12)
+FLAP = np.array([Z, TY, MY, QZ])
+LAG = np.array([Y, TZ, MZ, QY])
+TORSION = np.array([TX, MX])
+AXIAL = np.array([X, QX])
+
+
+@nb.njit(cache=True)
+def series_derivative_transfer(EI, k, f0, f1, f2, s):
+    """4x4 P: [y, y', y'', y'''](s) = P [y, y', y'', y'''](0) for EI y'''' − (T y')' − k y = 0
+    with T(s) = f0 + f1 s + f2 s² (power series about s = 0, summed until the terms vanish)."""
+    P = np.zeros((4, 4))
+    nmax = 400
+    for j in range(4):
+        c = np.zeros(nmax + 4)
+        fact = 1.0
+        for i in range(1, j + 1):
+            fact *= i
+        c[j] = 1.0 / fact                    # y^(j)(0) = 1, others 0
+        # derivatives of the series at s: accumulate sum c_n s^n etc.
+        val = np.zeros(4)
+        biggest = 0.0
+        small_run = 0
+        for n in range(nmax):
+            if n >= 4:
+                m = n - 4
+                c[n] = (f0 * (m + 2) * (m + 1) * c[m + 2] + f1 * (m + 1) ** 2 * c[m + 1]
+                        + (f2 * m * (m + 1) + k) * c[m]) / (EI * (m + 1) * (m + 2) * (m + 3)
+                                                            * (m + 4))
+            cn = c[n]
+            # term of y^(d) from c_n s^n: n!/(n-d)! c_n s^(n-d)
+            t0 = cn * s ** n
+            val[0] += t0
+            if n >= 1:
+                val[1] += n * cn * s ** (n - 1)
+            if n >= 2:
+                val[2] += n * (n - 1) * cn * s ** (n - 2)
+            if n >= 3:
+                val[3] += n * (n - 1) * (n - 2) * cn * s ** (n - 3)
+            a = abs(n * (n - 1) * (n - 2) * cn * s ** (n - 3)) if n >= 3 else 0.0
+            a = max(a, abs(t0))
+            for d in range(4):
+                biggest = max(biggest, abs(val[d]))
+            if n > 8 and a <= 1e-18 * biggest:
+                small_run += 1
+                if small_run >= 4:
+                    break
+            else:
+                small_run = 0
+        for d in range(4):
+            P[d, j] = val[d]
+    return P
+
+
+@nb.njit(cache=True)
+def resultant_map(EI, T, flap):
+    """C: state (disp, rot, moment, force) = C [y, y', y'', y''']."""
+    C = np.zeros((4, 4))
+    C[0, 0] = 1.0
+    sgn = -1.0 if flap else 1.0
+    C[1, 1] = sgn
+    C[2, 2] = sgn * EI
+    C[3, 1] = T
+    C[3, 3] = -EI
+    return C
+
+
+@nb.njit(cache=True)
+def centrifugal_tension(x, m, spin, hub_radius, L):
+    """T(x) = m̄Ω²[r_H(L − x) + (L² − x²)/2] (paper eq. 11, free tip F0 = 0), and its
+    expansion coefficients about x."""
+    w2 = m * spin * spin
+    T = w2 * (hub_radius * (L - x) + 0.5 * (L * L - x * x))
+    return T, -w2 * (hub_radius + x), -0.5 * w2
+
+
+@nb.njit(cache=True)
+def n_segments(EI, k, Tmax, length):
+    """Segments so that each spans ≤ 1.5 rad of the bending wavenumber (k/EI)^¼ and of the
+    tension wavenumber √(T/EI): the series then needs ~30 terms and keeps ~15 digits."""
+    beta = (abs(k) / EI) ** 0.25
+    kt = np.sqrt(abs(Tmax) / EI)
+    return max(1, int(np.ceil(length * max(beta, kt) / 1.5)))
+
+
+@nb.njit(cache=True)
+def bending_transfer(EI, m, omega, spin, hub_radius, L, x_a, x_b, flap):
+    """4x4 transfer (disp, rot, moment, force) from x_a to x_b (either order) of a rotating
+    blade in flap (k = m̄ω²) or lag (k = m̄(ω² + Ω²))."""
+    k = m * omega * omega if flap else m * (omega * omega + spin * spin)
+    T0, _, _ = centrifugal_tension(0.0, m, spin, hub_radius, L)
+    nseg = n_segments(EI, k, T0, abs(x_b - x_a))
+    U = np.eye(4)
+    h = (x_b - x_a) / nseg
+    for i in range(nseg):
+        xs = x_a + i * h
+        f0, f1, f2 = centrifugal_tension(xs, m, spin, hub_radius, L)
+        P = series_derivative_transfer(EI, k, f0, f1, f2, h)
+        Te, _, _ = centrifugal_tension(xs + h, m, spin, hub_radius, L)
+        Cs = resultant_map(EI, f0, flap)
+        Ce = resultant_map(EI, Te, flap)
+        U = Ce @ P @ np.linalg.inv(Cs) @ U
+    return U
+
+
+@nb.njit(cache=True)
+def second_order_transfer(stiff, g2, s):
+    """2x2 transfer of (q, R = stiff·q') for R' + stiff·g2·q = 0 over length s (g2 may be < 0):
+    torsion (stiff = GJ, g2 = I_α(ω² − Ω²)/GJ) and axial (EA, m̄(ω² + Ω²)/EA)."""
+    U = np.empty((2, 2))
+    if g2 > 0:
+        g = np.sqrt(g2)
+        c, sn = np.cos(g * s), np.sin(g * s)
+        U[0, 0], U[0, 1], U[1, 0], U[1, 1] = c, sn / (stiff * g), -stiff * g * sn, c
+    elif g2 < 0:
+        g = np.sqrt(-g2)
+        c, sn = np.cosh(g * s), np.sinh(g * s)
+        U[0, 0], U[0, 1], U[1, 0], U[1, 1] = c, sn / (stiff * g), stiff * g * sn, c
+    else:
+        U[0, 0], U[0, 1], U[1, 0], U[1, 1] = 1.0, s / stiff, 0.0, 1.0
+    return U
+
+
+@nb.njit(cache=True)
+def rotating_blade(omega, spin, L, hub_radius, EI_flap, EI_lag, GJ, EA, m, I_alpha, x_a, x_b):
+    """12x12 transfer of a rotating blade (local x = span from the root) from x_a to x_b."""
+    U = np.zeros((12, 12))
+    B = bending_transfer(EI_flap, m, omega, spin, hub_radius, L, x_a, x_b, True)
+    for i in range(4):
+        for j in range(4):
+            U[FLAP[i], FLAP[j]] = B[i, j]
+    B = bending_transfer(EI_lag, m, omega, spin, hub_radius, L, x_a, x_b, False)
+    for i in range(4):
+        for j in range(4):
+            U[LAG[i], LAG[j]] = B[i, j]
+    s = x_b - x_a
+    B2 = second_order_transfer(GJ, I_alpha * (omega * omega - spin * spin) / GJ, s)
+    for i in range(2):
+        for j in range(2):
+            U[TORSION[i], TORSION[j]] = B2[i, j]
+    B2 = second_order_transfer(EA, m * (omega * omega + spin * spin) / EA, s)
+    for i in range(2):
+        for j in range(2):
+            U[AXIAL[i], AXIAL[j]] = B2[i, j]
+    return U
+
+
+@nb.njit(cache=True)
+def orthonormalize(S):
+    """Gram–Schmidt with a positive-diagonal R: the basis of the same column space, continuous
+    in ω (R > 0 drops only a positive factor from any determinant built on S)."""
+    Q = S.copy()
+    for j in range(Q.shape[1]):
+        for i in range(j):
+            Q[:, j] -= (Q[:, i] @ Q[:, j]) * Q[:, i]
+        for i in range(j):                       # second pass: orthogonal to machine precision
+            Q[:, j] -= (Q[:, i] @ Q[:, j]) * Q[:, i]
+        Q[:, j] /= np.sqrt(Q[:, j] @ Q[:, j])
+    return Q
+
+
+@nb.njit(cache=True)
+def blade_subspace(omega, spin, L, hub_radius, EI_flap, EI_lag, GJ, EA, m, I_alpha, x_a, x_b,
+                   S, scale):
+    """Carry the solution basis S (12 x k, in the scaled state diag(scale)·Z) from x_a to x_b
+    segment by segment, re-orthonormalising after each: the growing e^{βx} solutions never
+    swamp the decaying ones (the full-span matrix has entries ~e^{βL}, ~1e26 at the 20th flap
+    mode, and its 2x2 determinants cancel to nothing)."""
+    k = m * (omega * omega + spin * spin)
+    T0, _, _ = centrifugal_tension(0.0, m, spin, hub_radius, L)
+    nseg = max(n_segments(EI_flap, k, T0, abs(x_b - x_a)),
+               n_segments(EI_lag, k, T0, abs(x_b - x_a)))
+    h = (x_b - x_a) / nseg
+    Q = orthonormalize(S)
+    for i in range(nseg):
+        U = rotating_blade(omega, spin, L, hub_radius, EI_flap, EI_lag, GJ, EA, m, I_alpha,
+                           x_a + i * h, x_a + (i + 1) * h)
+        for r in range(12):
+            for c in range(12):
+                U[r, c] *= scale[r] / scale[c]
+        Q = orthonormalize(U @ Q)
+    return Q
+
+
+@nb.njit(cache=True)
+def coupled_fourth_order_transfer(K, s):
+    """8x8 E(s): y(s) = E y(0), y = [W, W', W'', W'''] per component of W = [U, V] (order
+    U, U', U'', U''', V, …), for W'''' = K W (K 2x2 constant): the exponential series
+    Σ Kⁿ s^(4n+j−d)/(4n+j−d)! — exact, and short for segments with ‖K‖^¼ s ≤ 1.5."""
+    E = np.zeros((8, 8))
+    Kn = np.eye(2)
+    fact = np.ones(120)
+    for i in range(1, 120):
+        fact[i] = fact[i - 1] * i
+    for n in range(25):
+        for d in range(4):
+            for j in range(4):
+                p = 4 * n + j - d
+                if p >= 0:
+                    c = s ** p / fact[p]
+                    E[d, j] += Kn[0, 0] * c
+                    E[d, 4 + j] += Kn[0, 1] * c
+                    E[4 + d, j] += Kn[1, 0] * c
+                    E[4 + d, 4 + j] += Kn[1, 1] * c
+        Kn = Kn @ K
+    return E
+
+
+@nb.njit(cache=True)
+def shaft_coupling(EIx, EIy, m, omega, spin):
+    """K of the spinning shaft in the whirl ansatz u = U cos ωt, v = V sin ωt (rotating frame,
+    physical gyroscopic coupling): [U, V]'''' = K [U, V]."""
+    K = np.empty((2, 2))
+    a, c = m * (omega * omega + spin * spin), 2.0 * m * spin * omega
+    K[0, 0], K[0, 1] = a / EIy, c / EIy
+    K[1, 0], K[1, 1] = c / EIx, a / EIx
+    return K

@@ -1,0 +1,96 @@
+"""Roots of a characteristic function g(ω) (a scaled determinant) over a grid: every sign
+change is bracketed and refined; a dip of |g| that does not change sign (two roots closer
+than the grid, or a double root) is zoomed into until it resolves into sign changes or
+touches zero; after each root the function is deflated, g/(ω − r), and the bracket searched
+again, so clusters of three or more roots inside one grid step are not counted once.
+"""
+import numpy as np
+from scipy.optimize import brentq
+
+ZOOM_POINTS = 9
+MAX_DEPTH = 12
+# |g| below which a dip that never changes sign is a double root (g normalised, |g| ≤ 1)
+DOUBLE_ROOT_LEVEL = 1e-10
+
+
+def hadamard_det(A: np.ndarray) -> float:
+    """det A / Π‖a_j‖: same sign and zeros as det A, bounded by 1 (no overflow at high ω)."""
+    norms = np.linalg.norm(A, axis=0)
+    norms[norms == 0] = 1.0
+    sign, logdet = np.linalg.slogdet(A / norms)
+    return float(sign * np.exp(logdet))
+
+
+def find_roots(g, grid: np.ndarray, rtol: float = 1e-12) -> list:
+    """All roots of g on [grid[0], grid[-1]], ascending, multiplicity counted for double
+    roots (|g| touching zero without a sign change)."""
+    vals = np.array([g(w) for w in grid])
+    return sorted(_roots_on(g, np.asarray(grid, float), vals, rtol, 0))
+
+
+def _roots_on(g, w, v, rtol, depth):
+    roots = []
+    n = len(w)
+    for i in range(n - 1):
+        if v[i] == 0.0:
+            roots.append(w[i])
+            continue
+        if v[i] * v[i + 1] < 0:
+            r = brentq(g, w[i], w[i + 1], xtol=rtol * abs(w[i + 1]), rtol=1e-15, maxiter=200)
+            roots.append(r)
+            roots += _cluster(g, w[i], w[i + 1], [r], rtol, depth)
+    for i in range(1, n - 1):
+        # a dip of |g| with no sign change beside it: zoom
+        if (abs(v[i]) < abs(v[i - 1]) and abs(v[i]) < abs(v[i + 1]) and v[i - 1] * v[i] > 0
+                and v[i] * v[i + 1] > 0 and _may_touch(w[i - 1:i + 2], v[i - 1:i + 2])):
+            roots += _zoom(g, w[i - 1], w[i + 1], rtol, depth + 1)
+    return roots
+
+
+def _may_touch(w, v):
+    """Does the parabola through three samples around a dip reach zero (or come close)?"""
+    c = np.polyfit(w - w[1], v, 2)
+    if c[0] == 0:
+        return False
+    vmin = c[2] - c[1] ** 2 / (4 * c[0])
+    return np.sign(vmin) != np.sign(v[1]) or abs(vmin) < 0.2 * abs(v[1])
+
+
+def _zoom(g, a, b, rtol, depth):
+    if depth > MAX_DEPTH:
+        return []
+    w = np.linspace(a, b, ZOOM_POINTS)
+    v = np.array([g(x) for x in w])
+    if (b - a) < 1e3 * rtol * b:              # touches zero at the resolution: a double root
+        i = int(np.argmin(np.abs(v)))     # (g is a normalised determinant, |g| ≤ 1)
+        return [w[i], w[i]] if abs(v[i]) < DOUBLE_ROOT_LEVEL else []
+    return _roots_on(g, w, v, rtol, depth)
+
+
+def _cluster(g, a, b, found, rtol, depth):
+    """More roots in [a, b] besides `found`: search the deflated function."""
+    if depth > MAX_DEPTH:
+        return []
+
+    def h(x):
+        d = np.prod([x - r for r in found])
+        return g(x) / d if d != 0 else np.inf
+    w = np.linspace(a, b, ZOOM_POINTS)
+    # keep the samples off the known roots (the deflated function is 0/0 there)
+    for r in found:
+        w = w[np.abs(w - r) > 1e-6 * (b - a)]
+    v = np.array([h(x) for x in w])
+    extra = []
+    for i in range(len(w) - 1):
+        if v[i] * v[i + 1] < 0:
+            r = brentq(h, w[i], w[i + 1], xtol=rtol * abs(w[i + 1]), rtol=1e-15, maxiter=200)
+            if all(abs(r - f) > 10 * rtol * abs(r) for f in found + extra):
+                extra.append(r)
+    for i in range(1, len(w) - 1):
+        if (abs(v[i]) < abs(v[i - 1]) and abs(v[i]) < abs(v[i + 1]) and v[i - 1] * v[i] > 0
+                and v[i] * v[i + 1] > 0 and _may_touch(w[i - 1:i + 2], v[i - 1:i + 2])):
+            for r in _zoom(h, w[i - 1], w[i + 1], rtol, depth + 1):
+                extra.append(r)
+    if extra:
+        extra += _cluster(g, a, b, found + extra, rtol, depth + 1)
+    return extra

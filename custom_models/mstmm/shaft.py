@@ -1,0 +1,127 @@
+"""`mstmm` leaf for `spinning-shaft`: the spinning cantilever shaft of Table 2 (seed 002).
+
+Rotating frame, Euler–Bernoulli, the physical (skew-symmetric) gyroscopic coupling:
+    EI_yy u'''' + m ü − 2mΩ v̇ − mΩ² u = 0,   EI_xx v'''' + m v̈ + 2mΩ u̇ − mΩ² v = 0.
+The paper's eq. 32 prints the same sign on both Coriolis terms; taken literally (u, v ∝ e^{iωt})
+its characteristic roots are real-exponential and cannot give Table 2. With the whirl ansatz
+u = U cos ωt, v = V sin ωt the physical equations become the paper's eq. 33 exactly, real:
+    EI_yy U'''' = m(ω² + Ω²) U + 2mΩω V,   EI_xx V'''' = m(ω² + Ω²) V + 2mΩω U,
+which is what we solve (so eq. 33 and the table are right, eq. 32 has the sign slip).
+The element matrix is the exact exponential of this constant-coefficient first-order system
+(the closed form of the paper's α, β roots, eqs. 34-41, written as a matrix exponential), in the
+state (U, V, θx = −V', θy = −U', Mx = EI_xx V'', My = −EI_yy U'', Sx = EI_yy U''', Sy = EI_xx V''')
+(the paper's eqs. 36-38); it is split into segments of ≤ 1.5 rad wavenumber and the clamped-root
+basis re-orthonormalised after each, as for the blade.
+
+ω > 0 covers both whirl senses (ω < 0 is ω > 0 with V → −V). The fixed-frame whirl rate is
+sense·ω + Ω with sense = sign(∫U V) (+1: counter-clockwise about the spin axis in the rotating
+frame): forward whirl if > 0. Inside an anisotropic instability band a mode has no real ω: it
+is missing from the real roots and reported in notes.
+"""
+import numpy as np
+from scipy.linalg import expm
+
+from compare.contract import ModesResult
+from compare.physics.mstmm import spinning_shaft_omega0
+
+from .elements import coupled_fourth_order_transfer, orthonormalize, shaft_coupling
+from .roots import find_roots
+
+MODES_SETTINGS = {"rtol": 1e-12, "stations": 13}
+
+
+def first_order_matrix(EIx, EIy, m, omega, spin):
+    """A in y' = A y, y = [U, U', U'', U''', V, V', V'', V''']."""
+    A = np.zeros((8, 8))
+    for k in range(3):
+        A[k, k + 1] = 1.0
+        A[4 + k, 5 + k] = 1.0
+    a, c = m * (omega**2 + spin**2), 2 * m * spin * omega
+    A[3, 0], A[3, 4] = a / EIy, c / EIy
+    A[7, 4], A[7, 0] = a / EIx, c / EIx
+    return A
+
+
+def n_segments(EIx, EIy, m, omega, spin, L):
+    k = m * (abs(omega) + abs(spin)) ** 2
+    beta = (k / min(EIx, EIy)) ** 0.25
+    return max(1, int(np.ceil(beta * L / 1.5)))
+
+
+def clamped_tip_basis(p, omega, spin):
+    """Orthonormal basis of the clamped-root solutions at the tip, in derivative form."""
+    EIx, EIy, m, L = p["EI_xx"], p["EI_yy"], p["m"], p["L"]
+    n = n_segments(EIx, EIy, m, omega, spin, L)
+    U = coupled_fourth_order_transfer(shaft_coupling(EIx, EIy, m, omega, spin), L / n)
+    Q = np.zeros((8, 4))
+    Q[2, 0] = Q[3, 1] = Q[6, 2] = Q[7, 3] = 1.0          # U'', U''', V'', V''' free at the root
+    for _ in range(n):
+        Q = orthonormalize(U @ Q)
+    return Q
+
+
+def characteristic(p, spin, plane=None):
+    """Scaled det of the tip resultants. At rest the planes decouple and each has simple
+    roots (together they would give exact double roots): plane 'u' or 'v' solves one."""
+    rows, cols = {None: ([2, 3, 6, 7], slice(None)), "u": ([2, 3], [0, 1]),
+                  "v": ([6, 7], [2, 3])}[plane]
+
+    def g(omega):
+        Q = clamped_tip_basis(p, omega, spin)
+        if plane is not None:                    # basis columns stay in their plane at rest
+            Q = orthonormalize(np.ascontiguousarray(Q[:, cols]))
+        return float(np.linalg.det(Q[np.ix_(rows, range(Q.shape[1]))]))
+    return g
+
+
+def shape(p, omega, spin, stations):
+    """[U, V] at the stations (root→tip), from the null vector at the root."""
+    EIx, EIy, m, L = p["EI_xx"], p["EI_yy"], p["m"], p["L"]
+    A = first_order_matrix(EIx, EIy, m, omega, spin)
+    tip = expm(A * L)             # (one call per mode: scipy's expm is exact enough here)
+    _, _, vt = np.linalg.svd(tip[np.ix_([2, 3, 6, 7], [2, 3, 6, 7])])
+    y0 = np.zeros(8)
+    y0[[2, 3, 6, 7]] = vt[-1]
+    xs = np.linspace(0, L, stations)
+    ys = np.array([expm(A * x) @ y0 for x in xs])
+    s = np.concatenate([ys[:, 0], ys[:, 4]])
+    return s / s[np.argmax(np.abs(s))]
+
+
+def modes(params: dict, settings: dict) -> ModesResult:
+    s = dict(MODES_SETTINGS, **(settings or {}))
+    p = params
+    w0 = spinning_shaft_omega0(p["EI_xx"], p["m"], p["L"])
+    spin = p["spin_ratio"] * w0
+    planes = ("u", "v") if spin == 0 else (None,)
+    EImax = max(p["EI_xx"], p["EI_yy"])
+    omega_max = (4.0 + p["spin_ratio"]) * w0 * np.sqrt(EImax / p["EI_xx"])
+    while True:
+        # wavenumber grid: β L = (m (ω+Ω)²/EI)^¼ L in steps of 0.2 rad
+        bl_max = (p["m"] * (omega_max + spin) ** 2 / min(p["EI_xx"], p["EI_yy"])) ** 0.25 * p["L"]
+        grid = np.linspace(0, 1, int(bl_max / 0.1) + 8) ** 2 * omega_max
+        grid[0] = 1e-9 * omega_max
+        roots = sorted(r for pl in planes
+                       for r in find_roots(characteristic(p, spin, pl), grid, s["rtol"]))
+        if len(roots) >= p["n_modes"] + 1:
+            break
+        omega_max *= 1.6
+    roots = roots[:p["n_modes"]]
+    shapes, labels, count = [], [], {"forward whirl": 0, "backward whirl": 0, "whirl": 0}
+    for w in roots:
+        sh = shape(p, w, spin, s["stations"])
+        n = s["stations"]
+        uv = float(sh[:n] @ sh[n:])
+        if spin == 0:                                # planes decoupled: no whirl sense
+            kind = "whirl"
+        else:
+            kind = "forward whirl" if np.sign(uv) * w + spin > 0 else "backward whirl"
+        count[kind] += 1
+        labels.append(f"{kind} {count[kind]}")
+        shapes.append(sh)
+    notes = [f"ω₀ = {w0:.6g} rad/s; shapes [U, V] at {s['stations']} stations; rotating frame"]
+    if p["EI_xx"] != p["EI_yy"]:
+        notes.append("anisotropic: modes inside an instability band have no real frequency")
+    return ModesResult(frequencies_hz=np.array(roots) / (2 * np.pi), labels=labels,
+                       shapes=np.array(shapes), settings=s, notes=notes,
+                       extra={"omega_star": (np.array(roots) / w0).tolist()})

@@ -27,12 +27,20 @@ PAPERS = {
            "(solar-sail blade deployment), Science and Education (Bauman MSTU), 2014, no. 5",
 }
 
+SHORT = {"000": "Kiryukhin 2024", "001": "Chuveyko 2012", "002": "Yao, Rui, Wang 2021",
+         "003": "Khokhlova, Ponomareva, Sinelshchikov 2022", "004": "Tenenbaum 2014"}
+
 _SEED = re.compile(r"\bseeds?\s+(\d{3})\b")
 
 
 def cite(text: str) -> str:
     """`text` with every "seed NNN" replaced by the paper's reference."""
     return _SEED.sub(lambda m: PAPERS.get(m.group(1), m.group(0)), text or "")
+
+
+def cite_short(text: str) -> str:
+    """`text` with every "seed NNN" replaced by author(s) and year (for one-line listings)."""
+    return _SEED.sub(lambda m: SHORT.get(m.group(1), m.group(0)), text or "")
 
 
 def papers_in(text: str) -> list[str]:

@@ -261,13 +261,14 @@ def cmd_extremes(args):
 
 
 def cmd_list(args):
+    from .citations import cite_short
     from .scenes import SCENES
     from .solvers import REGISTRY, solvers_for
     for sc in SCENES.values():
         print(f"scene  {sc.name:20s} {sc.kind:5s}  solvers: "
               f"{', '.join(s.name for s in solvers_for(sc.name))}  — {sc.title}")
     for s in REGISTRY.values():
-        print(f"solver {s.name:20s} scenes: {', '.join(s.leaves)}  — {s.doc}")
+        print(f"solver {s.name:20s} scenes: {', '.join(s.leaves)}  — {cite_short(s.doc)}")
     return 0
 
 
@@ -415,4 +416,8 @@ def main(argv=None):
 
 
 def entry():
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except BrokenPipeError:            # `xval list | head`: the reader left, nothing to say
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        sys.exit(0)

@@ -11,7 +11,7 @@ import numpy as np
 
 from . import metrics
 from .atomic import atomic_path, write_text
-from .citations import papers_in
+from .citations import cite_short, papers_in
 
 # SI unit of each channel name the scenes use (a Scene hook `channel_units` would own this)
 CHANNEL_UNITS = {
@@ -152,7 +152,7 @@ def run_markdown(result, figures):
     refs = papers_in(sc.source) or [sc.source]
     out = [f"# {sc.name}: {sc.title}", "", "Source: " + "; ".join(refs) + ".", ""]
     if sc.notes:
-        out += [sc.notes, ""]
+        out += [cite_short(sc.notes), ""]
     changed = ", ".join(f"{p.name} = {fmt_value(result.params[p.name])}" for p in sc.params
                         if not np.array_equal(np.asarray(result.params[p.name]),
                                               np.asarray(p.default)))

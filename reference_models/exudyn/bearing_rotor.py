@@ -17,8 +17,9 @@ the same stage states (one Python call per stage for everything; the energy bala
 the integrator's accuracy, not the output grid's).
 
 Output: node sensors at every output step (fixed step: the step divides output_dt) or at every
-step (adaptive DOPRI5/ODE23: their steps do not land on the grid; the coordinates are put onto
-it by cubic Hermite interpolation with the sensors' velocities and accelerations).
+step (adaptive DOPRI5 and ODE23, here `rk23`: their steps do not land on the grid; the
+coordinates are put onto it by cubic Hermite interpolation with the sensors' velocities and
+accelerations).
 
 Divergence: the user function stops the run on a non-finite state or a bound (a journal farther
 than l/4 from its bearing, which also keeps the chart 60° from its lock; |ω| > 1e5 rad/s); an
@@ -51,12 +52,11 @@ from reference_models import bearing_common as bc
 # rtol 1e-10 — journals within 4e-11 m, spin rate within 2e-7 rad/s, energy balance 1.3e-8 of
 # the motor work; it adapts its step to stiff bearings (k_b = 1e9) where a fixed step diverges.
 DEFAULT_SETTINGS = {"integrator": "dopri5", "dt": 1e-4, "rtol": 1e-10}
-INTEGRATORS = ("rk4", "rk67", "dopri5", "ode23", "generalized_alpha")
-ADAPTIVE = ("dopri5", "ode23")
+INTEGRATORS = ("rk4", "rk67", "dopri5", "rk23", "generalized_alpha")   # rk23: Exudyn's ODE23
+ADAPTIVE = ("dopri5", "rk23")
 _SOLVERS = {"rk4": exu.DynamicSolverType.RK44, "rk67": exu.DynamicSolverType.RK67,
-            "dopri5": exu.DynamicSolverType.DOPRI5, "ode23": exu.DynamicSolverType.ODE23,
+            "dopri5": exu.DynamicSolverType.DOPRI5, "rk23": exu.DynamicSolverType.ODE23,
             "generalized_alpha": exu.DynamicSolverType.GeneralizedAlpha}
-_STAGES = {"rk4": 4, "rk67": 9, "dopri5": 6, "ode23": 3, "generalized_alpha": -1}
 
 
 class _Stop(Exception):
@@ -215,9 +215,10 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> LeafResult:
     status, t_fail, reason = "ok", None, None
     previous = exu.config.printToConsole
     exu.config.printToConsole = False
+    solver = _SOLVERS[s["integrator"]]
     wall0 = time.perf_counter()
     try:
-        mbs.SolveDynamic(ss, solverType=_SOLVERS[s["integrator"]], storeSolver=True)
+        mbs.SolveDynamic(ss, solverType=solver, storeSolver=True)
     except Exception as exc:  # noqa: BLE001 - _Stop (via ModelError), SolverError, ...
         status = "diverged"
         if fail["flag"]:
@@ -229,6 +230,8 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> LeafResult:
     wall = time.perf_counter() - wall0
 
     data = {k: mbs.GetSensorStoredData(v) for k, v in sensors.items()}
+    if data[(nb, "Coordinates")].size == 0:        # stopped before the first sensor write
+        data = {k: np.zeros((0, 1 + (6 if k[0] == nb else 2))) for k in data}
     t_rec = data[(nb, "Coordinates")][:, 0]
     rec = {k: v[:, 1:] for k, v in data.items()}
     if status != "ok" and t_fail is None:
@@ -250,7 +253,7 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> LeafResult:
                                 rec[(nb, "Coordinates_tt")][u], t_out[keep])
             wd[keep] = _hermite(tr, rec[(nw, "Coordinates_t")][u],
                                 rec[(nw, "Coordinates_tt")][u], t_out[keep])
-        else:
+        elif len(t_rec):
             q[0], qt[0], wd[0] = rec[(nb, "Coordinates")][0], rec[(nb, "Coordinates_t")][0], 0.0
         steps = max(len(t_rec) - 1, 0)
     else:

@@ -115,7 +115,7 @@ def test_assembly_2_engines_agree():
 def test_press_cycle_engines_agree():
     ra, rb = run(ex, CYCLE), run(mj, CYCLE)
     assert ra.status == rb.status == "ok"
-    ta, tb = ra.extra["lock_time"][0], rb.extra["lock_time"][0]
+    ta, tb = ra.extra["t_lock"][0], rb.extra["t_lock"][0]
     assert CYCLE["lock_after"] < ta < CYCLE["release_after"]
     assert abs(ta - tb) <= 1e-7
     ea, eb = ra.extra["lock_energy_loss"][0], rb.extra["lock_energy_loss"][0]

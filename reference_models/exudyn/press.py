@@ -381,7 +381,7 @@ def _run(model, p: dict, t_out: np.ndarray, rows: dict, extra: dict) -> tuple:
                 t_lock = _find_lock(model, rec, (t1 - t) / nst, psi_lock, work)
                 if t_lock is not None:
                     lock_loss, jump = _apply_lock(model)
-                    extra.update({"lock_time": np.array([t_lock]),
+                    extra.update({"t_lock": np.array([t_lock]),
                                   "lock_energy_loss": np.array([lock_loss]),
                                   "lock_bisections": np.array([model.n_bisections]),
                                   "crank_rate_jump": np.array([jump])})
@@ -426,7 +426,7 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> L
         for name in ch:
             ch[name][bad] = np.nan
     if cycle:
-        extra.setdefault("lock_time", np.array([np.nan]))
+        extra.setdefault("t_lock", np.array([np.nan]))
         extra.setdefault("lock_energy_loss", np.array([np.nan]))
         extra["motor_work"] = np.array([work[0]])
         extra["press_work"] = np.array([work[2]])

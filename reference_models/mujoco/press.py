@@ -238,7 +238,7 @@ class _Press:
         self.locked = True
         mujoco.mj_forward(m, d)
         self.lock_loss = T_before - d.energy[1]
-        self.extra.update({"lock_time": np.array([t_lock]),
+        self.extra.update({"t_lock": np.array([t_lock]),
                            "lock_energy_loss": np.array([self.lock_loss]),
                            "lock_bisections": np.array([n_bisections]),
                            "crank_rate_jump": np.array([vn[0] - v[0]])})
@@ -308,7 +308,7 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> L
             ch[name][bad] = np.nan
     extra = run.extra
     if cycle:
-        extra.setdefault("lock_time", np.array([np.nan]))
+        extra.setdefault("t_lock", np.array([np.nan]))
         extra.setdefault("lock_energy_loss", np.array([np.nan]))
         extra["motor_work"] = np.array([run.d.act[0]])
         extra["press_work"] = np.array([run.d.act[2]])

@@ -25,6 +25,20 @@ size is unchanged. At tilt π the spring direction itself is undefined; the run 
 status `diverged`. An unstable step shows as a jump of the energy balance, which the compare
 layer's one energy rule (the scene's `energy_bound`) reports as `diverged`.
 
+Speed (the path is the fastest measured for this model; 10 s spin-up, RK67 at dt = 0.01, 1000
+steps, best of 5 on 2 busy cores): the kinematic tree with the Python `forceUserFunction` and the
+Python work rate, 85–96 ms (≈ 13 µs per stage evaluation, the Python calls dominate). Tried and
+not taken: (a) the loads and the work rate as Exudyn symbolic user functions (C++ expression
+trees; the work as the velocity of an extra ODE2 coordinate in an `ObjectGenericODE2` spanning
+the tree's coordinates, the checks moved to a per-step post-step function): same numbers to all
+digits but 85 ms at dt = 0.01 and 478 ms against 392 ms at dt = 0.002 — the expression trees are
+interpreted, and the per-step Python check costs what the stage calls save; (b) the
+`EXUDYN_MODULE=fast` module (no range checks): 171–182 ms against 156–196 ms, no difference in
+the noise; (c) the tree's built-in joint springs (`jointPControlVector`) are C++ but are the
+Cardan spring ½k(α²+β²), a different model (|ω(10 s)| moves by 0.3 rad/s, see the notes).
+The leaf refuses a fixed step longer than the output step (no interpolation here), so its
+cheapest rung is dt = output_dt.
+
 `modes` linearises the same tree (drive torque 0) about steady spin Ω at tilt 0 with Exudyn's
 `ComputeLinearizedSystem` (M, K and the gyroscopic D = −∂f/∂q̇; gravity enters K through the
 tree) and solves the quadratic eigenproblem.
@@ -34,8 +48,13 @@ import time
 
 import exudyn as exu
 import numpy as np
-from exudyn.itemInterface import (NodeGenericODE1, NodeGenericODE2, ObjectGenericODE1,
-                                  ObjectKinematicTree, SensorNode)
+from exudyn.itemInterface import (
+    NodeGenericODE1,
+    NodeGenericODE2,
+    ObjectGenericODE1,
+    ObjectKinematicTree,
+    SensorNode,
+)
 
 from compare.contract import LeafResult, ModesResult, merge_settings
 from compare.physics import rotor as physics
@@ -148,16 +167,20 @@ def _quaternions(R):
         j = which[i]
         if j == 0:
             s = 2.0 * math.sqrt(max(1.0 + tr[i], 0.0))
-            Q[i] = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
+            Q[i] = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s,
+                    (r[1, 0] - r[0, 1]) / s]
         elif j == 1:
             s = 2.0 * math.sqrt(max(1.0 + r[0, 0] - r[1, 1] - r[2, 2], 0.0))
-            Q[i] = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
+            Q[i] = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s,
+                    (r[0, 2] + r[2, 0]) / s]
         elif j == 2:
             s = 2.0 * math.sqrt(max(1.0 + r[1, 1] - r[0, 0] - r[2, 2], 0.0))
-            Q[i] = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
+            Q[i] = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s,
+                    (r[1, 2] + r[2, 1]) / s]
         else:
             s = 2.0 * math.sqrt(max(1.0 + r[2, 2] - r[0, 0] - r[1, 1], 0.0))
-            Q[i] = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
+            Q[i] = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s,
+                    0.25 * s]
         if i > 0 and Q[i] @ Q[i - 1] < 0:
             Q[i] = -Q[i]
     return Q
@@ -390,6 +413,7 @@ def simulate(params, t_out, settings):
     no_progress = 0
     h_adapt = None                                      # adaptive: step size to go on with
     solver = _SOLVERS[name]
+    wall0 = time.perf_counter()
     while i_good < n_out - 1:
         q0, qd0 = _chart_coordinates(A0, R_c, w_c)
         model = _build(ph, A0, q0, qd0, W_c, float(params["torque"]))
@@ -462,6 +486,7 @@ def simulate(params, t_out, settings):
             reason = "exudyn: " + (msg[0] if msg else type(ex).__name__)
         break
 
+    wall = time.perf_counter() - wall0
     last = i_good if status != "ok" else n_out - 1
     Rs[last + 1:], Ws[last + 1:], Wk[last + 1:] = np.nan, np.nan, np.nan
     ch = physics.channels(params, Rs, Ws, Wk)
@@ -469,7 +494,8 @@ def simulate(params, t_out, settings):
     quat[: last + 1] = _quaternions(Rs[: last + 1])
     used["chart_changes"] = charts
     return LeafResult(channels=ch, status=status, t_fail=t_fail, reason=reason,
-                      stats={"steps": int(steps), "rhs_evals": int(rhs_evals)}, settings=used,
+                      stats={"steps": int(steps), "rhs_evals": int(rhs_evals),
+                             "integrate_s": wall}, settings=used,
                       extra={"orientation": quat, "angular_velocity": Ws.copy()})
 
 

@@ -19,6 +19,16 @@ callback sets to torque·ω_z in every stage, so A is RK4-consistent (act_dot = 
 
 The drive torque is a constant world-frame wrench in ``xfrc_applied``; gravity is MuJoCo's.
 
+Stepping path. With the native callback and a uniform output grid (the normal case), the whole
+run is one ``mujoco.rollout.rollout`` call per block of up to 2^17 steps: the steps run in C,
+the states come back for every step and the output rows are picked from them; the torque goes in
+as the rollout's constant ``xfrc_applied`` control (rollout does not keep ``xfrc_applied`` of the
+data it is given). Otherwise (Python callback, uneven grid) ``mj_step(m, d, n)`` runs the n
+steps of each output interval in one call. Measured on the 10 s spin-up on 2 busy cores: RK4 at
+dt = 0.04 (250 steps) 9 ms per run through the per-interval loop and ≈ 5 ms with rollout, where
+the step itself (≈ 12–25 µs per RK4 step with the callback in its four stages) dominates; at
+dt = 1e-3 both paths cost the 10 000 steps (rollout ≈ 0.27 s, ``mj_step`` loop ≈ 0.37 s busy).
+
 Optional model variant ``settings["spring"] = "cardan"``: the Cardan spring k/2(α²+β²) of
 R = Rx(α)Ry(β)Rz(φ) (a different spring at large tilt; the compare layer reports the deviation).
 """
@@ -30,6 +40,7 @@ import math
 import time as _time
 
 import mujoco
+import mujoco.rollout
 import numpy as np
 
 from compare.contract import LeafResult, ModesResult, merge_settings
@@ -324,6 +335,36 @@ def _build(params, settings, integrator, torque):
     return m, d, bid
 
 
+_ROLLOUT_BLOCK = 1 << 17             # steps per rollout call (bounds the state buffer)
+_FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS
+_XFRC = mujoco.mjtState.mjSTATE_XFRC_APPLIED
+
+
+def _rollout(m, d, n_per, n_out):
+    """Run n_out − 1 output intervals of n_per steps each through mujoco.rollout; returns the
+    (time, qpos, qvel, act) rows at the output times that were reached (stops at the first
+    block with a callback flag or a non-finite state) and the number of steps taken."""
+    nstate = mujoco.mj_stateSize(m, _FULL)
+    x = np.empty(nstate)
+    mujoco.mj_getState(m, d, x, _FULL)
+    ctrl = np.empty(mujoco.mj_stateSize(m, _XFRC))
+    mujoco.mj_getState(m, d, ctrl, _XFRC)
+    ctrl = ctrl.reshape(1, 1, -1)
+    per_block = max(1, _ROLLOUT_BLOCK // n_per) * n_per
+    total = (n_out - 1) * n_per
+    rows, done = [], 0
+    while done < total:
+        nstep = min(per_block, total - done)
+        st, _ = mujoco.rollout.rollout(m, d, x, ctrl, control_spec=_XFRC.value, nstep=nstep)
+        st = st[0]
+        rows.append(st[n_per - 1::n_per])
+        done += nstep
+        x = st[-1].copy()
+        if d.userdata[_U_FLAG] != 0.0 or not np.all(np.isfinite(x)):
+            break
+    return (np.concatenate(rows) if rows else np.empty((0, nstate))), done
+
+
 def _bad_warnings(d):
     return sum(int(d.warning[int(w)].number) for w in (mujoco.mjtWarning.mjWARN_BADQPOS,
                                                         mujoco.mjtWarning.mjWARN_BADQVEL,
@@ -348,6 +389,41 @@ def _channels(params, spring, quat, vel, work):
 # ----------------------------------------------------------------------------------------------
 # simulate
 # ----------------------------------------------------------------------------------------------
+def _step_loop(m, d, chunks, step_t, quat, vel, work):
+    """mj_step(m, d, n) per output interval, checks after each; fills the rows reached."""
+    status, t_fail, reason, steps = "ok", None, None, 0
+    ud = d.userdata
+    t_now = 0.0
+    cur_h = None
+    for i, (n, h) in enumerate(chunks):
+        if h != cur_h:
+            m.opt.timestep = cur_h = h
+        mujoco.mj_step(m, d, n)
+        steps += n
+        t_expect = step_t[i + 1]
+        qp, qv = d.qpos, d.qvel
+        bad = None
+        if ud[_U_FLAG] != 0.0:
+            bad = _FLAG_REASONS.get(float(ud[_U_FLAG]), "callback flag")
+            t_fail = float(ud[_U_TFAIL])
+        elif _bad_warnings(d):
+            bad = "MuJoCo reported a bad (NaN/huge) qpos/qvel/qacc"
+        elif not (np.all(np.isfinite(qp)) and np.all(np.isfinite(qv))
+                  and math.isfinite(d.act[0])):
+            bad = "non-finite state"
+        elif abs(d.time - t_expect) > 1e-9 * max(1.0, t_expect):
+            bad = f"time did not advance as expected (MuJoCo reset?) t={d.time:.6g}"
+        if bad is not None:
+            status, reason = "diverged", bad
+            if t_fail is None or not math.isfinite(t_fail):
+                t_fail = float(t_expect)
+            t_fail = float(min(max(t_fail, t_now), t_expect))
+            break
+        quat[i + 1], vel[i + 1], work[i + 1] = qp, qv, d.act[0]
+        t_now = t_expect
+    return status, t_fail, reason, steps
+
+
 def simulate(params: dict, t_out: np.ndarray, settings: dict) -> dict:
     """Integrate the rotor; channels on t_out (see module doc and the leaf-model contract).
 
@@ -384,36 +460,29 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> dict:
 
     status, t_fail, reason, steps = "ok", None, None, 0
     ud = d.userdata
+    uniform = len(set(chunks)) == 1
     wall0 = _time.perf_counter()
     with _Callback(s["callback"]) as cbk:
-        t_now = 0.0
-        cur_h = None
-        for i, (n, h) in enumerate(chunks):
-            if h != cur_h:
-                m.opt.timestep = cur_h = h
-            mujoco.mj_step(m, d, n)
-            steps += n
-            t_expect = step_t[i + 1]
-            qp, qv = d.qpos, d.qvel
-            bad = None
+        if cbk.kind == "native" and uniform:
+            m.opt.timestep = chunks[0][1]
+            rows, steps = _rollout(m, d, chunks[0][0], nrec)
+            nq = 1 + m.nq
+            fin = np.all(np.isfinite(rows), axis=1)
+            good = int(np.argmin(fin)) if not fin.all() else len(rows)
             if ud[_U_FLAG] != 0.0:
-                bad = _FLAG_REASONS.get(float(ud[_U_FLAG]), "callback flag")
                 t_fail = float(ud[_U_TFAIL])
-            elif _bad_warnings(d):
-                bad = "MuJoCo reported a bad (NaN/huge) qpos/qvel/qacc"
-            elif not (np.all(np.isfinite(qp)) and np.all(np.isfinite(qv))
-                      and math.isfinite(d.act[0])):
-                bad = "non-finite state"
-            elif abs(d.time - t_expect) > 1e-9 * max(1.0, t_expect):
-                bad = f"time did not advance as expected (MuJoCo reset?) t={d.time:.6g}"
-            if bad is not None:
-                status, reason = "diverged", bad
-                if t_fail is None or not math.isfinite(t_fail):
-                    t_fail = float(t_expect)
-                t_fail = float(min(max(t_fail, t_now), t_expect))
-                break
-            quat[i + 1], vel[i + 1], work[i + 1] = qp, qv, d.act[0]
-            t_now = t_expect
+                reason = _FLAG_REASONS.get(float(ud[_U_FLAG]), "callback flag")
+                good = min(good, int(np.searchsorted(step_t[1:], t_fail, side="left")))
+            elif good < len(rows) or len(rows) < nrec - 1:
+                reason = "non-finite state"
+                t_fail = float(step_t[min(good + 1, nrec - 1)])
+            quat[1:good + 1] = rows[:good, 1:nq]
+            vel[1:good + 1] = rows[:good, nq:nq + m.nv]
+            work[1:good + 1] = rows[:good, nq + m.nv]
+            if reason is not None:
+                status = "diverged"
+        else:
+            status, t_fail, reason, steps = _step_loop(m, d, chunks, step_t, quat, vel, work)
         kind = cbk.kind
     wall = _time.perf_counter() - wall0
 

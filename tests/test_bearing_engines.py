@@ -283,3 +283,28 @@ def test_every_offered_integrator_runs(engine, integrator, measured):
     assert res.status == "ok", res.reason
     assert res.settings["integrator"] == integrator
     assert energy_closure(res) <= 10 * measured
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_wall_clock_alarm_reaches_the_caller(engine):
+    """The adapter's time limit raises a BaseException from SIGALRM; Exudyn wraps what a user
+    function raises into its own error, so the leaf must raise the alarm again — not report
+    `diverged`."""
+    import signal
+
+    class Alarm(BaseException):
+        pass
+
+    def ring(signum, frame):
+        raise Alarm()
+
+    params = SCENE.resolve({"t_end": 20})
+    t = SCENE.output_grid(params)
+    previous = signal.signal(signal.SIGALRM, ring)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 0.5)
+        with pytest.raises(Alarm):
+            ENGINES[engine].simulate(params, t, {})
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)

@@ -130,9 +130,16 @@ def _build(params: dict, adaptive: bool):
     fail = {"flag": 0.0, "t": None, "calls": 0}
 
     def loads(mbs_, t, item, q, q_t):
-        fail["calls"] += 1
-        out, flag = generalised_forces(np.asarray(q), np.asarray(q_t), p, r_bound,
-                                       bc.OMEGA_BOUND)
+        try:
+            fail["calls"] += 1
+            out, flag = generalised_forces(np.asarray(q), np.asarray(q_t), p, r_bound,
+                                           bc.OMEGA_BOUND)
+        except BaseException as exc:
+            # Exudyn wraps whatever a user function raises into its own error; keep a wall-clock
+            # alarm or Ctrl-C (BaseException, not Exception) to raise it again after the solve
+            if not isinstance(exc, Exception):
+                fail["interrupt"] = exc
+            raise
         if flag != 0.0:
             fail["flag"], fail["t"] = flag, t
             raise _Stop(_REASONS[flag])
@@ -220,6 +227,8 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> LeafResult:
     try:
         mbs.SolveDynamic(ss, solverType=solver, storeSolver=True)
     except Exception as exc:  # noqa: BLE001 - _Stop (via ModelError), SolverError, ...
+        if fail.get("interrupt") is not None:
+            raise fail["interrupt"] from None
         status = "diverged"
         if fail["flag"]:
             t_fail, reason = float(fail["t"]), _REASONS[fail["flag"]]

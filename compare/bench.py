@@ -1,13 +1,17 @@
 """`xval bench`: the speed/accuracy trade (work-precision) of every solver of a scene.
 
-For each solver and integrator, a ladder of steps (fixed-step methods: the default step × 4, 2,
-1, ½, snapped to divisors of the output step) or tolerances (error-controlled methods); the
-error of each run is the relative error of the key channel's final value against a reference
-(the tightest run of the first solver, confirmed by the second); the time is the median wall time
-over `repeats` runs, compile time reported apart. A step-size-bound explicit method whose step
-is picked from its stability limit ("auto") has one rung. Every run's trajectory is kept in the
-bench directory. The summary names, for stated error levels,
-the fastest solver and every other solver's time ratio to it — all measured in this one run.
+For each solver and integrator, a ladder of steps (fixed-step methods, factors of 2) or
+tolerances (error-controlled methods, factors of 10) walked from the default outwards: coarser
+until the error reaches ~1e-2 (or the run fails), finer until the method's floor (the error stops
+falling, reaches what the reference can resolve, or a rung gets too slow). The error of each run
+is the relative error of the key channel's final value against a reference (the tightest run of
+the first solver, confirmed by the second); the time is the median wall time over `repeats`
+runs, compile time reported apart; the leaf's `rhs_evals` and integration time give the cost of
+one right-hand-side evaluation (ns). A step-size-bound explicit method whose step is picked from
+its stability limit ("auto") has one rung. Every run's trajectory is kept in the bench
+directory. The summary names, for the error levels 1e-3, 1e-6 and 1e-9, the fastest solver and
+every other solver's time ratio to it — all measured in this one run — and each fixed-step
+method's observed convergence order (flagged where it falls short of the method's order).
 """
 import datetime
 from pathlib import Path
@@ -20,8 +24,17 @@ from .errors import BadInput
 from .report import fmt_value, plot_style, save_figure
 from .scenes import get_scene
 
-LEVELS = (1e-3, 1e-6)
-RTOLS = (1e-5, 1e-7, 1e-9, 1e-11)
+LEVELS = (1e-3, 1e-6, 1e-9)
+RTOLS = tuple(10.0 ** -k for k in range(1, 14))     # 1e-1 … 1e-13, walked from START_RTOL
+START_RTOL = 1e-6
+COARSE_ERR = 1e-2          # the coarse end of a ladder: this error reached (or a failed run)
+FLOOR_ERR = 1e-12          # the fine end: below this the reference cannot tell rungs apart
+RUNG_WALL_S = 3.0          # nor walk finer once one run of a rung takes this long
+MAX_DOUBLINGS = 7          # a fixed step goes at most 2^7 coarser or finer than the default
+ORDER_RUNGS = 4            # the observed order is fitted on this many finest rungs
+# the order a fixed-step method should show (its observed order is flagged when lower)
+ORDERS = {"euler": 1, "explicit_euler": 1, "midpoint": 2, "rk4": 4, "rk44": 4, "rk67": 6,
+          "generalized_alpha": 2, "trapezoidal": 2, "imr": 2, "implicitfast": 1, "implicit": 1}
 
 
 def _snap(dt, dt_out):
@@ -29,16 +42,36 @@ def _snap(dt, dt_out):
     return dt_out / max(1, int(np.ceil(dt_out / dt - 1e-9)))
 
 
-def ladder(leaf, dt_out, preset=None):
-    """(label, settings) pairs walking each integrator's accuracy knob."""
+def _fixed_steps(dt0, dt_out, t_end):
+    """Candidate steps coarse → fine around dt0 (factors of ~2: up to the output step snapped
+    to its divisors, above it multiples 2^m of it that divide the horizon) and dt0's index."""
+    coarse = {dt_out}
+    for j in range(1, MAX_DOUBLINGS + 1):
+        c = dt0 * 2 ** j
+        if c <= dt_out * (1 + 1e-9):
+            coarse.add(_snap(c, dt_out))
+        else:
+            c = dt_out * 2 ** round(np.log2(c / dt_out))
+            if c <= t_end / 8 and abs(t_end / c - round(t_end / c)) < 1e-9:
+                coarse.add(c)
+    coarse = sorted((c for c in coarse if c > dt0 * (1 + 1e-9)), reverse=True)
+    fine = list(dict.fromkeys(_snap(dt0 / 2 ** j, dt_out) if dt0 <= dt_out else dt0 / 2 ** j
+                              for j in range(MAX_DOUBLINGS + 1)))
+    return coarse + fine, len(coarse)
+
+
+def ladder(leaf, dt_out, preset=None, t_end=None):
+    """Per integrator: (label, [settings coarse → fine], index of the starting rung)."""
     base = {**leaf.DEFAULT_SETTINGS, **(preset or {})}
     adaptive = tuple(getattr(leaf, "ADAPTIVE", ()))
+    t_end = t_end or 1e3 * dt_out
     out = []
     if base.get("integrator") in adaptive:
-        # the default error-controlled method, and dopri5 where offered: at loose tolerances
-        # its 6 stages beat dop853's 12 when the output grid caps the step
+        # the default error-controlled method, and dopri5 where offered (fewer stages: cheaper
+        # at loose tolerances)
         for name in dict.fromkeys([base["integrator"]] + [a for a in adaptive if a == "dopri5"]):
-            out += [(name, {**base, "integrator": name, "rtol": r}) for r in RTOLS]
+            out.append((name, [{**base, "integrator": name, "rtol": r} for r in RTOLS],
+                        RTOLS.index(START_RTOL)))
         fixed = "rk4" if "rk4" in leaf.INTEGRATORS else None
         dt0 = 1e-3
     else:
@@ -46,10 +79,10 @@ def ladder(leaf, dt_out, preset=None):
         if dt0 == "auto":      # a fixed number behind "auto" can be laddered; a stability-bound
             dt0 = getattr(leaf, "AUTO_DT", {}).get(fixed, dt0)   # explicit step cannot
     if fixed and not isinstance(dt0, (int, float)):     # e.g. "auto": the leaf picks its step
-        out.append((fixed, base))
+        out.append((fixed, [base], 0))
     elif fixed:
-        out += [(fixed, {**base, "integrator": fixed, "dt": _snap(dt0 * f, dt_out)})
-                for f in (4, 2, 1, 0.5)]
+        steps, start = _fixed_steps(dt0, dt_out, t_end)
+        out.append((fixed, [{**base, "integrator": fixed, "dt": dt} for dt in steps], start))
     return out
 
 
@@ -58,21 +91,49 @@ def _tightest(solver, scene_name, dt_out):
     base = {**leaf.DEFAULT_SETTINGS, **solver.preset}
     if base.get("integrator") in getattr(leaf, "ADAPTIVE", ()):
         return {**base, "rtol": 1e-13}
-    steps = [st["dt"] for _, st in ladder(leaf, dt_out, solver.preset)
-             if isinstance(st.get("dt"), (int, float))]
-    return {**base, "dt": min(steps) / 4} if steps else base
+    dt0 = base.get("dt")
+    if dt0 == "auto":
+        dt0 = getattr(leaf, "AUTO_DT", {}).get(base.get("integrator"), dt0)
+    return {**base, "dt": _snap(dt0 / 8, dt_out)} if isinstance(dt0, (int, float)) else base
 
 
-def _rungs(sc, solver, overrides, params, dt_out, vary):
-    """(label, settings, params) per run: the accuracy-knob ladder, or with `vary` = (NAME,
-    values) the solver's default settings at each value of that model parameter (e.g. the
-    paper's advice to lower the thread stiffness for design runs)."""
+def _ladders(sc, solver, overrides, params, dt_out, vary):
+    """(label, [(settings, params) coarse → fine], start) per integrator: the accuracy-knob
+    ladders, or with `vary` = (NAME, values) one ladder of the solver's default settings at
+    each value of that model parameter (e.g. the paper's advice to lower the thread stiffness
+    for design runs), every value run."""
     if vary is None:
-        return [(label, st, params) for label, st in
-                ladder(solver.leaf(sc.name), dt_out, solver.preset)]
+        return [(label, [(st, params) for st in sts], start) for label, sts, start in
+                ladder(solver.leaf(sc.name), dt_out, solver.preset, params["t_end"])]
     name, values = vary
     st = solvers.settings_for(solver, sc.name)
-    return [(f"{name}={v}", st, sc.resolve({**overrides, name: v})) for v in values]
+    return [(f"{name}={v}", [(st, sc.resolve({**overrides, name: v}))], 0) for v in values]
+
+
+def _walk(rungs, start, run, exhaustive=False):
+    """Run rungs[start], then coarser ones until the error reaches COARSE_ERR or a run fails,
+    then finer ones until the floor: the error at or below FLOOR_ERR, no longer falling (two
+    rungs in a row each less than 2× better), a run slower than RUNG_WALL_S, or a rung refused
+    (bad settings or over the step budget). `run(i)` returns the row (None when refused)."""
+    if exhaustive:
+        return [r for r in map(run, range(len(rungs))) if r is not None]
+    rows = {}
+    for i in range(start, -1, -1):                       # the start, then coarser
+        r = rows[i] = run(i)
+        if r is None or r["rel_error"] is None or r["rel_error"] >= COARSE_ERR:
+            break
+    stall, prev = 0, rows.get(start)
+    for i in range(start + 1, len(rungs)):               # finer
+        if prev is None or (prev["rel_error"] is not None and prev["rel_error"] <= FLOOR_ERR) \
+                or prev["wall_s"] > RUNG_WALL_S or stall >= 2:
+            break
+        r = rows[i] = run(i)
+        if r is None:
+            break
+        if r["rel_error"] is not None and prev["rel_error"] is not None:
+            stall = stall + 1 if r["rel_error"] > 0.5 * prev["rel_error"] else 0
+        prev = r
+    return [rows[i] for i in sorted(rows) if rows[i] is not None]
 
 
 def parse_vary(text, sc):
@@ -103,7 +164,8 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
     params = sc.resolve(overrides)
     vary = parse_vary(vary, sc) if vary is not None else None
     for s in chosen:
-        for _, st, p in _rungs(sc, s, overrides, params, params["output_dt"], vary):
+        for _, rungs, start in _ladders(sc, s, overrides, params, params["output_dt"], vary):
+            st, p = rungs[start]
             budget.check_steps(s.name, s.leaf(sc.name), p, st, max_steps)
     if make_out:
         make_out(out)
@@ -111,8 +173,8 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
     key = sc.key_channel
 
     # reference: the tightest run of the scene's reference solver (error-controlled at rtol
-    # 1e-13 where it has one, else a quarter of its finest ladder step), confirmed by the
-    # second the same way
+    # 1e-13 where it has one, else an eighth of its default step), confirmed by the second the
+    # same way
     refs = ([solvers.get_solver(n) for n in sc.reference_solvers]
             or solvers.solvers_for(sc.name)[:2])
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
@@ -133,26 +195,17 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
     rows = []
     for s in chosen:
         leaf = s.leaf(sc.name)
-        for rung, (label, st, p) in enumerate(_rungs(sc, s, overrides, params, dt_out, vary)):
-            walls, tr = [], (done.get((s.name, repr(sorted(st.items())))) if p == params
-                             else None)
-            if tr is not None:
-                walls.append(tr.wall_s)
-            while len(walls) < repeats:
-                tr = solvers.simulate(sc, s, p, st)
-                walls.append(tr.wall_s)
-            tr.save(out_dir / f"{s.name}-{rung}-{label}.npz")     # the trajectories stay
-            err = abs(tr.final()[key] - ref) / abs(ref) if tr.status == "ok" else None
-            rows.append({"solver": s.name, "method": label, "settings": tr.settings,
-                         "status": tr.status, "wall_s": float(np.median(walls)),
-                         "compile_s": tr.stats.get("compile_s"), "rel_error": err,
-                         "energy_residual": metrics.energy_residual(tr, sc.energy_channel)
-                         if sc.energy_channel else None,
-                         "steps": tr.stats.get("steps"),
-                         **({"vary": {vary[0]: p[vary[0]]}} if vary else {})})
-            knob = st["rtol"] if label in getattr(leaf, "ADAPTIVE", ()) else st.get("dt")
-            log(f"  {s.name} {label} {knob}: err "
-                f"{err if err is None else f'{err:.2e}'} wall {np.median(walls):.3g} s")
+        for label, rungs, start in _ladders(sc, s, overrides, params, dt_out, vary):
+            def run(i, s=s, leaf=leaf, label=label, rungs=rungs):
+                st, p = rungs[i]
+                try:
+                    solvers.check_settings(leaf, st, sc.output_grid(p))
+                    budget.check_steps(s.name, leaf, p, st, max_steps)
+                except (ValueError, BadInput):
+                    return None
+                return _run_rung(sc, s, leaf, label, st, p, params, done, repeats, ref, key,
+                                 out_dir, f"{s.name}-{label}-{i}", vary, log)
+            rows += _walk(rungs, start, run, exhaustive=vary is not None)
 
     summary, lines = {}, []
     for level in LEVELS:
@@ -166,25 +219,33 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
         fastest = min(best.values(), key=lambda r: r["wall_s"])
         ratios = {s: r["wall_s"] / fastest["wall_s"] for s, r in best.items()}
         summary[f"{level:g}"] = {"fastest": fastest["solver"], "method": fastest["method"],
-                                 "wall_s": fastest["wall_s"], "time_ratio": ratios,
+                                 "wall_s": fastest["wall_s"], "rel_error": fastest["rel_error"],
+                                 "settings": fastest["settings"], "time_ratio": ratios,
                                  "unreached": [s.name for s in chosen if s.name not in best]}
         lines.append(f"error ≤ {level:g} on final {key}: fastest {fastest['solver']} "
                      f"({fastest['method']}, {fastest['wall_s']:.3g} s); ratios "
                      + ", ".join(f"{s} {v:.2f}×" for s, v in sorted(ratios.items(),
                                                                    key=lambda x: x[1])))
-    _plot(out_dir / "work_precision.png", rows, sc.name, key)
+    orders = convergence_orders(rows, ref_check)
+    for o in orders:
+        lines.append(f"order {o['solver']} {o['method']}: observed {o['observed']:.2f} "
+                     f"(method {o['expected'] if o['expected'] else '?'}, {o['rungs']} rungs, "
+                     f"dt {o['dt_range'][0]:.3g}–{o['dt_range'][1]:.3g} s)"
+                     + (" — FLAG: below the method's order" if o["flag"] else ""))
+    _plot(out_dir / "work_precision.png", rows, sc.name, key, summary)
     obj = {"scene": sc.name, "params": params, "key_channel": key,
            "vary": vary and {"name": vary[0], "values": vary[1]},
            "reference": {"solvers": [s.name for s in refs], "value": ref,
                          "cross_check_rel": ref_check},
-           "repeats": repeats, "rows": rows, "summary": summary, "summary_lines": lines}
+           "repeats": repeats, "rows": rows, "summary": summary, "orders": orders,
+           "summary_lines": lines}
     md = [f"# Work-precision: {sc.name}", "",
           f"Reference: {refs[0].name} ({_settings_text(ref_runs[0].settings)}), "
           f"final {key} = {ref:.15g}"
           + (f"; {refs[1].name} agrees to {ref_check:.1e} relative" if ref_check is not None
              else ""), "", *[f"- {x}" for x in lines], "",
           "| solver | method | setting | rel. error | energy residual [J] | median wall [s] | "
-          "compile [s] | steps |", "|---|---|---|---|---|---|---|---|"]
+          "compile [s] | steps | RHS evals | ns / RHS |", "|---" * 10 + "|"]
     for r in rows:
         knob = r["settings"].get("rtol") if "rtol" in r["settings"] and r["method"] in (
             "dop853", "dopri5", "rk23", "ode23") else r["settings"].get("dt")
@@ -192,7 +253,9 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
         md.append(f"| {r['solver']} | {r['method']} | {fmt_value(knob)} | "
                   f"{'—' if err is None else format(err, '.2e')} | "
                   f"{'—' if er is None else format(er, '.2e')} | {r['wall_s']:.4g} | "
-                  f"{fmt_value(r['compile_s'], 3) if r['compile_s'] else '—'} | {r['steps']} |")
+                  f"{fmt_value(r['compile_s'], 3) if r['compile_s'] else '—'} | {r['steps']} | "
+                  f"{r['rhs_evals'] or '—'} | "
+                  f"{'—' if r['ns_per_rhs'] is None else format(r['ns_per_rhs'], '.0f')} |")
     md += ["", "![work-precision](work_precision.png)"]
     write_text(out_dir / "report.md", "\n".join(md) + "\n")
     write_json(out_dir / "bench.json", obj)
@@ -200,11 +263,62 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
     return obj
 
 
+def _run_rung(sc, solver, leaf, label, st, p, params, done, repeats, ref, key, out_dir, name,
+              vary, log):
+    """One rung: timed runs (a run slower than RUNG_WALL_S is not repeated), its row."""
+    walls, tr = [], (done.get((solver.name, repr(sorted(st.items())))) if p == params else None)
+    if tr is not None:
+        walls.append(tr.wall_s)
+    while len(walls) < repeats and not (walls and walls[0] > RUNG_WALL_S):
+        tr = solvers.simulate(sc, solver, p, st)
+        walls.append(tr.wall_s)
+    tr.save(out_dir / f"{name}.npz")                          # the trajectories stay
+    err = abs(tr.final()[key] - ref) / abs(ref) if tr.status == "ok" else None
+    evals, t_int = tr.stats.get("rhs_evals"), tr.stats.get("integrate_s")
+    row = {"solver": solver.name, "method": label, "settings": tr.settings,
+           "status": tr.status, "wall_s": float(np.median(walls)),
+           "compile_s": tr.stats.get("compile_s"), "rel_error": err,
+           "energy_residual": metrics.energy_residual(tr, sc.energy_channel)
+           if sc.energy_channel else None,
+           "steps": tr.stats.get("steps"), "rhs_evals": evals, "integrate_s": t_int,
+           "ns_per_rhs": 1e9 * t_int / evals if evals and t_int else None,
+           **({"vary": {vary[0]: p[vary[0]]}} if vary else {})}
+    knob = st.get("rtol") if label in getattr(leaf, "ADAPTIVE", ()) else st.get("dt")
+    log(f"  {solver.name} {label} {knob}: err {err if err is None else f'{err:.2e}'} "
+        f"wall {row['wall_s']:.3g} s"
+        + (f", {row['ns_per_rhs']:.0f} ns/RHS" if row["ns_per_rhs"] else ""))
+    return row
+
+
+def convergence_orders(rows, ref_check=None):
+    """Observed order of each fixed-step method: the least-squares slope of log(error) over
+    log(dt) on its finest rungs (up to ORDER_RUNGS) above the floor (100 × the reference's own
+    uncertainty, at least 100 × FLOOR_ERR) and below COARSE_ERR — coarse rungs can be
+    pre-asymptotic — flagged when it falls short of the method's order by more than 0.5."""
+    low = 100 * max(FLOOR_ERR, ref_check or 0.0)
+    out = []
+    for (s, m) in dict.fromkeys((r["solver"], r["method"]) for r in rows):
+        pts = sorted((r["settings"]["dt"], r["rel_error"]) for r in rows
+                     if r["solver"] == s and r["method"] == m and r["rel_error"]
+                     and isinstance(r["settings"].get("dt"), (int, float))
+                     and "rtol" not in r["settings"] and low < r["rel_error"] < COARSE_ERR)
+        pts = pts[:ORDER_RUNGS]
+        if len(pts) < 2:
+            continue
+        x, y = np.log(np.array(pts)).T
+        slope = float(np.polyfit(x, y, 1)[0]) if np.ptp(x) > 0 else float("nan")
+        expected = ORDERS.get(m)
+        out.append({"solver": s, "method": m, "observed": slope, "expected": expected,
+                    "rungs": len(pts), "dt_range": [pts[0][0], pts[-1][0]],
+                    "flag": bool(expected is not None and slope < expected - 0.5)})
+    return out
+
+
 def _settings_text(settings):
     return ", ".join(f"{k}={fmt_value(v)}" for k, v in settings.items() if v is not None)
 
 
-def _plot(path, rows, scene, key):
+def _plot(path, rows, scene, key, summary=None):
     plt = plot_style()
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for (s, m) in dict.fromkeys((r["solver"], r["method"]) for r in rows):
@@ -214,7 +328,13 @@ def _plot(path, rows, scene, key):
             x, y = zip(*sorted(pts))
             ax.loglog(x, y, "o-", ms=4, label=f"{s} {m}")
     for level in LEVELS:
-        ax.axhline(level, color="grey", lw=0.5, ls=":")
+        ax.axhline(level, color="grey", lw=0.6, ls=":")
+        best = (summary or {}).get(f"{level:g}")
+        if best:       # the level's fastest solver: a star at its rung, named
+            ax.plot(best["wall_s"], best["rel_error"], "*", ms=12, color="black", zorder=5)
+            ax.annotate(f"≤ {level:g}: {best['fastest']} {best['method']}",
+                        (best["wall_s"], level), textcoords="offset points", xytext=(4, 3),
+                        fontsize=7)
     ax.set_xlabel("median wall time [s]")
     ax.set_ylabel(f"relative error of final {key}")
     ax.set_title(f"work-precision: {scene}")

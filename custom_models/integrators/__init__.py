@@ -1,7 +1,11 @@
 """Time integrators shared by every custom model: one place, one file per family.
 
 - `explicit`: fixed-step and adaptive embedded Runge–Kutta methods as coefficient tables
-  (numba-compiled drivers; the right-hand side is a jitted `f(t, y, p)`).
+  (numba-compiled drivers; the right-hand side is a jitted `f(t, y, p)`; steps land on the
+  output times).
+- `dense`: the same methods with dense output (DOP853's 7th-order extension, Dopri5/RK23
+  interpolants, cubic Hermite for fixed steps): the step is set by the tolerance or `dt` alone;
+  the right-hand side writes into a given array, `f(t, y, p, dy)`.
 - `linear_acceleration`: the linear-acceleration (Wilson-θ) method for M(q) q'' = Q(q, q', t).
 - `implicit`: building blocks for stiff systems (O(n) block-tridiagonal Newton solves for
   spring–mass chains, bordered by one extra unknown).

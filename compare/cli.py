@@ -357,13 +357,14 @@ def cmd_modes(args):
 
 def cmd_campaign(args):
     from .campaign import load_campaign, plan, run_campaign
-    from .progress import progress_view
+    from .progress import busy, progress_view
     check_out(args.out)
     if args.scheduler and args.executor != "dask":
         raise BadInput("--scheduler needs --executor dask")
     # everything is validated before the output folder is made or anything runs
-    plan(load_campaign(args.file), args.file or "built-in campaign", args.timeout,
-         args.max_output_gib, args.max_steps)
+    with busy("checking the campaign, loading the models, planning the jobs …"):
+        plan(load_campaign(args.file), args.file or "built-in campaign", args.timeout,
+             args.max_output_gib, args.max_steps)
     make_out(args.out)
     with stdout_to_stderr(), progress_view() as view:
         summary = run_campaign(args.file, args.out, executor=args.executor,

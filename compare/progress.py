@@ -101,6 +101,17 @@ class RichProgress(PlainProgress):
         self.log(f"{label}: {status}{wall}")      # finished jobs scroll above the bar
 
 
+def busy(text, stream=None):
+    """A spinner with `text` on a TTY (e.g. while models load and the plan is checked);
+    nothing otherwise."""
+    import contextlib
+    stream = stream or sys.stderr
+    if not stream.isatty():
+        return contextlib.nullcontext()
+    from rich.console import Console
+    return Console(file=stream).status(text)
+
+
 def progress_view(stream=None):
     stream = stream or sys.stderr
     return RichProgress(stream) if stream.isatty() else PlainProgress(stream)

@@ -224,7 +224,8 @@ B_AT, M_AT = NP, NP + 1
 def rhs_rotating(t, y, p):
     n = int(p[NN])
     dy = np.empty(y.shape[0])
-    _rhs_rot(t, y, p, p[M_AT:M_AT + n], int(p[B_AT]), np.empty(3 * n), dy)
+    # the forces go straight into the acceleration slots (each is read before it is replaced)
+    _rhs_rot(t, y, p, p[M_AT:M_AT + n], int(p[B_AT]), dy[OFF + 3 * n:], dy)
     return dy
 
 

@@ -95,6 +95,8 @@ class _Sail:
         Lc, c, d = p["L_c"], p["stiffness"], p["damping"]
         self.explicit = s["integrator"] in _EXPLICIT
         self.rw = p["r"] * p["omega_spool"]
+        self.payout_args = (p["L"], self.rw, p["last_node"] == "released")
+        self.cd = (c, d)
         self.b = -1
         self.work = {"t": 0.0, "W": 0.0}        # spool work on one blade, summed at every time
         self.retries = 0
@@ -147,11 +149,12 @@ class _Sail:
 
     def q_force(self, mbs_, t, itemNumber, deltaL, deltaL_t, stiffness, damping, force):
         """The boundary node's Q-spring: growing rest length, damper on the true stretch rate."""
-        paid, rate, q_on = phys.payout_of(self.p, t)
+        # the shared payout law, called as plain Python (no jit dispatch in a user function)
+        paid, rate, q_on = phys.payout.py_func(t, *self.payout_args)
         if not q_on:                   # last node released at full payout
             return 0.0
-        f = (self.p["stiffness"] * (deltaL - (paid - self.l0 * self.b))
-             + self.p["damping"] * (deltaL_t - rate))
+        c, d = self.cd
+        f = c * (deltaL - (paid - self.l0 * self.b)) + d * (deltaL_t - rate)
         if t > self.work["t"]:         # rectangle rule at the solver's own (stage) times
             self.work["W"] -= f * rate * (t - self.work["t"])
             self.work["t"] = t

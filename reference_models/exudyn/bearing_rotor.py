@@ -29,7 +29,10 @@ balance is checked on the grid. Each gives `diverged` with t_fail and the reason
 from __future__ import annotations
 
 import math
+import signal
+import threading
 import time
+from contextlib import contextmanager
 
 import exudyn as exu
 import numpy as np
@@ -130,16 +133,9 @@ def _build(params: dict, adaptive: bool):
     fail = {"flag": 0.0, "t": None, "calls": 0}
 
     def loads(mbs_, t, item, q, q_t):
-        try:
-            fail["calls"] += 1
-            out, flag = generalised_forces(np.asarray(q), np.asarray(q_t), p, r_bound,
-                                           bc.OMEGA_BOUND)
-        except BaseException as exc:
-            # Exudyn wraps whatever a user function raises into its own error; keep a wall-clock
-            # alarm or Ctrl-C (BaseException, not Exception) to raise it again after the solve
-            if not isinstance(exc, Exception):
-                fail["interrupt"] = exc
-            raise
+        fail["calls"] += 1
+        out, flag = generalised_forces(np.asarray(q), np.asarray(q_t), p, r_bound,
+                                       bc.OMEGA_BOUND)
         if flag != 0.0:
             fail["flag"], fail["t"] = flag, t
             raise _Stop(_REASONS[flag])
@@ -155,6 +151,31 @@ def _build(params: dict, adaptive: bool):
                for kind in ("Coordinates", "Coordinates_t") + ("Coordinates_tt",) * adaptive}
     mbs.Assemble()
     return mbs, nb, nw, sensors, fail
+
+
+@contextmanager
+def _signals_kept(box: dict):
+    """Exudyn wraps whatever a user function raises into its own error, so an exception that a
+    signal handler raises there (the adapter's wall-clock alarm, Ctrl-C) would read as a solver
+    failure. Wrap the handlers so the exception is kept in box["interrupt"] to raise again."""
+    saved = {}
+    if threading.current_thread() is threading.main_thread():
+        for sig in (getattr(signal, "SIGALRM", None), signal.SIGINT):
+            handler = signal.getsignal(sig) if sig is not None else None
+            if callable(handler):
+                def kept(signum, frame, _handler=handler):
+                    try:
+                        _handler(signum, frame)
+                    except BaseException as exc:
+                        box["interrupt"] = exc
+                        raise
+                saved[sig] = handler
+                signal.signal(sig, kept)
+    try:
+        yield
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
 
 
 def _settings(s: dict, t_end: float, h: float, adaptive: bool, output_dt: float):
@@ -225,7 +246,8 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> LeafResult:
     solver = _SOLVERS[s["integrator"]]
     wall0 = time.perf_counter()
     try:
-        mbs.SolveDynamic(ss, solverType=solver, storeSolver=True)
+        with _signals_kept(fail):
+            mbs.SolveDynamic(ss, solverType=solver, storeSolver=True)
     except Exception as exc:  # noqa: BLE001 - _Stop (via ModelError), SolverError, ...
         if fail.get("interrupt") is not None:
             raise fail["interrupt"] from None

@@ -290,7 +290,7 @@ def test_wall_clock_alarm_reaches_the_caller(engine):
     """The adapter's time limit raises a BaseException from SIGALRM; Exudyn wraps what a user
     function raises into its own error, so the leaf must raise the alarm again — not report
     `diverged`. (The handler often runs at a user function's entry, outside any try block in
-    it: 3 of 10 alarms were lost that way before the leaf wrapped the handler itself.)"""
+    it: 6 of 10 alarms were lost that way before the leaf wrapped the handler itself.)"""
     import signal
 
     class Alarm(BaseException):

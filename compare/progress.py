@@ -4,6 +4,7 @@ The bar (rich) shows jobs done / total, the jobs running now, elapsed time and a
 drawn on standard error, so `--json` output on standard output stays one object. When standard
 error is not a terminal (a pipe, a CI log) each finished job is one line with a counter.
 """
+import os
 import sys
 import time
 
@@ -113,5 +114,10 @@ def busy(text, stream=None):
 
 
 def progress_view(stream=None):
-    stream = stream or sys.stderr
+    """The bar or the plain lines, written to a duplicate of standard error: jobs and report
+    phases redirect descriptors 1 and 2 into their logs, the user's terminal stays ours."""
+    if stream is None:
+        sys.stderr.flush()
+        stream = os.fdopen(os.dup(sys.stderr.fileno()), "w", buffering=1,
+                           encoding=sys.stderr.encoding, errors="replace")
     return RichProgress(stream) if stream.isatty() else PlainProgress(stream)

@@ -233,24 +233,34 @@ def test_mujoco_threads_do_not_share_the_global_callback():
         assert all(np.array_equal(a[k], b[k]) for k in a)
 
 
-def test_mujoco_run_stops_if_its_callback_is_taken_away(monkeypatch):
+@pytest.mark.parametrize("callback", ["native", "python"])
+def test_mujoco_run_stops_if_its_callback_is_taken_away(monkeypatch, callback):
     """Another leaf's simulation in another thread may replace the global passive callback:
-    the run must end `diverged`, not go on without its bearing forces."""
+    the run must end `diverged`, not go on without its bearing forces. (native: rollout blocks
+    of 10 output steps here; python: one mj_step call per output step.)"""
     import mujoco
+    import mujoco.rollout
 
-    real_step = mujoco.mj_step
     calls = {"n": 0}
+    steal_at = 2 if callback == "native" else 20
 
-    def step_then_steal(m, d, n=1):
-        real_step(m, d, n)
-        calls["n"] += 1
-        if calls["n"] == 20:
-            mujoco.set_mjcb_passive(None)
+    def stealing(real):
+        def wrapper(*args, **kwargs):
+            out = real(*args, **kwargs)
+            calls["n"] += 1
+            if calls["n"] == steal_at:
+                mujoco.set_mjcb_passive(None)
+            return out
+        return wrapper
 
-    monkeypatch.setattr(mujoco, "mj_step", step_then_steal)
-    params, t, res = run(mujoco_leaf, t_end=0.05)
+    monkeypatch.setattr(mujoco_leaf, "_ROLLOUT_BLOCK", 100)
+    monkeypatch.setattr(mujoco.rollout, "rollout", stealing(mujoco.rollout.rollout))
+    monkeypatch.setattr(mujoco, "mj_step", stealing(mujoco.mj_step))
+    params, t, res = run(mujoco_leaf, {"callback": callback}, t_end=0.05)
+    assert res.settings["callback"] == callback
     assert res.status == "diverged" and "callback was replaced" in res.reason
-    assert res.t_fail == pytest.approx(t[20])
+    # native: the second block (outputs 11–20) is checked after it ran, from its first output
+    assert res.t_fail == pytest.approx(t[11] if callback == "native" else t[20])
 
 
 def test_mujoco_auto_step_follows_the_bearing_stiffness():

@@ -80,3 +80,59 @@ def torsion_rotating_hz(f0_hz: np.ndarray, speed: float) -> np.ndarray:
     """Torsion of the paper's eq. 30, (GJφ')' − I_α(φ̈ + Ω²φ) = 0: ω² = ω₀² + Ω² exactly
     (uniform blade, any boundary conditions)."""
     return np.sqrt(np.asarray(f0_hz) ** 2 + (speed / (2 * np.pi)) ** 2)
+
+
+SQUARE_TORSION_BETA = 0.1406   # J = β a⁴ for a solid square (Saint-Venant), the tail boom
+
+
+def helicopter_layout(p: dict) -> dict:
+    """Geometry, masses and sections of the helicopter model (seed 002, Fig. 2), in the hub
+    frame: z up along the shaft, origin at the hub centre, blade k along azimuth k·90°.
+
+    Decisions where the paper is silent (every solver uses these):
+    - blade roots at radius r_H in the hub mid-plane; the shaft hangs from the hub's bottom
+      face centre (0, 0, −hub_height/2) down to the fuselage top;
+    - the fuselage is a uniform box whose top face holds the shaft; its centre of mass is
+      fuselage_cm_offset along +X from the shaft attachment and fuselage_height/2 below it;
+    - the tail boom leaves the fuselage's rear face (−X) at the centre-of-mass height and runs
+      along −X; its far end is clamped (Table 3) or free (Table 4);
+    - solid circular shaft (J = 2I), solid square tail boom (J = 0.1406 a⁴ when width =
+      height, else β = 0.333 of the thin-rectangle rule), polar mass moment ρ(I_y + I_z)."""
+    hub_h = p["hub_height"]
+    m_hub = p["hub_rho"] * p["hub_length"] * p["hub_width"] * hub_h
+    I_hub = m_hub / 12 * np.array([p["hub_width"] ** 2 + hub_h**2,
+                                   p["hub_length"] ** 2 + hub_h**2,
+                                   p["hub_length"] ** 2 + p["hub_width"] ** 2])
+    d = p["shaft_diameter"]
+    A_s = np.pi * d**2 / 4
+    I_s = np.pi * d**4 / 64
+    shaft_top = np.array([0.0, 0.0, -hub_h / 2])
+    shaft_bottom = shaft_top - np.array([0.0, 0.0, p["shaft_L"]])
+    fl, fw, fh = p["fuselage_length"], p["fuselage_width"], p["fuselage_height"]
+    m_f = p["fuselage_rho"] * fl * fw * fh
+    I_f = m_f / 12 * np.array([fw**2 + fh**2, fl**2 + fh**2, fl**2 + fw**2])
+    cm_f = shaft_bottom + np.array([p["fuselage_cm_offset"], 0.0, -fh / 2])
+    tail_joint = cm_f - np.array([fl / 2, 0.0, 0.0])
+    tw, th = p["tail_width"], p["tail_height"]
+    A_t = tw * th
+    Iy_t, Iz_t = tw * th**3 / 12, th * tw**3 / 12
+    a, b = max(tw, th), min(tw, th)
+    J_t = SQUARE_TORSION_BETA * a**4 if tw == th else TORSION_BETA * a * b**3
+    blade = blade_section_from(p, "blade_")
+    return {
+        "blade": dict(blade, L=p["blade_L"], EA=p["blade_E"] * blade["A"],
+                      chord=p["blade_chord"]),
+        "roots": [p["hub_radius"] * np.array([np.cos(k * np.pi / 2), np.sin(k * np.pi / 2),
+                                              0.0]) for k in range(4)],
+        "hub": {"m": m_hub, "I": I_hub, "cm": np.zeros(3)},
+        "shaft": {"top": shaft_top, "bottom": shaft_bottom, "L": p["shaft_L"],
+                  "m": p["shaft_rho"] * A_s, "EI": p["shaft_E"] * I_s,
+                  "EA": p["shaft_E"] * A_s, "GJ": p["shaft_G"] * 2 * I_s,
+                  "I_p": p["shaft_rho"] * 2 * I_s},
+        "fuselage": {"m": m_f, "I": I_f, "cm": cm_f, "top": shaft_bottom,
+                     "rear": tail_joint},
+        "tail": {"root": tail_joint, "end": tail_joint - np.array([p["tail_L"], 0.0, 0.0]),
+                 "L": p["tail_L"], "m": p["tail_rho"] * A_t, "EA": p["tail_E"] * A_t,
+                 "EI_flap": p["tail_E"] * Iy_t, "EI_lag": p["tail_E"] * Iz_t,
+                 "GJ": p["tail_G"] * J_t, "I_alpha": p["tail_rho"] * (Iy_t + Iz_t)},
+    }

@@ -60,3 +60,16 @@ def second_order(n_el, L, stiff, inertia):
             K[idx, idx] += w * stiff * np.outer(dN, dN)
             M[idx, idx] += w * inertia * np.outer(N, N)
     return K, M
+
+
+def lowest_modes(K, M, count, shift=0.0):
+    """Lowest `count` eigenpairs of K x = ω² M x, accurate in the low modes: solved as
+    M x = μ (K + shift·M) x for the largest μ = 1/(ω² + shift) (the direct form loses the low
+    modes' digits on fine meshes, where λ_max/λ_1 ~ n⁴). `shift` makes K + shift·M positive
+    definite (e.g. Ω² for the lag softening)."""
+    from scipy.linalg import eigh
+    n = K.shape[0]
+    count = min(count, n)
+    mu, V = eigh(M, K + shift * M, subset_by_index=[n - count, n - 1])
+    lam = 1.0 / mu[::-1] - shift
+    return lam, V[:, ::-1]

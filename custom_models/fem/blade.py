@@ -8,10 +8,11 @@ Richardson-extrapolated with the h⁴ rate of both element types; the note state
 relative change between the extrapolated and the fine values (the error estimate).
 """
 import numpy as np
-from scipy.linalg import eigh
 
 from compare.contract import ModesResult
 from compare.physics.mstmm import blade_section_from
+
+from .beam import lowest_modes
 
 MODES_SETTINGS = {"elements": 48, "stations": 13, "richardson": True}
 
@@ -49,24 +50,36 @@ def family_problem(b, spin, r_h, family, n_el):
 
 def family_modes(b, spin, r_h, family, n_el, count):
     K, M, sample = family_problem(b, spin, r_h, family, n_el)
-    count = min(count, K.shape[0])
-    lam, V = eigh(K, M, subset_by_index=[0, count - 1])
+    lam, V = lowest_modes(K, M, count, shift=2 * spin**2)
     return np.sign(lam) * np.sqrt(np.abs(lam)), V, sample
 
 
-def solve(b, spin, r_h, n_modes, n_el, richardson=True):
-    """Lowest n_modes: list of (ω, family, index, node samples), and the error estimate."""
-    rows, err = [], 0.0
-    for fam in ("flap", "lag", "torsion", "axial"):
-        w, V, sample = family_modes(b, spin, r_h, fam, n_el, n_modes)
+FAMILIES = ("flap", "lag", "torsion", "axial")
+
+
+def solve(b, spin, r_h, n_modes, n_el, richardson=True, stations=13):
+    """Lowest n_modes: list of (ω, family, index, node samples), the error estimate and the
+    mesh per family. A coarse pass tells how many modes each family contributes; each family
+    is then meshed with ≥ 8 elements per mode (a multiple of stations − 1, so the stations
+    are nodes)."""
+    coarse = sorted((w, fam) for fam in FAMILIES
+                    for w in family_modes(b, spin, r_h, fam, n_el, n_modes)[0])[:n_modes]
+    rows, err, meshes = [], 0.0, {}
+    for fam in FAMILIES:
+        # one extra mode per family: the coarse order near the cut may be wrong
+        count = sum(1 for _, f in coarse if f == fam) + 1
+        k = stations - 1
+        n_f = max(n_el, k * int(np.ceil(8 * count / k)))
+        meshes[fam] = n_f
+        w, V, sample = family_modes(b, spin, r_h, fam, n_f, count)
         if richardson:
-            w2, V, sample = family_modes(b, spin, r_h, fam, 2 * n_el, n_modes)
+            w2, V, sample = family_modes(b, spin, r_h, fam, 2 * n_f, count)
             ext = w2 + (w2 - w) / 15.0              # h⁴ convergence of both element types
             err = max(err, float(np.max(np.abs(ext - w2) / np.abs(ext))))
             w = ext
         rows += [(w[i], fam, i + 1, sample(V[:, i])) for i in range(len(w))]
     rows.sort(key=lambda r: r[0])
-    return rows[:n_modes], err
+    return rows[:n_modes], err, meshes
 
 
 def modes(params: dict, settings: dict) -> ModesResult:
@@ -77,12 +90,11 @@ def modes(params: dict, settings: dict) -> ModesResult:
     # of the highest requested mode (checked by the Richardson error estimate)
     n_el = int(s["elements"])
     n_el = (n_el + n_st - 2) // (n_st - 1) * (n_st - 1)
-    n_el = max(n_el, (n_st - 1) * int(np.ceil(params["n_modes"] * 8 / (n_st - 1))))
-    rows, err = solve(b, params["speed"], params["hub_radius"], params["n_modes"], n_el,
-                      s["richardson"])
-    step = 2 * n_el // (n_st - 1) if s["richardson"] else n_el // (n_st - 1)
+    rows, err, meshes = solve(b, params["speed"], params["hub_radius"], params["n_modes"], n_el,
+                              s["richardson"], n_st)
     shapes = []
     for _, fam, _, y in rows:
+        step = (2 if s["richardson"] else 1) * meshes[fam] // (n_st - 1)
         col = {"axial": 0, "lag": 1, "flap": 2, "torsion": 3}[fam]
         sh = np.zeros((n_st, 4))
         sh[:, col] = y[::step] * (b["chord"] / 2 if fam == "torsion" else 1.0)
@@ -90,6 +102,6 @@ def modes(params: dict, settings: dict) -> ModesResult:
         shapes.append(sh / sh[np.argmax(np.abs(sh))])
     return ModesResult(frequencies_hz=np.array([r[0] for r in rows]) / (2 * np.pi),
                        labels=[f"{fam} {i}" for _, fam, i, _ in rows], shapes=np.array(shapes),
-                       settings=dict(s, elements=n_el),
-                       notes=[f"Richardson error estimate {err:.1e} (elements {n_el} and "
-                              f"{2 * n_el})"])
+                       settings=dict(s, elements=meshes),
+                       notes=[f"Richardson error estimate {err:.1e} (elements per family "
+                              f"{meshes} and twice that)"])

@@ -241,3 +241,50 @@ def shaft_coupling(EIx, EIy, m, omega, spin):
     K[0, 0], K[0, 1] = a / EIy, c / EIy
     K[1, 0], K[1, 1] = c / EIx, a / EIx
     return K
+
+
+@nb.njit(cache=True)
+def coupled_fourth_order_transfer_complex(K, s):
+    """coupled_fourth_order_transfer for a complex K (the spinning shaft with e^{iωt})."""
+    E = np.zeros((8, 8), dtype=np.complex128)
+    Kn = np.eye(2).astype(np.complex128)
+    fact = np.ones(120)
+    for i in range(1, 120):
+        fact[i] = fact[i - 1] * i
+    for n in range(25):
+        for d in range(4):
+            for j in range(4):
+                p = 4 * n + j - d
+                if p >= 0:
+                    c = s ** p / fact[p]
+                    E[d, j] += Kn[0, 0] * c
+                    E[d, 4 + j] += Kn[0, 1] * c
+                    E[4 + d, j] += Kn[1, 0] * c
+                    E[4 + d, 4 + j] += Kn[1, 1] * c
+        Kn = Kn @ K
+    return E
+
+
+def spinning_shaft(omega, spin, EI, m, EA, GJ, I_p, x_a, x_b):
+    """12x12 complex transfer of the spinning shaft (local x = spin axis) from x_a to x_b,
+    u ∝ e^{iωt}, rotating frame, physical gyroscopic coupling:
+        EI v'''' + m(v̈ − 2Ωẇ − Ω²v) = 0,   EI w'''' + m(ẅ + 2Ωv̇ − Ω²w) = 0,
+    v along local y (lag-like signs), w along local z (flap-like signs); extension and torsion
+    about the spin axis as a non-rotating bar."""
+    a, c = m * (omega**2 + spin**2), 2.0 * m * spin * omega
+    K = np.array([[a, 1j * c], [-1j * c, a]]) / EI
+    s = x_b - x_a
+    beta = (abs(a + c) / EI) ** 0.25
+    n = max(1, int(np.ceil(abs(s) * beta / 1.5)))
+    E = np.linalg.matrix_power(coupled_fourth_order_transfer_complex(K, s / n), n)
+    Cv = resultant_map(EI, 0.0, False)
+    Cw = resultant_map(EI, 0.0, True)
+    C = np.zeros((8, 8))
+    C[:4, :4], C[4:, 4:] = Cv, Cw
+    B = C @ E @ np.linalg.inv(C)                 # (v-state, w-state)
+    U = np.zeros((12, 12), dtype=np.complex128)
+    idx = np.concatenate([LAG, FLAP])
+    U[np.ix_(idx, idx)] = B
+    U[np.ix_(TORSION, TORSION)] = second_order_transfer(GJ, I_p * omega**2 / GJ, s)
+    U[np.ix_(AXIAL, AXIAL)] = second_order_transfer(EA, m * omega**2 / EA, s)
+    return U

@@ -9,8 +9,10 @@ from scipy.optimize import brentq
 
 ZOOM_POINTS = 9
 MAX_DEPTH = 12
-# |g| below which a dip that never changes sign is a double root (g normalised, |g| ≤ 1)
-DOUBLE_ROOT_LEVEL = 1e-10
+# a dip that never changes sign is a double root when |g| at the finest zoom is below this
+# fraction of |g| where the dip was first seen (a double root falls as (ω − r)²: ~1e-10 over
+# the zoom; a mere minimum of |g| stays O(1))
+DOUBLE_ROOT_LEVEL = 1e-6
 
 
 def hadamard_det(A: np.ndarray) -> float:
@@ -28,7 +30,7 @@ def find_roots(g, grid: np.ndarray, rtol: float = 1e-12) -> list:
     return sorted(_roots_on(g, np.asarray(grid, float), vals, rtol, 0))
 
 
-def _roots_on(g, w, v, rtol, depth):
+def _roots_on(g, w, v, rtol, depth, ref_level=None):
     roots = []
     n = len(w)
     for i in range(n - 1):
@@ -43,7 +45,8 @@ def _roots_on(g, w, v, rtol, depth):
         # a dip of |g| with no sign change beside it: zoom
         if (abs(v[i]) < abs(v[i - 1]) and abs(v[i]) < abs(v[i + 1]) and v[i - 1] * v[i] > 0
                 and v[i] * v[i + 1] > 0 and _may_touch(w[i - 1:i + 2], v[i - 1:i + 2])):
-            roots += _zoom(g, w[i - 1], w[i + 1], rtol, depth + 1)
+            ref = ref_level or max(abs(v[i - 1]), abs(v[i + 1]))
+            roots += _zoom(g, w[i - 1], w[i + 1], rtol, depth + 1, ref)
     return roots
 
 
@@ -56,15 +59,16 @@ def _may_touch(w, v):
     return np.sign(vmin) != np.sign(v[1]) or abs(vmin) < 0.2 * abs(v[1])
 
 
-def _zoom(g, a, b, rtol, depth):
-    if depth > MAX_DEPTH:
-        return []
+def _zoom(g, a, b, rtol, depth, ref):
+    """Sample a dip more finely; `ref` is |g| beside the dip where it was first seen."""
     w = np.linspace(a, b, ZOOM_POINTS)
     v = np.array([g(x) for x in w])
-    if (b - a) < 1e3 * rtol * b:              # touches zero at the resolution: a double root
-        i = int(np.argmin(np.abs(v)))     # (g is a normalised determinant, |g| ≤ 1)
-        return [w[i], w[i]] if abs(v[i]) < DOUBLE_ROOT_LEVEL else []
-    return _roots_on(g, w, v, rtol, depth)
+    if (b - a) < 1e3 * rtol * b or depth > MAX_DEPTH:
+        # at the resolution and still no sign change: a double root if |g| fell like (ω − r)²
+        # from the first sighting (ratio (width/grid step)² ≪ DOUBLE_ROOT_LEVEL), else none
+        i = int(np.argmin(np.abs(v)))
+        return [w[i], w[i]] if abs(v[i]) < DOUBLE_ROOT_LEVEL * ref else []
+    return _roots_on(g, w, v, rtol, depth, ref)
 
 
 def _cluster(g, a, b, found, rtol, depth):
@@ -89,7 +93,8 @@ def _cluster(g, a, b, found, rtol, depth):
     for i in range(1, len(w) - 1):
         if (abs(v[i]) < abs(v[i - 1]) and abs(v[i]) < abs(v[i + 1]) and v[i - 1] * v[i] > 0
                 and v[i] * v[i + 1] > 0 and _may_touch(w[i - 1:i + 2], v[i - 1:i + 2])):
-            for r in _zoom(h, w[i - 1], w[i + 1], rtol, depth + 1):
+            for r in _zoom(h, w[i - 1], w[i + 1], rtol, depth + 1,
+                           max(abs(v[i - 1]), abs(v[i + 1]))):
                 extra.append(r)
     if extra:
         extra += _cluster(g, a, b, found + extra, rtol, depth + 1)

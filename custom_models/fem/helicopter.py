@@ -1,0 +1,247 @@
+"""`fem` leaf for `helicopter-clamped` / `helicopter-hover`: the helicopter of seed 002 by
+finite elements, independent of the transfer matrices (shared: helicopter_layout and the
+physics of each element, see custom_models/mstmm/helicopter.py).
+
+Beams (4 blades, drive shaft, tail boom) are 3-D Hermite members: per node the 6 shared dofs
+(u, v, w, θx, θy, θz in the member frame, θz = v', θy = −w') plus 2 member-own dofs (u', θx')
+so that extension and torsion are Hermite cubic too. Blades: centrifugal geometric stiffness
+∫T(v'² + w'²), lag and extension softening −Ω²m̄, torsion +Ω²I_α. Shaft: spin softening and
+the gyroscopic matrix G (v, w blocks ∓2Ω M_b). Hub and fuselage: rigid bodies (lumped mass and
+inertia at the centre of mass); blade roots, shaft ends and tail root are tied to them by rigid
+links. Eigenproblem M q̈ + G q̇ + K q = 0 (complex, state-space); convergence: blades meshed
+with n and 2n elements, the frequencies extrapolated (h⁴) and the change reported.
+"""
+import numpy as np
+from scipy.linalg import eig
+
+from compare.contract import ModesResult
+from compare.physics.mstmm import helicopter_layout
+
+from .beam import bending
+
+MODES_SETTINGS = {"blade_elements": 12, "shaft_elements": 2, "tail_elements": 6,
+                  "richardson": True}
+BLADE_STATIONS = 7
+
+
+def skew(r):
+    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+
+
+def blade_frame(k):
+    c, s = np.cos(k * np.pi / 2), np.sin(k * np.pi / 2)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+SHAFT_FRAME = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+
+
+class Model:
+    """Independent dofs: masters (hub, fuselage: 6 each), free beam nodes (6), member-own
+    dofs (2 per beam node). E maps them to every member's field dofs."""
+
+    def __init__(self):
+        self.n = 0
+        self.blocks = []            # (field K, G, M, E rows)
+
+    def new(self, k):
+        idx = np.arange(self.n, self.n + k)
+        self.n += k
+        return idx
+
+
+def member_fields(nodes, EA, m, EI_v, EI_w, GJ, I_alpha, tension=None):
+    """Field matrices (8 dofs per node: u, u', v, v', w, w', φ, φ') K, M and the bending mass
+    M_b (per plane), in member coordinates."""
+    _, Ku, Mu = bending(nodes, 0.0, m, lambda x: EA)        # ∫EA u'², the "tension" form
+    Kv, KTv, Mv = bending(nodes, EI_v, m, tension)
+    Kw, KTw, Mw = bending(nodes, EI_w, m, tension)
+    _, Kt, Mt = bending(nodes, 0.0, I_alpha, lambda x: GJ)
+    return {"u": (Ku, Mu), "v": (Kv + KTv, Mv), "w": (Kw + KTw, Mw), "t": (Kt, Mt)}
+
+
+def build(L, spin, n_blade, n_shaft, n_tail, clamped):
+    """Global K, G, M over the independent dofs, and samplers for the shape vector."""
+    mdl = Model()
+    hub = mdl.new(6)
+    fus = mdl.new(6)
+    # rigid link: shared dofs of a node at offset r from a master = Tl @ master
+    def link(r):
+        T = np.eye(6)
+        T[0:3, 3:6] = -skew(r)
+        return T
+
+    members = []
+
+    def add_member(R, nodes, fields, ends, extra=None):
+        """ends: for first/last node either ('link', master_idx, r) or None (free) or
+        'fixed'. Returns per node (shared map 6 x n, own idx)."""
+        nn = len(nodes)
+        shared = []
+        for i in range(nn):
+            spec = ends.get(i)
+            S = np.zeros((6, 0))
+            if spec is None:
+                idx = mdl.new(6)
+                S = ("free", idx)
+            elif spec == "fixed":
+                S = ("fixed", None)
+            else:
+                S = ("link", spec[0], link(spec[1]))
+            shared.append(S)
+        own = [mdl.new(2) for _ in range(nn)]
+        members.append((R, nodes, fields, shared, own, extra))
+        return shared, own
+
+    b = L["blade"]
+    Lb = b["L"]
+    blade_nodes = np.linspace(0.0, Lb, n_blade + 1)
+    T = lambda x: b["m"] * spin**2 * (np.linalg.norm(L["roots"][0]) * (Lb - x)
+                                        + 0.5 * (Lb**2 - x**2))
+    blade_members = []
+    for k in range(4):
+        f = member_fields(blade_nodes, b["EA"], b["m"], b["EI_lag"], b["EI_flap"], b["GJ"],
+                          b["I_alpha"], T)
+        f["u"] = (f["u"][0] - spin**2 * f["u"][1], f["u"][1])
+        f["v"] = (f["v"][0] - spin**2 * f["v"][1], f["v"][1])
+        f["t"] = (f["t"][0] + spin**2 * f["t"][1], f["t"][1])
+        blade_members.append(add_member(blade_frame(k), blade_nodes, f,
+                                        {0: (hub, L["roots"][k])}))
+    s = L["shaft"]
+    shaft_nodes = np.linspace(0.0, s["L"], n_shaft + 1)      # x_l = z, from the bottom
+    f = member_fields(shaft_nodes, s["EA"], s["m"], s["EI"], s["EI"], s["GJ"], s["I_p"])
+    Mb = f["v"][1]
+    f["v"] = (f["v"][0] - spin**2 * Mb, Mb)
+    f["w"] = (f["w"][0] - spin**2 * Mb, Mb)
+    fu = L["fuselage"]
+    add_member(SHAFT_FRAME, shaft_nodes, f,
+               {0: (fus, s["bottom"] - fu["cm"]), n_shaft: (hub, s["top"])},
+               extra={"gyro": 2 * spin * Mb})
+    t = L["tail"]
+    tail_nodes = np.linspace(0.0, t["L"], n_tail + 1)        # x_l = +x, from the tail end
+    f = member_fields(tail_nodes, t["EA"], t["m"], t["EI_lag"], t["EI_flap"], t["GJ"],
+                      t["I_alpha"])
+    add_member(np.eye(3), tail_nodes, f,
+               {0: "fixed" if clamped else None, n_tail: (fus, t["root"] - fu["cm"])})
+
+    n = mdl.n
+    K = np.zeros((n, n))
+    M = np.zeros((n, n))
+    G = np.zeros((n, n))
+    # rigid bodies
+    h = L["hub"]
+    M[np.ix_(hub, hub)] += np.diag(np.concatenate([[h["m"]] * 3, h["I"]]))
+    M[np.ix_(fus, fus)] += np.diag(np.concatenate([[fu["m"]] * 3, fu["I"]]))
+    samplers = []
+    for R, nodes, fields, shared, own, extra in members:
+        nn = len(nodes)
+        # E: field dofs (8 per node: u,u',v,v',w,w',φ,φ') <- independent dofs
+        E = np.zeros((8 * nn, n))
+        for i in range(nn):
+            kind = shared[i][0]
+            if kind == "free":
+                Sg = np.zeros((6, n))
+                Sg[:, shared[i][1]] = np.eye(6)
+            elif kind == "link":
+                Sg = np.zeros((6, n))
+                Sg[:, shared[i][1]] = shared[i][2]
+            else:
+                Sg = np.zeros((6, n))
+            Rb = np.zeros((6, 6))
+            Rb[0:3, 0:3] = R.T
+            Rb[3:6, 3:6] = R.T
+            Sl = Rb @ Sg                                  # local u, v, w, θx, θy, θz
+            r = 8 * i
+            E[r + 0] = Sl[0]
+            E[r + 2] = Sl[1]
+            E[r + 3] = Sl[5]                              # v' = θz
+            E[r + 4] = Sl[2]
+            E[r + 5] = -Sl[4]                             # w' = −θy
+            E[r + 6] = Sl[3]
+            E[r + 1, own[i][0]] = 1.0
+            E[r + 7, own[i][1]] = 1.0
+        for name, off in (("u", 0), ("v", 2), ("w", 4), ("t", 6)):
+            Kf, Mf = fields[name]
+            rows = np.array([8 * i + off + j for i in range(nn) for j in range(2)])
+            Ef = E[rows]
+            K += Ef.T @ Kf @ Ef
+            M += Ef.T @ Mf @ Ef
+        if extra and "gyro" in extra:
+            rv = np.array([8 * i + 2 + j for i in range(nn) for j in range(2)])
+            rw = np.array([8 * i + 4 + j for i in range(nn) for j in range(2)])
+            Gb = extra["gyro"]
+            G += E[rv].T @ (-Gb) @ E[rw] + E[rw].T @ Gb @ E[rv]
+        samplers.append((nodes, E))
+    # drop dofs nobody uses (the clamped tail-end node has none)
+    used = np.where(np.abs(M).sum(axis=0) + np.abs(K).sum(axis=0) > 0)[0]
+    return K[np.ix_(used, used)], G[np.ix_(used, used)], M[np.ix_(used, used)], \
+        samplers[:4], hub, fus, used, n
+
+
+def solve(L, spin, mesh, clamped):
+    K, G, M, samplers, hub, fus, used, n = build(L, spin, *mesh, clamped)
+    N = K.shape[0]
+    Minv = np.linalg.inv(M)
+    A = np.block([[np.zeros((N, N)), np.eye(N)], [-Minv @ K, -Minv @ G]])
+    lam, V = eig(A)
+    return lam, V[:N], samplers, hub, fus, used, n
+
+
+def shape_vector(x, samplers, hub, fus, used, n, chord):
+    """Blades (7 stations × [axial, lag, flap, twist·chord/2]) + hub and fuselage motion."""
+    full = np.zeros(n, dtype=complex)
+    full[used] = x
+    parts = []
+    for nodes, E in samplers:
+        fld = E @ full
+        step = (len(nodes) - 1) // (BLADE_STATIONS - 1)
+        for i in range(0, len(nodes), step):
+            r = 8 * i
+            parts.append([fld[r], fld[r + 2], fld[r + 4], fld[r + 6] * chord / 2])
+    v = np.concatenate([np.ravel(parts), full[hub], full[fus]])
+    k = np.argmax(np.abs(v))
+    v = v / v[k]
+    return v.real
+
+
+def frequencies(L, spin, mesh, clamped, n_modes):
+    lam, V, samplers, hub, fus, used, n = solve(L, spin, mesh, clamped)
+    scale = np.abs(lam).max()
+    osc = [i for i in range(len(lam)) if lam[i].imag > 1e-6 * scale ** 0.5
+           and abs(lam[i].real) < 1e-6 * abs(lam[i])]
+    unstable = [float(lam[i].real) for i in range(len(lam))
+                if lam[i].real > 1e-6 * max(1.0, abs(lam[i]))]
+    osc.sort(key=lambda i: lam[i].imag)
+    osc = [i for i in osc if lam[i].imag > 1e-3][:n_modes]
+    shapes = [shape_vector(V[:, i], samplers, hub, fus, used, n, L["blade"]["chord"])
+              for i in osc]
+    return np.array([lam[i].imag for i in osc]), shapes, unstable
+
+
+def modes_for(params, settings, clamped):
+    s = dict(MODES_SETTINGS, **(settings or {}))
+    L = helicopter_layout(params)
+    spin, n_modes = params["speed"], params["n_modes"]
+    mesh = (s["blade_elements"], s["shaft_elements"], s["tail_elements"])
+    w, shapes, unstable = frequencies(L, spin, mesh, clamped, n_modes)
+    notes = []
+    if s["richardson"]:
+        w2, shapes, unstable = frequencies(L, spin, tuple(2 * m for m in mesh), clamped,
+                                           n_modes)
+        k = min(len(w), len(w2))
+        ext = w2[:k] + (w2[:k] - w[:k]) / 15.0
+        notes.append(f"meshes {mesh} and twice; Richardson change "
+                     f"{np.max(np.abs(ext - w2[:k]) / ext):.1e}")
+        w, shapes = ext, shapes[:k]
+    if unstable:
+        notes.append(f"divergent (real) eigenvalues {np.round(unstable, 4).tolist()} 1/s")
+    from custom_models.mstmm.labels import label_modes
+    labels = label_modes(np.array(shapes), w, L, spin)
+    return ModesResult(frequencies_hz=w / (2 * np.pi), labels=labels, shapes=np.array(shapes),
+                       settings=s, notes=notes, extra={"unstable": unstable})
+
+
+def modes(params: dict, settings: dict) -> ModesResult:
+    """Dispatches on the scene: `helicopter-clamped` has a `clamped` tail (n_modes default
+    13), `helicopter-hover` not; the leaf modules below fix it."""
+    return modes_for(params, settings, True)

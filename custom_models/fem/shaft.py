@@ -1,0 +1,97 @@
+"""`fem` leaf for `spinning-shaft`: Hermite cubic elements in both bending planes, rotating
+frame, with the gyroscopic matrix of the physical Coriolis terms and the spin softening:
+    M q̈ + Ω G q̇ + (K − Ω² M) q = 0,   G = 2 [[0, −M_b], [M_b, 0]] (u, v blocks),
+solved as the quadratic eigenproblem in μ = 1/λ (K μ² + Ω G μ + M = 0, linearised), which
+keeps the low modes' digits. Eigenvalues with Re λ > 0 (static divergence inside an
+anisotropic instability band) are reported in notes and extra["unstable"], not as frequencies.
+Convergence: n and 2n elements, Richardson h⁴ extrapolation of the frequencies.
+"""
+import numpy as np
+from scipy.linalg import eig
+
+from compare.contract import ModesResult
+from compare.physics.mstmm import spinning_shaft_omega0
+
+from .beam import bending
+
+MODES_SETTINGS = {"elements": 24, "stations": 13, "richardson": True}
+
+
+def matrices(p, n_el, spin):
+    nodes = np.linspace(0.0, p["L"], n_el + 1)
+    Ku, _, Mb = bending(nodes, p["EI_yy"], p["m"])
+    Kv, _, _ = bending(nodes, p["EI_xx"], p["m"])
+    f = slice(2, None)                                   # clamped root
+    Ku, Kv, Mb = Ku[f, f], Kv[f, f], Mb[f, f]
+    n = Mb.shape[0]
+    Z = np.zeros((n, n))
+    M = np.block([[Mb, Z], [Z, Mb]])
+    K = np.block([[Ku, Z], [Z, Kv]]) - spin**2 * M
+    G = 2 * spin * np.block([[Z, -Mb], [Mb, Z]])
+    return K, G, M, n
+
+
+def eigen(p, n_el, spin):
+    """λ (rad/s, complex) and eigenvectors of M λ² + G λ + K = 0, sorted by |λ|."""
+    K, G, M, n = matrices(p, n_el, spin)
+    N = 2 * n
+    A = np.block([[np.zeros((N, N)), np.eye(N)],
+                  [-np.linalg.solve(K, M), -np.linalg.solve(K, G)]])
+    mu, V = eig(A)
+    lam = 1.0 / mu
+    order = np.argsort(np.abs(lam))
+    return lam[order], V[:N, order], n
+
+
+def solve(p, n_el, spin, n_modes):
+    lam, V, n = eigen(p, n_el, spin)
+    keep = [i for i in range(len(lam)) if lam[i].imag > 1e-9 * abs(lam[i])]
+    unstable = [float(lam[i].real) for i in range(len(lam))
+                if lam[i].real > 1e-9 * abs(lam[i]) and abs(lam[i].imag) <= 1e-9 * abs(lam[i])]
+    keep = keep[:n_modes]
+    return np.array([lam[i].imag for i in keep]), V[:, keep], n, unstable
+
+
+def modes(params: dict, settings: dict) -> ModesResult:
+    s = dict(MODES_SETTINGS, **(settings or {}))
+    p = params
+    w0 = spinning_shaft_omega0(p["EI_xx"], p["m"], p["L"])
+    spin = p["spin_ratio"] * w0
+    n_st = s["stations"]
+    k = n_st - 1
+    n_el = max(int(s["elements"]), k * int(np.ceil(4 * p["n_modes"] / k)))
+    n_el = k * int(np.ceil(n_el / k))
+    w, V, n, unstable = solve(p, n_el, spin, p["n_modes"])
+    err = 0.0
+    if s["richardson"]:
+        w2, V, n, unstable = solve(p, 2 * n_el, spin, p["n_modes"])
+        ext = w2 + (w2 - w) / 15.0
+        err = float(np.max(np.abs(ext - w2) / ext))
+        w = ext
+    step = (2 if s["richardson"] else 1) * n_el // k
+    labels, shapes, count = [], [], {"forward whirl": 0, "backward whirl": 0, "whirl": 0}
+    for j in range(len(w)):
+        x = V[:, j]
+        u = np.concatenate([[0.0], x[0:n:2]])
+        v = np.concatenate([[0.0], x[n::2]])
+        big = u[np.argmax(np.abs(u))] if np.abs(u).max() > 1e-9 * np.abs(v).max() else \
+            v[np.argmax(np.abs(v))]
+        u, v = u / big, v / big
+        U, Vs = u.real, -v.imag                       # u = U cos ωt, v = V sin ωt
+        if spin == 0:
+            kind = "whirl"
+            U, Vs = u.real, v.real
+        else:
+            sense = np.sign(U @ Vs)                   # +1: counter-clockwise (rotating frame)
+            kind = "forward whirl" if sense * w[j] + spin > 0 else "backward whirl"
+        count[kind] += 1
+        labels.append(f"{kind} {count[kind]}")
+        sh = np.concatenate([U[::step], Vs[::step]])
+        shapes.append(sh / sh[np.argmax(np.abs(sh))])
+    notes = [f"ω₀ = {w0:.6g} rad/s; elements {n_el} and {2 * n_el}, Richardson error estimate "
+             f"{err:.1e}"]
+    if unstable:
+        notes.append(f"unstable (divergence) growth rates {np.round(unstable, 6).tolist()} 1/s")
+    return ModesResult(frequencies_hz=w / (2 * np.pi), labels=labels, shapes=np.array(shapes),
+                       settings=dict(s, elements=n_el), notes=notes,
+                       extra={"omega_star": (w / w0).tolist(), "unstable": unstable})

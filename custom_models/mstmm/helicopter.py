@@ -1,0 +1,232 @@
+"""`mstmm` leaf for `helicopter-clamped` and `helicopter-hover` (seed 002, Fig. 2, eqs. 1-9).
+
+Tree: blades 1-4 (free tips) → hub (rigid, 4 inputs) → spinning drive shaft → fuselage (rigid,
+offset centre of mass) → tail boom → tail end (clamped, or free when hovering). Geometry,
+masses and sections: compare.physics.mstmm.helicopter_layout (shared with every solver).
+
+As in the paper every element is written in the rotor frame: blades with centrifugal
+stiffening, lag softening, torsion Ω² term and extension spin softening; the shaft with its
+gyroscopic coupling; hub, fuselage and tail without rotation terms.
+
+Overall transfer equation, in the paper's structure: the unknowns are the free-tip states of
+the four blades (6 each, carried root-ward as orthonormal bases) and the hub motion (6); the
+geometric equations (paper eqs. 3-8, here one per blade, 24 rows) tie each blade root to the
+hub's rigid motion; the hub sums the root resultants into the shaft; shaft, fuselage and tail
+carry the state to the tail end, where 6 boundary rows close the 30x30 matrix U_all.
+det U_all(ω) is complex (the shaft's e^{iωt} coupling) with a phase that is constant between
+roots; its real part after removing that phase is the sign-robust characteristic function.
+"""
+import numpy as np
+
+from compare.contract import ModesResult
+from compare.physics.mstmm import helicopter_layout
+
+from . import elements as el
+from .roots import find_roots
+
+
+def skew(r):
+    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+
+
+def frame_blocks(R):
+    """12x12 map local state → global state (every 3-vector rotated)."""
+    T = np.zeros((12, 12))
+    for k in range(4):
+        T[3 * k:3 * k + 3, 3 * k:3 * k + 3] = R
+    return T
+
+
+def blade_frame(k):
+    c, s = np.cos(k * np.pi / 2), np.sin(k * np.pi / 2)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])   # x radial, y lag, z flap
+
+
+SHAFT_FRAME = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])  # x_l = z, y_l = x
+
+
+def blade_root_basis(b, omega, spin, hub_radius):
+    """12x6 basis of the root states (blade frame, physical units) of free-tip solutions."""
+    S = np.zeros((12, 6))
+    S[:6, :6] = np.eye(6)
+    scale = np.ones(12)
+    scale[6:] = 1.0 / b["EI_flap"]
+    Q = el.blade_subspace(omega, spin, b["L"], hub_radius, b["EI_flap"], b["EI_lag"], b["GJ"],
+                          b["EA"], b["m"], b["I_alpha"], b["L"], 0.0, S, scale)
+    return Q / scale[:, None]
+
+
+def rigid_output(m, I, cm, inputs_point, out_point, omega):
+    """Rows giving the output state at out_point of a rigid body moving with (u, θ) at
+    inputs_point, in terms of [u, θ, ΣM about inputs_point, ΣF] (12 → 12)."""
+    r_io = out_point - inputs_point
+    r_co = cm - out_point
+    T = np.zeros((12, 12))
+    T[0:3, 0:3] = np.eye(3)
+    T[0:3, 3:6] = -skew(r_io)                   # u_out = u + θ × r
+    T[3:6, 3:6] = np.eye(3)
+    # u_c = u + θ × (cm − inputs_point)
+    Uc = np.hstack([np.eye(3), -skew(cm - inputs_point)])
+    T[9:12, 9:12] = np.eye(3)
+    T[9:12, 0:6] = m * omega**2 * Uc
+    # M_out = ΣM + (r_in − r_out) × ΣF + ω²[I θ + m (r_c − r_out) × u_c]
+    T[6:9, 6:9] = np.eye(3)
+    T[6:9, 9:12] = skew(-r_io)
+    T[6:9, 3:6] += omega**2 * np.diag(I)
+    T[6:9, 0:6] += omega**2 * m * skew(r_co) @ Uc
+    return T
+
+
+def overall_matrix(L, omega, spin, hub_radius, clamped=True, parts=False):
+    """U_all (30x30, complex); with parts=True also the blade root basis and the state at
+    the fuselage top (12x30) to rebuild a mode."""
+    b = L["blade"]
+    rows_geo = []
+    hub_sum = np.zeros((12, 30), dtype=complex)   # [u_h, θ_h, ΣM about O, ΣF] at the hub centre
+    hub_sum[0:6, 24:30] = np.eye(6)
+    Qroot = blade_root_basis(b, omega, spin, hub_radius)
+    for k in range(4):
+        Tk = frame_blocks(blade_frame(k))
+        Zk = Tk @ Qroot                            # global root state per tip coefficient
+        rk = L["roots"][k]
+        # geometric equations: root kinematics = hub rigid motion at r_k
+        G = np.zeros((6, 30), dtype=complex)
+        G[:, 6 * k:6 * k + 6] = Zk[0:6]
+        G[0:3, 24:27] = -np.eye(3)
+        G[0:3, 27:30] = skew(rk)                   # −(θ × r_k) = +r_k × θ
+        G[3:6, 27:30] = -np.eye(3)
+        rows_geo.append(G)
+        hub_sum[6:9, 6 * k:6 * k + 6] += Zk[6:9] + skew(rk) @ Zk[9:12]
+        hub_sum[9:12, 6 * k:6 * k + 6] += Zk[9:12]
+    h, s, f, t = L["hub"], L["shaft"], L["fuselage"], L["tail"]
+    z = rigid_output(h["m"], h["I"], h["cm"], np.zeros(3), s["top"], omega) @ hub_sum
+    Ts = frame_blocks(SHAFT_FRAME)
+    Us = el.spinning_shaft(omega, spin, s["EI"], s["m"], s["EA"], s["GJ"], s["I_p"], s["L"], 0.0)
+    z = Ts @ Us @ Ts.T @ z
+    z_fus = z
+    z = rigid_output(f["m"], f["I"], f["cm"], f["top"], f["rear"], omega) @ z
+    Ut = el.rotating_blade(omega, 0.0, t["L"], 0.0, t["EI_flap"], t["EI_lag"], t["GJ"],
+                           t["EA"], t["m"], t["I_alpha"], t["L"], 0.0)
+    z = Ut @ z
+    end = z[0:6] if clamped else z[6:12]
+    A = np.vstack(rows_geo + [end])
+    return (A, Qroot, z_fus) if parts else A
+
+
+def characteristic(L, spin, hub_radius, clamped):
+    def g(omega):
+        A = overall_matrix(L, omega, spin, hub_radius, clamped)
+        A = A / np.linalg.norm(A, axis=0)
+        return complex(np.linalg.det(A))
+    return g
+
+
+def real_characteristic(L, spin, hub_radius, clamped):
+    """Re det of the row- and column-normalised U_all (the determinant is real up to rounding:
+    the shaft's coupling enters as a Hermitian pair)."""
+    def g(omega):
+        A = overall_matrix(L, omega, spin, hub_radius, clamped)
+        A = A / np.linalg.norm(A, axis=1)[:, None]
+        A = A / np.linalg.norm(A, axis=0)
+        return float(np.linalg.det(A).real)
+    return g
+
+
+def isolated_blade_roots(L, spin, hub_radius, omega_max):
+    """Clamped-root blade frequencies [rad/s] below omega_max: the four blades' modes cluster
+    around each (reactionless blade combinations sit exactly on it)."""
+    from .blade import FAMILIES, family_function, family_grid
+    b = dict(L["blade"])
+    out = []
+    for fam in FAMILIES:
+        out += find_roots(family_function(b, spin, hub_radius, fam),
+                          family_grid(b, spin, fam, omega_max), 1e-13)
+    return sorted(out)
+
+
+def nullity(L, omega, spin, hub_radius, clamped, level=1e-9):
+    A = overall_matrix(L, omega, spin, hub_radius, clamped)
+    A = A / np.linalg.norm(A, axis=1)[:, None]
+    A = A / np.linalg.norm(A, axis=0)
+    sv = np.linalg.svd(A, compute_uv=False)
+    return int(np.sum(sv < level * sv[0]))
+
+
+def frequencies(L, spin, hub_radius, clamped, omega_max, rtol=1e-10, step_hz=0.1,
+                cluster_width=0.02, cluster_points=60):
+    """All roots in (0, omega_max]: the exact reactionless roots at the isolated-blade
+    frequencies (counted by the nullity of U_all there), then the deflated characteristic
+    function on a grid that is refined ±cluster_width (relative) around every isolated-blade
+    frequency, where the coupled blade modes crowd."""
+    iso = isolated_blade_roots(L, spin, hub_radius, omega_max)
+    exact = []
+    for r in iso:
+        exact += [r] * nullity(L, r, spin, hub_radius, clamped)
+    g0 = real_characteristic(L, spin, hub_radius, clamped)
+
+    def g(omega):
+        d = np.prod([(omega - r) / r for r in exact]) if exact else 1.0
+        return g0(omega) / d
+    grid = [np.arange(2 * np.pi * step_hz / 2, omega_max, 2 * np.pi * step_hz)]
+    for r in iso:
+        grid.append(np.linspace(r * (1 - cluster_width), r * (1 + cluster_width),
+                                cluster_points))
+    grid = np.unique(np.concatenate(grid))
+    grid = grid[(grid > 0) & (grid <= omega_max)]
+    # keep the samples off the exact roots (g is 0/0 there)
+    for r in exact:
+        grid = grid[np.abs(grid - r) > 1e-9 * r]
+    found = find_roots(g, grid, rtol)
+    return sorted(found + exact), exact
+
+
+def mode_shape(L, omega, spin, hub_radius, clamped, stations=7):
+    """Shape vector shared with `fem` (custom_models/mstmm/labels.py): blades × stations ×
+    [axial, lag, flap, twist·chord/2] (blade frames), hub [u, θ], fuselage centre [u, θ]."""
+    A, Qroot, z_fus = overall_matrix(L, omega, spin, hub_radius, clamped, parts=True)
+    _, _, vh = np.linalg.svd(A / np.linalg.norm(A, axis=0))
+    x = vh[-1].conj() / np.linalg.norm(A, axis=0)
+    b = L["blade"]
+    parts = []
+    for k in range(4):
+        z0 = Qroot @ x[6 * k:6 * k + 6]
+        for xs in np.linspace(0.0, b["L"], stations):
+            U = el.rotating_blade(omega, spin, b["L"], hub_radius, b["EI_flap"], b["EI_lag"],
+                                  b["GJ"], b["EA"], b["m"], b["I_alpha"], 0.0, xs)
+            z = U @ z0
+            parts.append([z[el.X], z[el.Y], z[el.Z], z[el.TX] * b["chord"] / 2])
+    f = L["fuselage"]
+    top = z_fus @ x
+    u_c = top[0:3] + np.cross(top[3:6], f["cm"] - f["top"])
+    v = np.concatenate([np.ravel(parts), x[24:30], u_c, top[3:6]])
+    v = v / v[np.argmax(np.abs(v))]
+    return v.real
+
+
+MODES_SETTINGS = {"rtol": 1e-10, "step_hz": 0.1}
+
+
+def modes_for(params: dict, settings: dict, clamped: bool) -> ModesResult:
+    from .labels import label_modes
+    s = dict(MODES_SETTINGS, **(settings or {}))
+    L = helicopter_layout(params)
+    spin, rh, n = params["speed"], params["hub_radius"], params["n_modes"]
+    omega_max = 2 * np.pi * 12.0
+    while True:
+        roots, exact = frequencies(L, spin, rh, clamped, omega_max, s["rtol"], s["step_hz"])
+        if len(roots) >= n + 1:
+            break
+        omega_max *= 1.5
+    roots = roots[:n]
+    # a repeated root gets two orthogonal shapes only from the nullspace; take the same shape
+    # twice (labels still count them) — MAC tracking sees a degenerate pair as such
+    shapes = np.array([mode_shape(L, w, spin, rh, clamped) for w in roots])
+    return ModesResult(frequencies_hz=np.array(roots) / (2 * np.pi),
+                       labels=label_modes(shapes, roots, L, spin), shapes=shapes, settings=s,
+                       notes=[f"exact reactionless roots at isolated-blade frequencies "
+                              f"{np.round(np.array(exact) / (2 * np.pi), 4).tolist()} Hz"])
+
+
+def modes(params: dict, settings: dict) -> ModesResult:
+    """helicopter-clamped (tail end clamped, Table 3)."""
+    return modes_for(params, settings, True)

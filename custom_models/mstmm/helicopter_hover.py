@@ -1,0 +1,8 @@
+"""`mstmm` leaf for `helicopter-hover`: the helicopter with the tail end free (Table 4)."""
+from compare.contract import ModesResult
+
+from .helicopter import MODES_SETTINGS, modes_for  # noqa: F401
+
+
+def modes(params: dict, settings: dict) -> ModesResult:
+    return modes_for(params, settings, False)

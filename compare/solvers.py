@@ -194,18 +194,29 @@ def _time_limit(seconds):
     """Stop the enclosed call after `seconds` of wall time with _Timeout. Needs SIGALRM and the
     main thread (true for the CLI and the process-pool workers; Dask runs tasks in threads, where
     no limit is applied). The alarm is seen when control is back in Python: engine leaves return
-    there at every output step, the compiled kernels only at the end of the run."""
+    there at every output step, the compiled kernels only at the end of the run. An engine that
+    turns the exception raised in its user function into its own failure (Exudyn does) still
+    ends `timeout`: the alarm's firing is remembered and raised again on the way out."""
     if not seconds or threading.current_thread() is not threading.main_thread() \
             or not hasattr(signal, "SIGALRM"):
         yield
         return
+    fired = []
 
     def on_alarm(signum, frame):
+        fired.append(True)
         raise _Timeout()
     old = signal.signal(signal.SIGALRM, on_alarm)
     signal.setitimer(signal.ITIMER_REAL, float(seconds))
     try:
-        yield
+        try:
+            yield
+        except Exception:
+            if fired:                  # the engine wrapped the alarm into its own error
+                raise _Timeout() from None
+            raise
+        if fired:                      # swallowed inside the engine: the limit still counts
+            raise _Timeout()
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0.0)
         signal.signal(signal.SIGALRM, old)

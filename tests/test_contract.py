@@ -86,3 +86,26 @@ def test_integrator_spellings_and_settings_merge():
     assert s == {"integrator": "rk4", "dt": 1e-3, "spectral_radius": 0.7}
     with pytest.raises(ValueError, match="unknown settings"):
         merge_settings({"dtt": 1}, {"integrator": "rk4", "dt": 1e-3}, ("rk4",))
+
+
+def test_an_engine_that_swallows_the_wall_clock_alarm_still_ends_timeout(monkeypatch):
+    """Exudyn turns an exception raised in a user function into its own error; the adapter
+    remembers that its alarm fired (a leaf double that catches everything, like an engine)."""
+    import time as _time
+    leaf = types.ModuleType("swallowing_leaf")
+    leaf.DEFAULT_SETTINGS, leaf.INTEGRATORS = {"integrator": "x"}, ("x",)
+
+    def simulate(params, t_out, settings):
+        try:
+            _time.sleep(2.0)
+        except BaseException:            # noqa: BLE001 - what an engine's user-function wrapper does
+            pass
+        return LeafResult(channels={c: np.zeros(len(t_out)) for c in SPINUP.channels},
+                          status="diverged", t_fail=0.0, reason="engine error")
+    leaf.simulate = simulate
+    monkeypatch.setitem(sys.modules, "swallowing_leaf", leaf)
+    monkeypatch.setitem(solvers.REGISTRY, "swallow", solvers.Solver("swallow", "test", "numpy"))
+    monkeypatch.setitem(SPINUP.leaves, "swallow", "swallowing_leaf")
+    tr = solvers.simulate(SPINUP, solvers.get_solver("swallow"), SPINUP.resolve({"t_end": 0.1}),
+                          {"integrator": "x"}, timeout_s=0.2)
+    assert tr.status == "timeout"

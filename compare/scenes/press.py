@@ -1,8 +1,11 @@
 """Crank–rocker press with slider, idle and variable structure (seed 003; spec scene-press.md)."""
+import math
+
 import numpy as np
 
 from ..errors import BadInput
 from ..params import Param, positive
+from ..physics import press as phys
 from .base import Finding, Scene
 
 SOURCE = "seed 003 (clutchless crank press; Lagrange partial systems, linear-acceleration method)"
@@ -34,18 +37,20 @@ _MECHANISM = (
           choices=(1, 2)),
 )
 
-CHANNELS = ("crank_angle", "crank_rate", "crank_accel", "rocker_angle", "slider_x",
-            "loop_violation", "energy_balance")
+CHANNELS = phys.CHANNELS     # each built once, by compare.physics.press.channels
 # the issue's acceptance numbers, as absolute bounds
 TOLERANCES = {"crank_angle": ("abs", 1e-4), "crank_rate": ("abs", 1e-3),
               "slider_x": ("abs", 1e-7)}
 
 
 def _check(p):
-    """The loop must close at the start: B = C + l3(cos ψ, sin ψ) with C on the x axis needs
-    |y_B − y_A| ≤ l2 for the rod to reach from A (rejected here, before anything runs)."""
-    gap = abs(p["l3"] * np.sin(np.radians(p["psi0"])) - p["l1"] * np.sin(np.radians(p["phi0"])))
-    if gap > p["l2"]:
+    """The loop must close at the start (the shared loop closure): B = C + l3(cos ψ, sin ψ) with
+    C on the x axis needs |y_B − y_A| ≤ l2 for the rod to reach from A (rejected here, before
+    anything runs)."""
+    xA, yA, xB, yB, xC, ok = phys.loop_closure(math.radians(p["phi0"]), math.radians(p["psi0"]),
+                                               p["l1"], p["l2"], p["l3"], 1.0)
+    if not ok:
+        gap = abs(yB - yA)
         raise BadInput(f"l2: the rod ({p['l2']:g} m) cannot close the loop at phi0 = "
                        f"{p['phi0']:g} deg, psi0 = {p['psi0']:g} deg (needs ≥ {gap:.4g} m)")
 
@@ -63,6 +68,7 @@ PRESS = Scene(
                          positive("output_dt", 0.00125, "s", "output grid (paper: 40 steps)")),
     channels=CHANNELS, tolerances=TOLERANCES, key_channel="crank_rate", check=_check,
     reference_solvers=("lagrange-exact", "mujoco"),
+    campaign_cases=({"name": "press"},),
     notes="Energy balance = kinetic + spring + gravity − motor work + damper loss.")
 
 PRESS_CYCLE = Scene(
@@ -82,6 +88,7 @@ PRESS_CYCLE = Scene(
     channels=CHANNELS, tolerances={"crank_rate": ("abs", 1e-3), "crank_angle": ("abs", 1e-4),
                                    "slider_x": ("abs", 1e-7)},
     key_channel="crank_rate", check=_check, findings=lambda p, trs: cycle_findings(p, trs),
+    campaign_cases=({"name": "press-cycle"},),
     notes="The lock is a plastic impact located as a state event; energy_balance includes the "
           "press work and the energy lost at the lock.")
 

@@ -316,3 +316,15 @@ def test_hundred_crank_revolutions_energy_drift():
     assert (c["crank_angle"][-1] - c["crank_angle"][0]) / (2 * math.pi) > 100
     eb = c["energy_balance"]
     assert np.max(np.abs(eb - eb[0])) < 1e-6 * r.extra["motor_work"][-1]
+
+
+def test_loop_violation_observable():
+    """|B − A| − l2 from the reported (φ, ψ, x_C): zero on the independent geometry, and the
+    size of a slider displacement along the rod when the slider is moved off the closure."""
+    for q in _random_states(10)[1]:
+        A, B, C = _geometry(q, DEFAULT, 1.0)
+        assert phys.loop_violation(DEFAULT, q[0], q[1], C[0]) < 1e-15
+        dx = 1e-6
+        rod = (B - A) / np.linalg.norm(B - A)
+        assert phys.loop_violation(DEFAULT, q[0], q[1], C[0] + dx) == pytest.approx(
+            abs(rod[0]) * dx, rel=1e-3)

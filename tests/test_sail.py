@@ -394,3 +394,33 @@ def test_report_and_recording_carry_formula18(tmp_path):
     I = J + 2 * (rho * (L - ell) * Lc**2 + rho * ((Lc + ell)**3 - Lc**3) / 3 + mk * (Lc + ell)**2)
     np.testing.assert_allclose(v, I0 * Om0 / I, rtol=1e-12)
     assert len(t) == 41
+
+
+def test_release_law_adds_no_angular_momentum_about_the_axis():
+    """The shared release law: a node leaves Q = R_z(ψ)(L_c, 0, r) with the hub point's velocity
+    plus r·ω along the rotated X1 axis; the added part is radial, so the node carries exactly the
+    m L_c² Ω it had as stored thread (closed form of (Q × V)_z = Ω L_c²)."""
+    rng = np.random.default_rng(5)
+    for psi, om in rng.uniform(-4, 4, (5, 2)):
+        Lc, r, rw = 0.05, 0.01, 0.035
+        q0, q1, q2, v0, v1, v2 = phys.release_state(psi, om, Lc, r, rw)
+        assert np.allclose([q0, q1, q2], [Lc * np.cos(psi), Lc * np.sin(psi), r], atol=1e-16)
+        assert q0 * v1 - q1 * v0 == pytest.approx(om * Lc**2, rel=1e-12, abs=1e-16)
+        # and the relative velocity is r·ω along the radius
+        rel = np.array([v0 + om * q1, v1 - om * q0, v2])
+        assert np.allclose(rel, rw * np.array([np.cos(psi), np.sin(psi), 0.0]), atol=1e-16)
+
+
+def test_payout_and_breakpoints():
+    """ℓ = r·ω·t until t_full = L/(r·ω); releases at t_j = j·L/(n·r·ω); the end of payout is
+    a breakpoint; after it the Q-spring stays only for last_node = attached."""
+    p = scene(**FAST, t_end=80.0)
+    rw, L, n = p["r"] * p["omega_spool"], p["L"], p["n"]
+    t_full = L / rw
+    assert phys.payout_of(p, 10.0) == pytest.approx((rw * 10.0, rw, True))
+    assert phys.payout_of(p, t_full + 1.0) == (L, 0.0, True)
+    assert phys.payout_of(scene(last_node="released"), 1e4)[2] is False
+    t, out, rel, end = phys.breakpoints(p, grid(80.0))
+    assert np.allclose(t[rel > 0], [j * L / (n * rw) for j in range(1, n)], rtol=1e-12)
+    assert t[end] == pytest.approx([t_full], rel=1e-12)
+    assert np.array_equal(np.sort(out[out >= 0]), np.arange(len(grid(80.0))))

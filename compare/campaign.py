@@ -438,7 +438,7 @@ def run_campaign(path, out, executor="local", scheduler=None, workers=None, time
     view.start(len(jobs), len(reused))
     for c in cases:
         if not pending[c.name]:
-            outcome[c.name] = finish_case(c, jobs, store, out_dir, crashed, reused, view)
+            outcome[c.name] = _finish_safely(c, jobs, store, out_dir, crashed, reused, view)
     if todo:
         ex, client = make_executor(executor, scheduler, workers)
         t_start = time.time()
@@ -463,8 +463,8 @@ def run_campaign(path, out, executor="local", scheduler=None, workers=None, time
                     if not pending[j.case]:
                         case = next(c for c in cases if c.name == j.case)
                         view.note(f"writing the report of {case.name}")
-                        outcome[case.name] = finish_case(case, jobs, store, out_dir, crashed,
-                                                         reused, view)
+                        outcome[case.name] = _finish_safely(case, jobs, store, out_dir,
+                                                            crashed, reused, view)
         finally:
             ex.shutdown(wait=True)
             if client is not None:
@@ -488,6 +488,22 @@ def _started(jobs, store, since):
 
 
 # --- one case's comparison, recording and report ------------------------------------------------
+
+def _finish_safely(case, jobs, store, out_dir, crashed, reused, view):
+    """A case whose comparison or report fails is recorded as such; the other cases stand."""
+    try:
+        return finish_case(case, jobs, store, out_dir, crashed, reused, view)
+    except Exception as e:
+        import traceback
+        msg = f"report failed: {type(e).__name__}: {e}".splitlines()[0]
+        (out_dir / case.name).mkdir(parents=True, exist_ok=True)
+        (out_dir / case.name / "report.log").write_text(traceback.format_exc())
+        view.log(f"{case.name}: {msg} (traceback in {out_dir / case.name / 'report.log'})")
+        for j in jobs:
+            if j.case == case.name:
+                crashed.setdefault(j.label, msg)
+        return {"scene": case.scene.name, "params": case.params, "runs": [],
+                "comparisons": [], "findings": [], "error": msg}
 
 def finish_case(case, jobs, store, out_dir, crashed, reused, view):
     """Link the stored results into the case folder, compare, record and report them (unless

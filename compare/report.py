@@ -153,7 +153,8 @@ def run_markdown(result, figures):
     out = [f"# {sc.name}: {sc.title}", "", "Source: " + "; ".join(refs) + ".", ""]
     if sc.notes:
         out += [cite_short(sc.notes), ""]
-    changed = ", ".join(f"{p.name} = {fmt_value(result.params[p.name])}" for p in sc.params
+    changed = ", ".join(f"{p.name} = {fmt_value(result.params[p.name])}"
+                        + (f" {p.unit}" if p.unit else "") for p in sc.params
                         if not np.array_equal(np.asarray(result.params[p.name]),
                                               np.asarray(p.default)))
     out += [f"Parameters: defaults{'; ' + changed if changed else ''}.", "", "## Runs", "",

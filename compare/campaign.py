@@ -400,6 +400,21 @@ def is_done(job, store):
     return meta["stats"].get("input_digest") == job.digest and meta["status"] != "timeout"
 
 
+def connect(scheduler, timeout_s=10):
+    """A Dask client of the scheduler at `scheduler`; BadInput (one line) when none answers."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise BadInput("--executor dask needs the optional extra: pip install "
+                       "'xval[dask]'") from None
+    try:
+        return Client(scheduler, timeout=f"{timeout_s}s")
+    except (OSError, TimeoutError, ValueError) as e:
+        raise BadInput(f"--scheduler {scheduler}: no Dask scheduler answers there "
+                       f"({type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''})"
+                       ) from None
+
+
 def make_executor(kind, scheduler, workers):
     if kind == "dask":
         try:
@@ -408,7 +423,7 @@ def make_executor(kind, scheduler, workers):
             raise BadInput("--executor dask needs the optional extra: pip install "
                            "'xval[dask]'") from None
         if scheduler:
-            client = Client(scheduler)
+            client = connect(scheduler)
         else:
             client = Client(LocalCluster(n_workers=workers or 2, threads_per_worker=1,
                                          dashboard_address=None, silence_logs=50))

@@ -365,6 +365,10 @@ def cmd_campaign(args):
     with busy("checking the campaign, loading the models, planning the jobs …"):
         plan(load_campaign(args.file), args.file or "built-in campaign", args.timeout,
              args.max_output_gib, args.max_steps)
+    if args.scheduler:                 # reachable before anything is written
+        from .campaign import connect
+        with busy(f"connecting to {args.scheduler} …"):
+            connect(args.scheduler).close()
     make_out(args.out)
     with stdout_to_stderr(), progress_view() as view:
         summary = run_campaign(args.file, args.out, executor=args.executor,

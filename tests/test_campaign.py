@@ -116,6 +116,10 @@ sweep = {{ {sweep} }}
     (SWEEP_TOML.format(sweep="torque = [1]").replace("t_end = 0.5", "t_end = -1"),
      ["cases[0].set.t_end"]),
     ("name = \"t\"\n", ["camp.toml", "cases", "missing"]),
+    # 5e8 samples × 8 arrays × 8 bytes per point = 30 GiB against the 2 GiB budget
+    (SWEEP_TOML.format(sweep="torque = [1]").replace("t_end = 0.5", "t_end = 0.5, "
+                                                      "output_dt = 1e-9"),
+     ["cases[0] sweep point spin/torque=1", "exceeds the budget", "--max-output-gib"]),
 ])
 def test_malformed_campaign_file_is_one_line_exit_2_and_writes_nothing(tmp_path, text, words):
     rc, so, se = xval("campaign", _toml(tmp_path, text), "--out", str(tmp_path / "logs"))

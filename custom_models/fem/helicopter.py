@@ -8,11 +8,10 @@ so that extension and torsion are Hermite cubic too. Blades: centrifugal geometr
 ∫T(v'² + w'²), lag and extension softening −Ω²m̄, torsion +Ω²I_α. Shaft: spin softening and
 the gyroscopic matrix G (v, w blocks ∓2Ω M_b). Hub and fuselage: rigid bodies (lumped mass and
 inertia at the centre of mass); blade roots, shaft ends and tail root are tied to them by rigid
-links. Eigenproblem M q̈ + G q̇ + K q = 0 (complex, state-space); convergence: blades meshed
+links. Eigenproblem M q̈ + G q̇ + K q = 0 (complex, sparse shift-invert); convergence: blades meshed
 with n and 2n elements, the frequencies extrapolated (h⁴) and the change reported.
 """
 import numpy as np
-from scipy.linalg import eig
 
 from compare.contract import ModesResult
 from compare.physics.mstmm import helicopter_layout
@@ -22,6 +21,7 @@ from .beam import bending
 MODES_SETTINGS = {"blade_elements": 12, "shaft_elements": 2, "tail_elements": 6,
                   "richardson": True}
 BLADE_STATIONS = 7
+RIGID_BODY_HZ = 0.01
 
 
 def skew(r):
@@ -178,12 +178,19 @@ def build(L, spin, n_blade, n_shaft, n_tail, clamped):
         samplers[:4], hub, fus, used, n
 
 
-def solve(L, spin, mesh, clamped):
+def solve(L, spin, mesh, clamped, count):
+    """The `count` eigenvalues of M λ² + G λ + K = 0 nearest to a small shift (the lowest
+    modes), by sparse shift-invert on the first-order form B z' = A z,
+    A = [[0, I], [−K, −G]], B = [[I, 0], [0, M]]."""
+    from scipy import sparse
+    from scipy.sparse.linalg import eigs
     K, G, M, samplers, hub, fus, used, n = build(L, spin, *mesh, clamped)
     N = K.shape[0]
-    Minv = np.linalg.inv(M)
-    A = np.block([[np.zeros((N, N)), np.eye(N)], [-Minv @ K, -Minv @ G]])
-    lam, V = eig(A)
+    I = sparse.identity(N, format="csc")
+    A = sparse.bmat([[None, I], [sparse.csc_matrix(-K), sparse.csc_matrix(-G)]], format="csc")
+    B = sparse.bmat([[I, None], [None, sparse.csc_matrix(M)]], format="csc")
+    # shift off the axis: the hovering aircraft has (defective) rigid-body modes at λ = 0
+    lam, V = eigs(A, k=min(count, 2 * N - 2), M=B, sigma=-1.0, which="LM", tol=1e-14)
     return lam, V[:N], samplers, hub, fus, used, n
 
 
@@ -205,14 +212,15 @@ def shape_vector(x, samplers, hub, fus, used, n, chord):
 
 
 def frequencies(L, spin, mesh, clamped, n_modes):
-    lam, V, samplers, hub, fus, used, n = solve(L, spin, mesh, clamped)
+    lam, V, samplers, hub, fus, used, n = solve(L, spin, mesh, clamped, 2 * n_modes + 40)
     scale = np.abs(lam).max()
     osc = [i for i in range(len(lam)) if lam[i].imag > 1e-6 * scale ** 0.5
            and abs(lam[i].real) < 1e-6 * abs(lam[i])]
     unstable = [float(lam[i].real) for i in range(len(lam))
-                if lam[i].real > 1e-6 * max(1.0, abs(lam[i]))]
+                if lam[i].real > 1e-6 * max(1.0, abs(lam[i])) and abs(lam[i]) > 1e-2]
     osc.sort(key=lambda i: lam[i].imag)
-    osc = [i for i in osc if lam[i].imag > 1e-3][:n_modes]
+    # below 0.01 Hz: the free aircraft's rigid-body modes (mstmm's search starts at 0.05 Hz)
+    osc = [i for i in osc if lam[i].imag > RIGID_BODY_HZ * 2 * np.pi][:n_modes]
     shapes = [shape_vector(V[:, i], samplers, hub, fus, used, n, L["blade"]["chord"])
               for i in osc]
     return np.array([lam[i].imag for i in osc]), shapes, unstable

@@ -52,11 +52,18 @@ def tip_basis(b, omega, spin, hub_radius, family):
 
 def family_function(b, spin, hub_radius, family):
     """g(ω): det of the tip resultants of the orthonormal clamped-root basis (bounded by 1,
-    zero exactly at the roots, continuous in ω)."""
-    def g(omega):
-        Q, res = tip_basis(b, omega, spin, hub_radius, family)
-        return float(np.linalg.det(Q[res, :]))
-    return g
+    zero exactly at the roots, continuous in ω). Bending families propagate only their own
+    4x4 block (elements.bending_tip_det); torsion and extension are the closed-form 2x2
+    cos/sin matrix, whose (resultant, resultant) entry is the characteristic function."""
+    if family in ("flap", "lag"):
+        EI = b["EI_flap"] if family == "flap" else b["EI_lag"]
+        flap = family == "flap"
+        return lambda omega: el.bending_tip_det(EI, b["m"], omega, spin, hub_radius, b["L"],
+                                                flap)
+    stiff, inert, sgn = ((b["GJ"], b["I_alpha"], -1.0) if family == "torsion"
+                         else (b["EA"], b["m"], 1.0))
+    return lambda omega: el.second_order_transfer(
+        stiff, inert * (omega**2 + sgn * spin**2) / stiff, b["L"])[1, 1]
 
 
 def family_grid(b, spin, family, omega_max):

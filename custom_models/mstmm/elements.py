@@ -34,47 +34,47 @@ AXIAL = np.array([X, QX])
 @nb.njit(cache=True)
 def series_derivative_transfer(EI, k, f0, f1, f2, s):
     """4x4 P: [y, y', y'', y'''](s) = P [y, y', y'', y'''](0) for EI y'''' − (T y')' − k y = 0
-    with T(s) = f0 + f1 s + f2 s² (power series about s = 0, summed until the terms vanish)."""
+    with T(s) = f0 + f1 s + f2 s² (power series about s = 0, summed until the terms vanish).
+    The coefficients are carried scaled by sⁿ (a_n = c_n sⁿ), so no powers are formed."""
     P = np.zeros((4, 4))
     nmax = 400
+    a = np.zeros(nmax + 4)
+    g0, g1, g2 = f0 * s * s / EI, f1 * s * s * s / EI, f2 * s ** 4 / EI
+    kk = k * s ** 4 / EI
     for j in range(4):
-        c = np.zeros(nmax + 4)
+        a[:] = 0.0
         fact = 1.0
         for i in range(1, j + 1):
             fact *= i
-        c[j] = 1.0 / fact                    # y^(j)(0) = 1, others 0
-        # derivatives of the series at s: accumulate sum c_n s^n etc.
+        a[j] = s ** j / fact                   # y^(j)(0) = 1, others 0
         val = np.zeros(4)
         biggest = 0.0
         small_run = 0
         for n in range(nmax):
             if n >= 4:
                 m = n - 4
-                c[n] = (f0 * (m + 2) * (m + 1) * c[m + 2] + f1 * (m + 1) ** 2 * c[m + 1]
-                        + (f2 * m * (m + 1) + k) * c[m]) / (EI * (m + 1) * (m + 2) * (m + 3)
-                                                            * (m + 4))
-            cn = c[n]
-            # term of y^(d) from c_n s^n: n!/(n-d)! c_n s^(n-d)
-            t0 = cn * s ** n
-            val[0] += t0
-            if n >= 1:
-                val[1] += n * cn * s ** (n - 1)
-            if n >= 2:
-                val[2] += n * (n - 1) * cn * s ** (n - 2)
-            if n >= 3:
-                val[3] += n * (n - 1) * (n - 2) * cn * s ** (n - 3)
-            a = abs(n * (n - 1) * (n - 2) * cn * s ** (n - 3)) if n >= 3 else 0.0
-            a = max(a, abs(t0))
+                a[n] = (g0 * (m + 2) * (m + 1) * a[m + 2] + g1 * (m + 1) ** 2 * a[m + 1]
+                        + (g2 * m * (m + 1) + kk) * a[m]) / ((m + 1) * (m + 2) * (m + 3)
+                                                             * (m + 4))
+            an = a[n]
+            val[0] += an
+            val[1] += n * an
+            val[2] += n * (n - 1) * an
+            val[3] += n * (n - 1) * (n - 2) * an
+            size = abs(n * (n - 1) * (n - 2) * an) + abs(an)
             for d in range(4):
                 biggest = max(biggest, abs(val[d]))
-            if n > 8 and a <= 1e-18 * biggest:
+            if n > 8 and size <= 1e-18 * biggest:
                 small_run += 1
                 if small_run >= 4:
                     break
             else:
                 small_run = 0
-        for d in range(4):
-            P[d, j] = val[d]
+        # y^(d)(s) = sum n!/(n-d)! c_n s^(n-d) = (sum n!/(n-d)! a_n) / s^d
+        P[0, j] = val[0]
+        P[1, j] = val[1] / s
+        P[2, j] = val[2] / (s * s)
+        P[3, j] = val[3] / (s * s * s)
     return P
 
 
@@ -102,11 +102,12 @@ def centrifugal_tension(x, m, spin, hub_radius, L):
 
 @nb.njit(cache=True)
 def n_segments(EI, k, Tmax, length):
-    """Segments so that each spans ≤ 1.5 rad of the bending wavenumber (k/EI)^¼ and of the
-    tension wavenumber √(T/EI): the series then needs ~30 terms and keeps ~15 digits."""
+    """Segments so that each spans ≤ 1.5 rad of the bending wavenumber (k/EI)^¼ and ≤ 3 rad
+    of the tension wavenumber √(T/EI): the series then needs ~30 terms and keeps ~15 digits
+    (the growth between segments is taken out by the re-orthonormalisation)."""
     beta = (abs(k) / EI) ** 0.25
     kt = np.sqrt(abs(Tmax) / EI)
-    return max(1, int(np.ceil(length * max(beta, kt) / 1.5)))
+    return max(1, int(np.ceil(length * max(beta / 1.5, kt / 3.0))))
 
 
 @nb.njit(cache=True)
@@ -288,3 +289,29 @@ def spinning_shaft(omega, spin, EI, m, EA, GJ, I_p, x_a, x_b):
     U[np.ix_(TORSION, TORSION)] = second_order_transfer(GJ, I_p * omega**2 / GJ, s)
     U[np.ix_(AXIAL, AXIAL)] = second_order_transfer(EA, m * omega**2 / EA, s)
     return U
+
+
+@nb.njit(cache=True)
+def bending_tip_det(EI, m, omega, spin, hub_radius, L, flap):
+    """Characteristic function of one bending family of the clamped-free rotating blade: the
+    clamped-root basis (moment, force free) carried to the tip with re-orthonormalisation
+    after every segment (scaled state: resultants / EI), det of its tip resultant rows."""
+    k = m * omega * omega if flap else m * (omega * omega + spin * spin)
+    T0, _, _ = centrifugal_tension(0.0, m, spin, hub_radius, L)
+    nseg = n_segments(EI, k, T0, L)
+    h = L / nseg
+    Q = np.zeros((4, 2))
+    Q[2, 0] = 1.0
+    Q[3, 1] = 1.0
+    D = np.array([1.0, 1.0, 1.0 / EI, 1.0 / EI])
+    for i in range(nseg):
+        xs = i * h
+        f0, f1, f2 = centrifugal_tension(xs, m, spin, hub_radius, L)
+        P = series_derivative_transfer(EI, k, f0, f1, f2, h)
+        Te, _, _ = centrifugal_tension(xs + h, m, spin, hub_radius, L)
+        U = resultant_map(EI, Te, flap) @ P @ np.linalg.inv(resultant_map(EI, f0, flap))
+        for r in range(4):
+            for c in range(4):
+                U[r, c] *= D[r] / D[c]
+        Q = orthonormalize(U @ Q)
+    return Q[2, 0] * Q[3, 1] - Q[2, 1] * Q[3, 0]

@@ -56,60 +56,86 @@ def blade_root_basis(b, omega, spin, hub_radius):
     return Q / scale[:, None]
 
 
-def rigid_output(m, I, cm, inputs_point, out_point, omega):
-    """Rows giving the output state at out_point of a rigid body moving with (u, θ) at
-    inputs_point, in terms of [u, θ, ΣM about inputs_point, ΣF] (12 → 12)."""
+def rigid_output_parts(m, I, cm, inputs_point, out_point):
+    """Output state at out_point of a rigid body moving with (u, θ) at inputs_point, from
+    [u, θ, ΣM about inputs_point, ΣF]: T = T0 + ω² T2 (12 → 12)."""
     r_io = out_point - inputs_point
     r_co = cm - out_point
-    T = np.zeros((12, 12))
-    T[0:3, 0:3] = np.eye(3)
-    T[0:3, 3:6] = -skew(r_io)                   # u_out = u + θ × r
-    T[3:6, 3:6] = np.eye(3)
-    # u_c = u + θ × (cm − inputs_point)
-    Uc = np.hstack([np.eye(3), -skew(cm - inputs_point)])
-    T[9:12, 9:12] = np.eye(3)
-    T[9:12, 0:6] = m * omega**2 * Uc
-    # M_out = ΣM + (r_in − r_out) × ΣF + ω²[I θ + m (r_c − r_out) × u_c]
-    T[6:9, 6:9] = np.eye(3)
-    T[6:9, 9:12] = skew(-r_io)
-    T[6:9, 3:6] += omega**2 * np.diag(I)
-    T[6:9, 0:6] += omega**2 * m * skew(r_co) @ Uc
-    return T
+    T0 = np.eye(12)
+    T0[0:3, 3:6] = -skew(r_io)                  # u_out = u + θ × r
+    T0[6:9, 9:12] = skew(-r_io)                 # M_out = ΣM + (r_in − r_out) × ΣF + …
+    Uc = np.hstack([np.eye(3), -skew(cm - inputs_point)])     # u_c = u + θ × (r_c − r_in)
+    T2 = np.zeros((12, 12))
+    T2[9:12, 0:6] = m * Uc                       # F_out = ΣF + ω² m u_c
+    T2[6:9, 3:6] = np.diag(I)                    # … + ω² [I θ + m (r_c − r_out) × u_c]
+    T2[6:9, 0:6] += m * skew(r_co) @ Uc
+    return T0, T2
+
+
+def rigid_output(m, I, cm, inputs_point, out_point, omega):
+    T0, T2 = rigid_output_parts(m, I, cm, inputs_point, out_point)
+    return T0 + omega**2 * T2
+
+
+class Tree:
+    """The ω-independent pieces of U_all, built once per parameter set."""
+
+    def __init__(self, L):
+        self.L = L
+        self.T = [frame_blocks(blade_frame(k)) for k in range(4)]
+        self.G0 = []
+        for k in range(4):
+            G = np.zeros((6, 30))
+            G[0:3, 24:27] = -np.eye(3)
+            G[0:3, 27:30] = skew(L["roots"][k])    # −(θ × r_k) = +r_k × θ
+            G[3:6, 27:30] = -np.eye(3)
+            self.G0.append(G)
+        self.R = [skew(r) for r in L["roots"]]
+        h, s, f = L["hub"], L["shaft"], L["fuselage"]
+        self.hub = rigid_output_parts(h["m"], h["I"], h["cm"], np.zeros(3), s["top"])
+        self.fus = rigid_output_parts(f["m"], f["I"], f["cm"], f["top"], f["rear"])
+        self.Ts = frame_blocks(SHAFT_FRAME)
+
+
+_TREES = {}
+
+
+def tree(L):
+    key = id(L)
+    if key not in _TREES or _TREES[key].L is not L:
+        _TREES.clear()
+        _TREES[key] = Tree(L)
+    return _TREES[key]
 
 
 def overall_matrix(L, omega, spin, hub_radius, clamped=True, parts=False):
     """U_all (30x30, complex); with parts=True also the blade root basis and the state at
     the fuselage top (12x30) to rebuild a mode."""
+    tr = tree(L)
     b = L["blade"]
-    rows_geo = []
+    rows = []
     hub_sum = np.zeros((12, 30), dtype=complex)   # [u_h, θ_h, ΣM about O, ΣF] at the hub centre
     hub_sum[0:6, 24:30] = np.eye(6)
     Qroot = blade_root_basis(b, omega, spin, hub_radius)
     for k in range(4):
-        Tk = frame_blocks(blade_frame(k))
-        Zk = Tk @ Qroot                            # global root state per tip coefficient
-        rk = L["roots"][k]
-        # geometric equations: root kinematics = hub rigid motion at r_k
-        G = np.zeros((6, 30), dtype=complex)
-        G[:, 6 * k:6 * k + 6] = Zk[0:6]
-        G[0:3, 24:27] = -np.eye(3)
-        G[0:3, 27:30] = skew(rk)                   # −(θ × r_k) = +r_k × θ
-        G[3:6, 27:30] = -np.eye(3)
-        rows_geo.append(G)
-        hub_sum[6:9, 6 * k:6 * k + 6] += Zk[6:9] + skew(rk) @ Zk[9:12]
+        Zk = tr.T[k] @ Qroot                       # global root state per tip coefficient
+        G = tr.G0[k].astype(complex)
+        G[:, 6 * k:6 * k + 6] = Zk[0:6]            # geometric equations: root = hub motion
+        rows.append(G)
+        hub_sum[6:9, 6 * k:6 * k + 6] += Zk[6:9] + tr.R[k] @ Zk[9:12]
         hub_sum[9:12, 6 * k:6 * k + 6] += Zk[9:12]
-    h, s, f, t = L["hub"], L["shaft"], L["fuselage"], L["tail"]
-    z = rigid_output(h["m"], h["I"], h["cm"], np.zeros(3), s["top"], omega) @ hub_sum
-    Ts = frame_blocks(SHAFT_FRAME)
+    s, t = L["shaft"], L["tail"]
+    w2 = omega**2
+    z = (tr.hub[0] + w2 * tr.hub[1]) @ hub_sum
     Us = el.spinning_shaft(omega, spin, s["EI"], s["m"], s["EA"], s["GJ"], s["I_p"], s["L"], 0.0)
-    z = Ts @ Us @ Ts.T @ z
+    z = tr.Ts @ (Us @ (tr.Ts.T @ z))
     z_fus = z
-    z = rigid_output(f["m"], f["I"], f["cm"], f["top"], f["rear"], omega) @ z
+    z = (tr.fus[0] + w2 * tr.fus[1]) @ z
     Ut = el.rotating_blade(omega, 0.0, t["L"], 0.0, t["EI_flap"], t["EI_lag"], t["GJ"],
                            t["EA"], t["m"], t["I_alpha"], t["L"], 0.0)
     z = Ut @ z
     end = z[0:6] if clamped else z[6:12]
-    A = np.vstack(rows_geo + [end])
+    A = np.vstack(rows + [end])
     return (A, Qroot, z_fus) if parts else A
 
 
@@ -191,9 +217,9 @@ def mode_shape(L, omega, spin, hub_radius, clamped, stations=7):
     for k in range(4):
         z0 = Qroot @ x[6 * k:6 * k + 6]
         for xs in np.linspace(0.0, b["L"], stations):
-            U = el.rotating_blade(omega, spin, b["L"], hub_radius, b["EI_flap"], b["EI_lag"],
-                                  b["GJ"], b["EA"], b["m"], b["I_alpha"], 0.0, xs)
-            z = U @ z0
+            z = z0 if xs == 0 else el.rotating_blade(
+                omega, spin, b["L"], hub_radius, b["EI_flap"], b["EI_lag"], b["GJ"], b["EA"],
+                b["m"], b["I_alpha"], 0.0, xs) @ z0
             parts.append([z[el.X], z[el.Y], z[el.Z], z[el.TX] * b["chord"] / 2])
     f = L["fuselage"]
     top = z_fus @ x
@@ -203,7 +229,7 @@ def mode_shape(L, omega, spin, hub_radius, clamped, stations=7):
     return v.real
 
 
-MODES_SETTINGS = {"rtol": 1e-10, "step_hz": 0.1}
+MODES_SETTINGS = {"rtol": 1e-10, "step_hz": 0.1}  # grid step outside the blade clusters
 
 
 def modes_for(params: dict, settings: dict, clamped: bool) -> ModesResult:
@@ -211,12 +237,15 @@ def modes_for(params: dict, settings: dict, clamped: bool) -> ModesResult:
     s = dict(MODES_SETTINGS, **(settings or {}))
     L = helicopter_layout(params)
     spin, rh, n = params["speed"], params["hub_radius"], params["n_modes"]
-    omega_max = 2 * np.pi * 12.0
+    # first guess: just above the isolated-blade root whose four-blade clusters hold n + 1
+    iso = isolated_blade_roots(L, spin, rh, 2 * np.pi * 200.0)
+    k = min(len(iso) - 1, int(np.ceil((n + 1) / 4)) - 1)
+    omega_max = 1.03 * iso[k]
     while True:
         roots, exact = frequencies(L, spin, rh, clamped, omega_max, s["rtol"], s["step_hz"])
         if len(roots) >= n + 1:
             break
-        omega_max *= 1.5
+        omega_max *= 1.25
     roots = roots[:n]
     # a repeated root gets two orthogonal shapes only from the nullspace; take the same shape
     # twice (labels still count them) — MAC tracking sees a degenerate pair as such

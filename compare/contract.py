@@ -16,8 +16,9 @@ ALIASES = {"rk44": "rk4", "generalized-alpha": "generalized_alpha",
            "trapezoidal-index2": "trapezoidal", "ode23": "rk23",
            "velocityverlet": "velocity_verlet", "semi-implicit-euler": "euler"}
 # One spelling per setting key (old spellings of earlier leaves still accepted).
-KEY_ALIASES = {"rho_inf": "spectral_radius", "newton_tol": "newton_tol",
-               "newton_tolerance": "newton_tol"}
+KEY_ALIASES = {"rho_inf": "spectral_radius", "newton_tolerance": "newton_tol",
+               "newton_rtol": "newton_tol", "newton_rel_tol": "newton_tol",
+               "newton_atol": "newton_abs_tol", "fine_newton_rel_tol": "fine_newton_tol"}
 
 
 def canonical_integrator(name: str) -> str:

@@ -109,12 +109,13 @@ def write_run_recording(path, result):
             rr.RecordingStream(APPLICATION_ID,
                                recording_id=f"{scene.name}-{path.parent.name}") as rec:
         rec.save(str(tmp), default_blueprint=blueprint(scene, draw is not None))
-        for i, tr in enumerate(trs):
+        for tr in trs:
             for ch in scene.channels:
                 _series(rec, f"{ch}/{tr.solver}", tr.t, tr.channels[ch], tr.solver,
                         colors[tr.solver])
             if draw and tr.status in ("ok", "diverged"):
-                draw(rec, result.params, tr, colors[tr.solver], np.array([1.0 * i, 0.0, 0.0]))
+                # overlaid at one place: where two solvers part, their bodies separate
+                draw(rec, result.params, tr, colors[tr.solver], np.zeros(3))
         for ch in scene.channels:
             curve = analytic_curve(result, ch)
             if curve is not None:

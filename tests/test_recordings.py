@@ -10,7 +10,14 @@ from compare.scenes import get_scene
 
 # short runs of each scene: every solver, the recording written, no report
 CASES = {"rotor-spinup": {"t_end": "4.5", "output_dt": "0.01"},
-         "bearing-rotor": {"t_end": "0.2"}}
+         "bearing-rotor": {"t_end": "0.2"},
+         "press": {"t_end": "0.02"},
+         "press-cycle": {},
+         "sail-deploy": {"t_end": "2", "stiffness": "1e5", "n": "10"}}
+BODY = {"rotor-spinup": ("", "Transform3D:translation"),
+        "bearing-rotor": ("", "Transform3D:translation"),
+        "press": ("/links", "LineStrips3D:strips"), "press-cycle": ("/links", "LineStrips3D:strips"),
+        "sail-deploy": ("/thread", "LineStrips3D:strips")}
 
 
 def record(scene_name, tmp_path):
@@ -26,9 +33,10 @@ def record(scene_name, tmp_path):
 def test_every_solver_drawn_and_every_pair_deviation_recorded(scene_name, tmp_path):
     sc, res, path = record(scene_name, tmp_path)
     n = len(res.trajectories[0].t)
+    sub, component = BODY[scene_name]
     for tr in res.trajectories:
         assert tr.status == "ok", tr.reason
-        t, _ = load_rows(path, f"world/{tr.solver}", "Transform3D:translation")
+        t, _ = load_rows(path, f"world/{tr.solver}{sub}", component)
         assert len(t) == n and np.allclose(t, tr.t, atol=1e-9)
     for c in res.comparisons:
         t, v = load_rows(path, pair_entity(c.channel, c.a, c.b), "Scalars:scalars")
@@ -48,3 +56,24 @@ def test_events_land_at_their_times(tmp_path):
     for tt, txt in zip(t, text):
         solver = txt[0].split("(")[1].split(")")[0]
         assert tt == pytest.approx(passage.at[solver], abs=1e-6)
+
+
+def test_press_cycle_lock_is_an_event_and_a_colour_change(tmp_path):
+    sc, res, path = record("press-cycle", tmp_path)
+    lock = next(f for f in res.findings if f.name == "t_lock")
+    t, text = load_rows(path, "events", "TextLog:text")
+    dt = float(sc.resolve()["output_dt"])
+    for solver, t_lock in lock.at.items():
+        at = [tt for tt, x in zip(t, text) if f"({solver})" in x[0]]
+        assert len(at) == 1 and abs(at[0] - t_lock) < dt          # within one output step
+        tc, colors = load_rows(path, f"world/{solver}/links", "LineStrips3D:colors")
+        changed = [tt for tt, c, c0 in zip(tc[1:], colors[1:], colors) if c != c0]
+        assert changed and abs(changed[0] - t_lock) <= dt        # the linkage turns dark
+
+
+def test_long_sail_run_is_decimated(tmp_path):
+    from compare.scenes.sail import MAX_FRAMES
+    sc, res, path = record("sail-deploy", tmp_path)
+    t, strips = load_rows(path, f"world/{res.trajectories[0].solver}/thread",
+                          "LineStrips3D:strips")
+    assert len(t) <= MAX_FRAMES and len(strips[0]) == 2          # two blades per instant

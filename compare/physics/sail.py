@@ -166,12 +166,15 @@ def channels(params: dict, t, psi, omega, X, V, b_out, dissipated=None, spool_wo
     rate_W = np.zeros(N)
     TU = np.full(N, np.nan)
     wrel = np.zeros(N)
+    # the drawing's input: released nodes tip → boundary, then Q (one blade, inertial frame)
+    shape = np.full((N, n + 1, 3), np.nan)
     for i in range(N):
         b = int(b_out[i])
         if b < 0 or not np.isfinite(omega[i]):
             continue
         cp, sp = np.cos(psi[i]), np.sin(psi[i])
         Q = np.array([Lc * cp, Lc * sp, r])
+        shape[i, :b + 1], shape[i, b + 1] = X[i, :b + 1], Q
         VQ = omega[i] * np.array([-Q[1], Q[0], 0.0])
         x, v, mm = X[i, :b + 1], V[i, :b + 1], m[:b + 1]
         ms = m[b + 1:].sum()
@@ -217,4 +220,5 @@ def channels(params: dict, t, psi, omega, X, V, b_out, dissipated=None, spool_wo
     else:
         W = np.asarray(spool_work, float)
     out["energy_balance"] = np.where(ok, TU + D - W - wrel, np.nan)
-    return out, {"tip_angle_signed": signed, "kinetic_energy": kinetic}
+    return out, {"tip_angle_signed": signed, "kinetic_energy": kinetic,
+                 "hub_angle": np.asarray(psi, float), "thread_shape": shape}

@@ -61,6 +61,49 @@ PRESS_LEAVES = {"lagrange-partial": "custom_models.press_partial",
                 "mujoco": "reference_models.mujoco.press"}
 
 
+def draw_press(rec, params, traj, color, offset):
+    """Crank O→A, rod A→B, rocker B→C as one line strip with the joints as points, the slider
+    at C on its guide (the x axis), from the crank and rocker angles through the shared loop
+    closure. While the rocker is locked onto the slider the linkage turns dark (press-cycle)."""
+    import rerun as rr
+    phi, psi = traj.channels["crank_angle"], traj.channels["rocker_angle"]
+    rows = np.nonzero(np.isfinite(phi) & np.isfinite(psi))[0]
+    l1, l2, l3 = params["l1"], params["l2"], params["l3"]
+    sigma = phys.assembly_sign(params)
+    pts = np.full((len(rows), 4, 3), np.nan)
+    for k, i in enumerate(rows):
+        xA, yA, xB, yB, xC, _ = phys.loop_closure(float(phi[i]), float(psi[i]), l1, l2, l3,
+                                                  sigma)
+        pts[k] = [[0, 0, 0], [xA, yA, 0], [xB, yB, 0], [xC, 0, 0]]
+    pts += offset
+    t = traj.t[rows]
+    t_lock = _extra_scalar(traj, "t_lock")
+    locked = np.zeros(len(rows), bool)
+    if t_lock is not None and phys.is_cycle(params):
+        locked = (t >= t_lock) & (t < params["release_after"])
+    dark = tuple(int(c * 0.35) for c in color)
+    colors = [dark if x else tuple(color) for x in locked]
+    ent = f"world/{traj.solver}"
+    xc = pts[:, 3, 0]
+    rec.log(f"{ent}/guide", rr.LineStrips3D([[[np.nanmin(xc) - l1, 0, 0],
+                                              [np.nanmax(xc) + l1, 0, 0]]], radii=2e-4,
+                                            colors=[(128, 128, 128)]), static=True)
+    idx = [rr.TimeColumn("sim_time", duration=t)]
+    rec.send_columns(f"{ent}/links", indexes=idx,
+                     columns=rr.LineStrips3D.columns(strips=list(pts), colors=colors,
+                                                     radii=[5e-4] * len(rows))
+                     .partition([1] * len(rows)))
+    rec.send_columns(f"{ent}/joints", indexes=idx,
+                     columns=rr.Points3D.columns(positions=pts.reshape(-1, 3),
+                                                 colors=np.repeat(colors, 4, axis=0),
+                                                 radii=[1e-3] * (4 * len(rows)))
+                     .partition([4] * len(rows)))
+    box = [[4e-3, 2e-3, 2e-3]] * len(rows)
+    rec.send_columns(f"{ent}/slider", indexes=idx,
+                     columns=rr.Boxes3D.columns(centers=pts[:, 3], half_sizes=box,
+                                                colors=colors).partition([1] * len(rows)))
+
+
 PRESS = Scene(
     name="press", title="Crank–rocker press with slider, idle run (2 DOF)", source=SOURCE,
     kind="time", leaves=PRESS_LEAVES,
@@ -68,6 +111,7 @@ PRESS = Scene(
                          positive("output_dt", 0.00125, "s", "output grid (paper: 40 steps)")),
     channels=CHANNELS, tolerances=TOLERANCES, key_channel="crank_rate", check=_check,
     reference_solvers=("lagrange-exact", "mujoco"),
+    draw_3d=draw_press, view_channels=("crank_rate", "rocker_angle", "slider_x"),
     campaign_cases=({"name": "press"},),
     notes="Energy balance = kinetic + spring + gravity − motor work + damper loss.")
 
@@ -88,6 +132,7 @@ PRESS_CYCLE = Scene(
     channels=CHANNELS, tolerances={"crank_rate": ("abs", 1e-3), "crank_angle": ("abs", 1e-4),
                                    "slider_x": ("abs", 1e-7)},
     key_channel="crank_rate", check=_check, findings=lambda p, trs: cycle_findings(p, trs),
+    draw_3d=draw_press, view_channels=("crank_rate", "rocker_angle", "slider_x"),
     campaign_cases=({"name": "press-cycle"},),
     notes="The lock is a plastic impact located as a state event; energy_balance includes the "
           "press work and the energy lost at the lock.")
@@ -113,7 +158,7 @@ def cycle_findings(params, trajectories):
                         "release_after) in any solver")]
     spread = max(found.values()) - min(found.values())
     out.append(Finding("t_lock", min(found.values()), "s", "lock at t = " + ", ".join(
-        f"{s} {v:.10f} s" for s, v in found.items()) + f" (spread {spread:.1e} s)"))
+        f"{s} {v:.10f} s" for s, v in found.items()) + f" (spread {spread:.1e} s)", at=found))
     lf = {s: v for s, v in loss.items() if v is not None}
     if lf:
         out.append(Finding("lock_energy_loss", min(lf.values()), "J",

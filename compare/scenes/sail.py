@@ -29,7 +29,47 @@ def sail_findings(params, trajectories):
         parts.append(f"tip angle mean {np.mean(tip[late]):.4f} rad, std {np.std(tip[late]):.4f} "
                      f"rad over t ≥ {tr.t[late][0]:.3g} s")
         out.append(Finding(f"sail_{tr.solver}", am, "", f"{tr.solver}: " + "; ".join(parts)))
+    t_full = params["L"] / (params["r"] * params["omega_spool"])
+    if ok and t_full <= ok[0].t[-1]:
+        out.append(Finding("end_of_deployment", t_full, "s", f"the whole blade is out at "
+                           f"t = L/(r·ω) = {t_full:.6g} s: the spool stops (last node "
+                           f"{params['last_node']})", at={tr.solver: t_full for tr in ok}))
     return out
+
+
+MAX_FRAMES = 600     # a long deployment is drawn at ≤ 600 instants (stated recording size)
+
+
+def draw_sail(rec, params, traj, color, offset):
+    """Hub disk, both spools and both blades' threads (the second blade is the first turned by
+    π: the blades are symmetric), from the shared kinematic output `thread_shape` (released
+    nodes tip → boundary, then the departure point Q). Long runs are decimated to MAX_FRAMES
+    instants."""
+    import rerun as rr
+    shape, psi = traj.extra.get("thread_shape"), traj.extra.get("hub_angle")
+    if shape is None or psi is None:
+        return
+    ent = f"world/{traj.solver}"
+    rows = np.nonzero(np.isfinite(psi))[0]
+    rows = rows[:: max(1, int(np.ceil(len(rows) / MAX_FRAMES)))]
+    Lc, r = params["L_c"], params["r"]
+    rec.log(f"{ent}/hub", rr.Cylinders3D(lengths=[0.2 * r], radii=[0.8 * Lc],
+                                         centers=[offset], colors=[color]), static=True)
+    strips, spools, times = [], [], traj.t[rows]
+    for i in rows:
+        pts = shape[i][np.isfinite(shape[i]).all(axis=1)]
+        turn = np.array([[-1.0, -1.0, 1.0]])                    # R_z(π)
+        strips += [pts + offset, pts * turn + offset]
+        q = np.array([Lc * np.cos(psi[i]), Lc * np.sin(psi[i]), r])
+        spools += [q + offset, q * turn[0] + offset]
+    rec.send_columns(f"{ent}/thread", indexes=[rr.TimeColumn("sim_time", duration=times)],
+                     columns=rr.LineStrips3D.columns(strips=strips,
+                                                     colors=[color] * len(strips))
+                     .partition([2] * len(rows)))
+    rec.send_columns(f"{ent}/spools", indexes=[rr.TimeColumn("sim_time", duration=times)],
+                     columns=rr.Points3D.columns(positions=np.array(spools),
+                                                 colors=[color] * len(spools))
+                     .partition([2] * len(rows)))
 
 
 SAIL = Scene(
@@ -64,6 +104,8 @@ SAIL = Scene(
     invariant_channels=("angular_momentum",),
     analytic={"hub_rate": ("hub_rate_formula18", "formula18")},
     findings=sail_findings,
+    draw_3d=draw_sail,
+    view_channels=("hub_rate", "tip_angle", "angular_momentum"),
     # full deployment: both custom variants and Exudyn (~4 min; MuJoCo needs ~15 min at k = 1e7
     # and checks the first 2 s)
     campaign_cases=({"name": "sail-deploy-full",

@@ -1,6 +1,6 @@
 """Results: `Trajectory` (time-domain run) and `Modes` (frequencies), with .npz round trip."""
-from dataclasses import dataclass, field
 import json
+from dataclasses import dataclass, field
 
 import numpy as np
 

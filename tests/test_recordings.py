@@ -16,7 +16,8 @@ CASES = {"rotor-spinup": {"t_end": "4.5", "output_dt": "0.01"},
          "sail-deploy": {"t_end": "2", "stiffness": "1e5", "n": "10"}}
 BODY = {"rotor-spinup": ("", "Transform3D:translation"),
         "bearing-rotor": ("", "Transform3D:translation"),
-        "press": ("/links", "LineStrips3D:strips"), "press-cycle": ("/links", "LineStrips3D:strips"),
+        "press": ("/links", "LineStrips3D:strips"),
+        "press-cycle": ("/links", "LineStrips3D:strips"),
         "sail-deploy": ("/thread", "LineStrips3D:strips")}
 
 

@@ -249,6 +249,7 @@ def integrate_adaptive_dense(f, guard, y0, p, t_out, rtol, atol, h_max, max_step
     h = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
     h = min(h, h_max)
     i_out = 1
+    just_rejected = False
     while i_out < n_out:
         if steps + rejected >= max_steps:
             return Y, steps, evals, rejected, t, FAIL_MAX_STEPS
@@ -270,6 +271,7 @@ def integrate_adaptive_dense(f, guard, y0, p, t_out, rtol, atol, h_max, max_step
             err = 1e10           # a NaN trial step: retry smaller, fail by underflow
         if err >= 1.0:
             rejected += 1
+            just_rejected = True
             h = h_try * max(0.2, 0.9 * err ** expo)
             continue
         t_new = t_end if last else t + h_try
@@ -290,6 +292,9 @@ def integrate_adaptive_dense(f, guard, y0, p, t_out, rtol, atol, h_max, max_step
         y[:] = y_new
         fy[:] = K[n_st]
         fac = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** expo)
+        if just_rejected:        # no growth right after a rejection (as scipy and Hairer do)
+            fac = min(1.0, fac)
+            just_rejected = False
         # a clipped last step says little about the next one: keep h unless it grew
         h = min(h_max, max(h, h_try * fac) if last else h_try * fac)
     return Y, steps, evals, rejected, np.nan, FAIL_OK

@@ -9,7 +9,7 @@ relative change between the extrapolated and the fine values (the error estimate
 """
 import numpy as np
 
-from compare.contract import ModesResult
+from compare.contract import ModesResult, merge_settings
 from compare.physics.mstmm import blade_section_from
 
 from .beam import lowest_modes
@@ -83,7 +83,7 @@ def solve(b, spin, r_h, n_modes, n_el, richardson=True, stations=13):
 
 
 def modes(params: dict, settings: dict) -> ModesResult:
-    s = dict(MODES_SETTINGS, **(settings or {}))
+    s = merge_settings(settings, MODES_SETTINGS, ())
     b = properties(params)
     n_st = s["stations"]
     # a mesh whose element boundaries include the stations, ≥ 4 elements per half wavelength

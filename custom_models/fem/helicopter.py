@@ -13,7 +13,7 @@ with n and 2n elements, the frequencies extrapolated (h⁴) and the change repor
 """
 import numpy as np
 
-from compare.contract import ModesResult
+from compare.contract import ModesResult, merge_settings
 from compare.physics.mstmm import helicopter_layout
 
 from .beam import bending
@@ -227,7 +227,7 @@ def frequencies(L, spin, mesh, clamped, n_modes):
 
 
 def modes_for(params, settings, clamped):
-    s = dict(MODES_SETTINGS, **(settings or {}))
+    s = merge_settings(settings, MODES_SETTINGS, ())
     L = helicopter_layout(params)
     spin, n_modes = params["speed"], params["n_modes"]
     mesh = (s["blade_elements"], s["shaft_elements"], s["tail_elements"])

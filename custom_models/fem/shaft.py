@@ -9,7 +9,7 @@ Convergence: n and 2n elements, Richardson h⁴ extrapolation of the frequencies
 import numpy as np
 from scipy.linalg import eig
 
-from compare.contract import ModesResult
+from compare.contract import ModesResult, merge_settings
 from compare.physics.mstmm import spinning_shaft_omega0
 
 from .beam import bending
@@ -53,7 +53,7 @@ def solve(p, n_el, spin, n_modes):
 
 
 def modes(params: dict, settings: dict) -> ModesResult:
-    s = dict(MODES_SETTINGS, **(settings or {}))
+    s = merge_settings(settings, MODES_SETTINGS, ())
     p = params
     w0 = spinning_shaft_omega0(p["EI_xx"], p["m"], p["L"])
     spin = p["spin_ratio"] * w0

@@ -8,7 +8,7 @@ labels every root by construction. Frequencies in Hz, shapes sampled at 13 fixed
 """
 import numpy as np
 
-from compare.contract import ModesResult
+from compare.contract import ModesResult, merge_settings
 from compare.physics.mstmm import blade_section_from
 
 from . import elements as el
@@ -126,7 +126,7 @@ def blade_modes(b, spin, hub_radius, n_modes, rtol=1e-12):
 
 
 def modes(params: dict, settings: dict) -> ModesResult:
-    s = dict(MODES_SETTINGS, **(settings or {}))
+    s = merge_settings(settings, MODES_SETTINGS, ())
     b = blade_properties(params)
     spin, rh = params["speed"], params["hub_radius"]
     found = blade_modes(b, spin, rh, params["n_modes"], s["rtol"])

@@ -18,7 +18,7 @@ roots; its real part after removing that phase is the sign-robust characteristic
 """
 import numpy as np
 
-from compare.contract import ModesResult
+from compare.contract import ModesResult, merge_settings
 from compare.physics.mstmm import helicopter_layout
 
 from . import elements as el
@@ -234,7 +234,7 @@ MODES_SETTINGS = {"rtol": 1e-10, "step_hz": 0.1}  # grid step outside the blade 
 
 def modes_for(params: dict, settings: dict, clamped: bool) -> ModesResult:
     from .labels import label_modes
-    s = dict(MODES_SETTINGS, **(settings or {}))
+    s = merge_settings(settings, MODES_SETTINGS, ())
     L = helicopter_layout(params)
     spin, rh, n = params["speed"], params["hub_radius"], params["n_modes"]
     # first guess: just above the isolated-blade root whose four-blade clusters hold n + 1

@@ -21,7 +21,7 @@ is missing from the real roots and reported in notes.
 import numpy as np
 from scipy.linalg import expm
 
-from compare.contract import ModesResult
+from compare.contract import ModesResult, merge_settings
 from compare.physics.mstmm import spinning_shaft_omega0
 
 from .elements import coupled_fourth_order_transfer, orthonormalize, shaft_coupling
@@ -89,7 +89,7 @@ def shape(p, omega, spin, stations):
 
 
 def modes(params: dict, settings: dict) -> ModesResult:
-    s = dict(MODES_SETTINGS, **(settings or {}))
+    s = merge_settings(settings, MODES_SETTINGS, ())
     p = params
     w0 = spinning_shaft_omega0(p["EI_xx"], p["m"], p["L"])
     spin = p["spin_ratio"] * w0

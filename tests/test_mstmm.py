@@ -175,7 +175,6 @@ def test_bad_parameters(scene, name, value):
         scene.resolve({name: value})
 
 
-@pytest.mark.slow
 def test_twentieth_flap_mode_fem_at_speed():
     """Acceptance: the 20th flap mode at 40 rad/s, mstmm vs fem ≤ 1e-4 (measured 2.4e-9)."""
     p = ROTATING_BEAM.resolve({"speed": 40, "n_modes": 52})
@@ -203,7 +202,6 @@ def test_helicopter_isolated_blade_roots_match_table3():
         assert abs(f[lab] / paper - 1) < 1e-4, (lab, f[lab])
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("scene", ["clamped", "hover"])
 def test_helicopter_fem_confirms_mstmm(scene):
     """Every helicopter mode, mstmm vs fem: measured ≤ 1.7e-6 (clamped, 13 modes) and

@@ -5,7 +5,11 @@ The blade family is the component with the largest share over the blades; the ro
 is the multi-blade coordinate with the largest projection of the blades' tip amplitudes:
 collective (1, 1, 1, 1), cyclic (1, 0, −1, 0)/(0, 1, 0, −1), differential (1, −1, 1, −1).
 Modes whose blades carry less motion than hub and fuselage are 'fuselage'. Shared by
-`mstmm` and `fem` (a labelling rule, not physics)."""
+`mstmm` and `fem` (a labelling rule, not physics). An exactly repeated root (e.g. the two
+reactionless torsion modes, twist pattern (1, 0, 1, 0) and (0, 1, 0, 1)) has no preferred
+basis: each solver returns some pair spanning it, and the rotor-pattern word of those two
+labels may differ between solvers (measured: 19.868 Hz 'torsion differential' in mstmm,
+'torsion collective' in fem); frequencies and the spanned space agree."""
 import numpy as np
 
 FAMILY = ("axial", "lag", "flap", "torsion")

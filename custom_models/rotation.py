@@ -198,3 +198,14 @@ def matrices_to_quats(Rs):
         if np.all(np.isfinite(Rs[i])):
             out[i] = matrix_to_quat(Rs[i])
     return out
+
+
+@nb.njit(cache=True)
+def quats_to_matrices(Q):
+    """(n, 4) quaternions (not necessarily unit) → (n, 3, 3) rotation matrices; NaN stays NaN."""
+    out = np.empty((Q.shape[0], 3, 3))
+    for i in range(Q.shape[0]):
+        R = quat_matrix_t(Q[i, 0], Q[i, 1], Q[i, 2], Q[i, 3])
+        for k in range(9):
+            out[i, k // 3, k % 3] = R[k]
+    return out

@@ -103,10 +103,12 @@ def integrate(rhs, guard, y0, p, t_out, settings):
     return Y, stats, (None if code == 0 else float(t_fail)), REASONS.get(int(code)), used
 
 
-def result(params, t_out, Y, stats, t_fail, reason, used, motion, p, invariants=None):
-    """Assemble the LeafResult; rows after a failure stay NaN."""
+def result(params, t_out, Y, stats, t_fail, reason, used, motion, p, invariants=None,
+           quats=None):
+    """Assemble the LeafResult; rows after a failure stay NaN. `quats`: the orientation as
+    unit quaternions (w ≥ 0) where the formulation has them, else taken from the rotations."""
     Rs, omegas, work = motion(Y, p)
-    quats = matrices_to_quats(Rs)
+    quats = matrices_to_quats(Rs) if quats is None else quats
     return LeafResult(channels=physics.channels(params, Rs, omegas, work), stats=stats,
                       settings=used, status="ok" if t_fail is None else "diverged",
                       t_fail=t_fail, reason=reason, extra={"orientation": quats},

@@ -11,10 +11,16 @@ The right-hand side is fused scalar code writing into `dy` (no allocation per ev
 import numba as nb
 import numpy as np
 
-from compare.physics.rotor import rotations_from_quaternions
-
 from . import rotor
-from .rotation import cross_t, mat_tvec_t, mat_vec_t, matrix_to_quat, quat_matrix_t, transverse_t
+from .rotation import (
+    cross_t,
+    mat_tvec_t,
+    mat_vec_t,
+    matrix_to_quat,
+    quat_matrix_t,
+    quats_to_matrices,
+    transverse_t,
+)
 from .rotor import (  # noqa: F401
     ADAPTIVE,
     DEFAULT_SETTINGS,
@@ -77,7 +83,7 @@ def guard(t, y, p):
 
 def motion(Y, p):
     """Rotations, fixed-frame ω and work per output row (NaN rows stay NaN)."""
-    Rs = rotations_from_quaternions(Y[:, 0:4])
+    Rs = quats_to_matrices(np.ascontiguousarray(Y[:, 0:4]))
     return Rs, np.einsum("nij,nj->ni", Rs, Y[:, 4:7]), Y[:, 7]
 
 
@@ -92,5 +98,7 @@ def simulate(params, t_out, settings):
                                                      initial_state(params, p), p, t_out,
                                                      settings)
     qn = np.linalg.norm(Y[:, 0:4], axis=1)
+    unit = Y[:, 0:4] / qn[:, None]
+    unit *= np.where(unit[:, :1] < 0, -1.0, 1.0)             # w ≥ 0, as matrix_to_quat gives
     return rotor.result(params, t_out, Y, stats, t_fail, reason, used, motion, p,
-                        {"quaternion_norm": float(np.nanmax(np.abs(qn - 1.0)))})
+                        {"quaternion_norm": float(np.nanmax(np.abs(qn - 1.0)))}, unit)

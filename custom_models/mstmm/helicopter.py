@@ -175,14 +175,27 @@ def characteristic(L, spin, hub_radius, clamped):
     return g
 
 
+_NORMALISED = {}        # ω -> normalised U_all of the current search (det and σ_min share it)
+
+
+def normalised(L, omega, spin, hub_radius, clamped):
+    key = (id(L), omega, spin, hub_radius, clamped)
+    A = _NORMALISED.get(key)
+    if A is None:
+        A = overall_matrix(L, omega, spin, hub_radius, clamped)
+        A = A / np.linalg.norm(A, axis=1)[:, None]
+        A = A / np.linalg.norm(A, axis=0)
+        if len(_NORMALISED) > 4000:
+            _NORMALISED.clear()
+        _NORMALISED[key] = A
+    return A
+
+
 def real_characteristic(L, spin, hub_radius, clamped):
     """Re det of the row- and column-normalised U_all (the determinant is real up to rounding:
     the shaft's coupling enters as a Hermitian pair)."""
     def g(omega):
-        A = overall_matrix(L, omega, spin, hub_radius, clamped)
-        A = A / np.linalg.norm(A, axis=1)[:, None]
-        A = A / np.linalg.norm(A, axis=0)
-        return float(np.linalg.det(A).real)
+        return float(np.linalg.det(normalised(L, omega, spin, hub_radius, clamped)).real)
     return g
 
 
@@ -207,7 +220,7 @@ def nullity(L, omega, spin, hub_radius, clamped, level=1e-9):
 
 
 def frequencies(L, spin, hub_radius, clamped, omega_max, rtol=1e-10, step_hz=0.1,
-                cluster_width=0.02, cluster_points=60):
+                cluster_width=0.02, cluster_points=40):
     """All roots in (0, omega_max]: the exact reactionless roots at the isolated-blade
     frequencies (counted by the nullity of U_all there), then the deflated characteristic
     function on a grid that is refined ±cluster_width (relative) around every isolated-blade
@@ -225,16 +238,59 @@ def frequencies(L, spin, hub_radius, clamped, omega_max, rtol=1e-10, step_hz=0.1
         d = np.prod([(omega - r) / r for r in exact]) if exact else 1.0
         return g0(omega) / d
     grid = [np.arange(2 * np.pi * step_hz / 2, omega_max, 2 * np.pi * step_hz)]
-    for r in iso:
+    for r in iso:               # two tiers: the cluster, and its core (pairs split < 1e-5)
         grid.append(np.linspace(r * (1 - cluster_width), r * (1 + cluster_width),
+                                cluster_points))
+        grid.append(np.linspace(r * (1 - cluster_width / 8), r * (1 + cluster_width / 8),
                                 cluster_points))
     grid = np.unique(np.concatenate(grid))
     grid = grid[(grid > 0) & (grid <= omega_max)]
     # keep the samples off the exact roots (g is 0/0 there)
     for r in exact:
         grid = grid[np.abs(grid - r) > 1e-9 * r]
+    _NORMALISED.clear()
     found = find_roots(g, grid, rtol)
+    found += narrow_pairs(L, spin, hub_radius, clamped, grid, found + exact, g, rtol)
     return sorted(found + exact), exact
+
+
+def singular_values(L, omega, spin, hub_radius, clamped):
+    return np.linalg.svd(normalised(L, omega, spin, hub_radius, clamped), compute_uv=False)
+
+
+def smallest_singular_value(L, omega, spin, hub_radius, clamped):
+    return float(singular_values(L, omega, spin, hub_radius, clamped)[-1])
+
+
+def narrow_pairs(L, spin, hub_radius, clamped, grid, known, g, rtol, level=1e-7):
+    """Roots the determinant's samples cannot see: two roots closer than the grid make |det|
+    a spike narrower than a grid step (measured: the cyclic flap-1 pair at rest, 4e-5 Hz
+    apart). σ_min of U_all is V-shaped at every root, so its local minima on the grid mark
+    them: minimise σ_min there; a minimum below `level` that is no known root is a root, and
+    the deflated determinant is searched around it for its partner."""
+    from scipy.optimize import minimize_scalar
+
+    from .roots import _cluster
+    sig = np.array([smallest_singular_value(L, w, spin, hub_radius, clamped) for w in grid])
+    extra = []
+    for i in range(1, len(grid) - 1):
+        if not (sig[i] < sig[i - 1] and sig[i] < sig[i + 1]):
+            continue
+        a, b = grid[i - 1], grid[i + 1]
+        res = minimize_scalar(lambda w: smallest_singular_value(L, w, spin, hub_radius,
+                                                                clamped),
+                              bounds=(a, b), method="bounded",
+                              options={"xatol": rtol * b, "maxiter": 200})
+        w = float(res.x)
+        if res.fun > level or any(abs(w - r) < 1e-7 * w for r in known + extra):
+            continue
+        near = [r for r in known + extra if a <= r <= b]
+        # an exactly repeated root (σ_min and σ_2 both vanish) is counted by its nullity
+        mult = max(1, int(np.sum(singular_values(L, w, spin, hub_radius, clamped) < 1e-6)))
+        extra += [w] * mult
+        if mult == 1:
+            extra += _cluster(g, a, b, near + [w], rtol, 1)
+    return extra
 
 
 def mode_shape(L, omega, spin, hub_radius, clamped, stations=7):

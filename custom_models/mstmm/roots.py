@@ -51,12 +51,16 @@ def _roots_on(g, w, v, rtol, depth, ref_level=None):
 
 
 def _may_touch(w, v):
-    """Does the parabola through three samples around a dip reach zero (or come close)?"""
+    """Can two roots hide in a dip of |g| seen at three samples? Yes if the parabola through
+    them reaches zero or comes close, or if the middle sample is far below both neighbours (a
+    dip narrower than the grid, which the parabola does not follow)."""
+    if abs(v[1]) < 0.2 * min(abs(v[0]), abs(v[2])):
+        return True
     c = np.polyfit(w - w[1], v, 2)
     if c[0] == 0:
         return False
     vmin = c[2] - c[1] ** 2 / (4 * c[0])
-    return np.sign(vmin) != np.sign(v[1]) or abs(vmin) < 0.2 * abs(v[1])
+    return np.sign(vmin) != np.sign(v[1]) or abs(vmin) < 0.5 * abs(v[1])
 
 
 def _zoom(g, a, b, rtol, depth, ref):

@@ -37,11 +37,13 @@ def deviation(a: Trajectory, b: Trajectory, channel: str,
               allowance: float | tuple) -> Comparison:
     """Deviation of two trajectories on their common output grid, with the verdict.
 
-    `allowance`: relative to the channel's scale, or ("abs", bound) in SI units. The solvers'
-    own errors come from `Trajectory.errors` where estimated."""
+    `allowance`: relative to the channel's scale, ("abs", bound) in SI units, or
+    ("rel+abs", rel, floor): rel · scale + floor (a channel that stays near zero, like the
+    tilt of an upright rotor, needs an absolute floor). The solvers' own errors come from
+    `Trajectory.errors` where estimated."""
     if a.status != "ok" or b.status != "ok":
         why = ", ".join(f"{t.solver} {t.status}" for t in (a, b) if t.status != "ok")
-        tol = allowance[1] if isinstance(allowance, tuple) else allowance
+        tol = allowance if not isinstance(allowance, tuple) else allowance[1]
         return Comparison(a.solver, b.solver, channel, np.nan, np.nan, np.nan, np.nan,
                           tol, "skipped", f"not compared: {why}")
     if len(a.t) != len(b.t) or np.max(np.abs(a.t - b.t)) > 1e-9 * max(a.t[-1], 1.0):
@@ -51,7 +53,7 @@ def deviation(a: Trajectory, b: Trajectory, channel: str,
     scale = float(max(np.max(np.abs(x)), np.max(np.abs(y)), 1e-300))
     max_abs = float(np.max(d))
     rel = max_abs / scale
-    allow = allowance[1] if isinstance(allowance, tuple) else allowance * scale
+    allow = allowance_si(allowance, scale)
     ea, eb = a.errors.get(channel), b.errors.get(channel)
     err = float(np.nanmax(ea + eb)) if ea is not None and eb is not None else None
     bound = allow + (err or 0.0)
@@ -62,6 +64,14 @@ def deviation(a: Trajectory, b: Trajectory, channel: str,
               else f"allowance {allow:.1e} (no error estimate)"))
     return Comparison(a.solver, b.solver, channel, max_abs, float(np.sqrt(np.mean(d**2))), rel,
                       scale, bound / scale, verdict, why, max_abs, err, allow)
+
+
+def allowance_si(allowance: float | tuple, scale: float) -> float:
+    if not isinstance(allowance, tuple):
+        return allowance * scale
+    if allowance[0] == "abs":
+        return allowance[1]
+    return allowance[1] * scale + allowance[2]
 
 
 def pairwise(trajectories: list[Trajectory], tolerances: dict) -> list[Comparison]:

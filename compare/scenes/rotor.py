@@ -161,14 +161,15 @@ SPINUP = Scene(
     ),
     channels=("omega_norm", "spin_rate", "tilt", "work", "kinetic", "potential",
               "energy_balance"),
-    # Modelling allowances (relative): the four solvers model one system with one spring law,
-    # so only the error estimates' own inaccuracy is allowed for. Measured (`xval run
-    # rotor-spinup`, 1.5 and 3.2 N·m): every pair's max|Δ| lies within the two solvers' error
-    # estimates except the custom pair, by at most 2.5e-12 of scale (kinetic, 1.5 N·m; the
-    # rtol/100 rerun is itself ~1e-2 of the estimate off); engines deviate 1e-9…4e-7 of scale,
-    # all within their estimates.
-    tolerances={c: 1e-10 for c in ("omega_norm", "spin_rate", "tilt", "work", "kinetic",
-                                   "potential")},
+    # Modelling allowances: the four solvers model one system with one spring law, so only the
+    # error estimates' own inaccuracy is allowed for: 1e-10 of scale plus a floor of 1e-11 (SI)
+    # for channels that stay near zero (tilt before resonance). Measured (`xval run
+    # rotor-spinup` at 1.5 and 3.2 N·m and t_end 1): every pair's max|Δ| lies within the two
+    # solvers' error estimates except the custom pair, by at most 2.5e-12 of scale (kinetic,
+    # 1.5 N·m) and 4.6e-13 absolute (tilt, 1 s); engines deviate 1e-9…4e-7 of scale, all
+    # within their estimates.
+    tolerances={c: ("rel+abs", 1e-10, 1e-11) for c in ("omega_norm", "spin_rate", "tilt",
+                                                        "work", "kinetic", "potential")},
     key_channel="omega_norm",
     view_channels=("omega_norm", "tilt", "energy_balance"),
     energy_scale_channels=("kinetic", "potential", "work"),

@@ -81,6 +81,15 @@ def _combine(y, h, B, K, out):
 
 
 @nb.njit(cache=True)
+def _finite(y):
+    """All entries finite (a scalar loop: np.isfinite would allocate every step)."""
+    acc = 0.0
+    for j in range(y.shape[0]):
+        acc += y[j] * 0.0          # NaN for a NaN or ±inf entry, else 0
+    return acc == 0.0
+
+
+@nb.njit(cache=True)
 def _hermite(y0, f0, y1, f1, h, x, out):
     x2 = x * x
     x3 = x2 * x
@@ -116,7 +125,7 @@ def integrate_fixed_dense(f, guard, y0, p, t_out, dt, A, B, C):
             _stage_state(y, h, A, K, s, ys)
             f(t + C[s] * h, ys, p, K[s])
         _combine(y, h, B, K, y_new)
-        if not np.all(np.isfinite(y_new)):
+        if not _finite(y_new):
             return Y, k + 1, evals + n_st - 1, t_new, FAIL_NONFINITE
         code = guard(t_new, y_new, p)
         if code != 0:

@@ -155,19 +155,26 @@ def match_modes(fa: list, la: list, fb: list, lb: list) -> list[tuple[int, int]]
     return sorted(pairs)
 
 
-def frequency_comparisons(results: list[Modes], tolerance: float) -> list[Comparison]:
-    """Every pair of solvers, mode by mode, as Comparisons (channel = the mode's label)."""
+def frequency_comparisons(results: list[Modes], tolerance: float,
+                          by_solver: dict | None = None) -> list[Comparison]:
+    """Every pair of solvers, mode by mode, as Comparisons (channel = the mode's label).
+    `tolerance`: relative allowance between solvers of one model; `by_solver`: a larger
+    modelling allowance for a pair that involves that solver (e.g. a rigid-segment chain whose
+    sections carry rotary inertia the Euler–Bernoulli model has not)."""
     out = []
     ok = [r for r in results if r.status == "ok"]
     for i, a in enumerate(ok):
         for b in ok[i + 1:]:
+            tol = max([tolerance] + [(by_solver or {}).get(s, 0.0) for s in (a.solver, b.solver)])
             for ia, ib in match_modes(list(a.frequencies_hz), a.labels,
                                       list(b.frequencies_hz), b.labels):
                 fa, fb = a.frequencies_hz[ia], b.frequencies_hz[ib]
                 d = abs(fa - fb)
                 scale = max(abs(fa), abs(fb), 1e-300)
-                v = "agree" if d / scale <= tolerance else "disagree"
+                v = "agree" if d / scale <= tol else "disagree"
                 out.append(Comparison(a.solver, b.solver, a.labels[ia] or f"mode {ia + 1}", d, d,
-                                      d / scale, scale, tolerance, v,
-                                      f"{fa:.8g} vs {fb:.8g} Hz: rel {d / scale:.2e}"))
+                                      d / scale, scale, tol, v,
+                                      f"{fa:.8g} vs {fb:.8g} Hz: rel {d / scale:.2e} "
+                                      f"{'≤' if v == 'agree' else '>'} allowance {tol:.1e}",
+                                      d, None, tol * scale))
     return out

@@ -33,31 +33,41 @@ def mac(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return num / np.maximum(den, 1e-300)
 
 
+def _unique(labels) -> bool:
+    return all(labels) and len(set(labels)) == len(labels)
+
+
 def track(results: list[Modes]) -> dict[str, np.ndarray]:
-    """Mode lines over a sweep, keyed by the label at the start of the sweep. Modes are followed
-    from one point to the next by mode-shape correlation (MAC, optimal assignment) when every
-    point has shapes, so crossings and veerings are drawn as they are; else by label (a leaf
-    that labels its modes consistently), else by order."""
+    """Mode lines over a sweep, never by sorting. From one point to the next a mode keeps its
+    label where both points label their modes uniquely and alike (the leaves classify modes
+    from their shapes: flap / lag / torsion, forward / backward whirl), so crossings are drawn
+    as crossings; elsewhere — repeated roots at rest ("whirl 1" twice), a leaf without
+    physical labels — by mode-shape correlation (MAC, optimal assignment), else by nearest
+    frequency. Each line is keyed by its label at the end of the sweep, made unique."""
     ok = [r for r in results if r.status == "ok" and len(r.frequencies_hz)]
     if len(ok) != len(results) or not ok:
         return {}
     n = min(len(r.frequencies_hz) for r in ok)
-    keys = [lb or f"mode {i + 1}" for i, lb in enumerate(ok[0].labels[:n])]
     lines = np.full((n, len(ok)), np.nan)
-    if all(r.shapes is not None and len(r.shapes) >= n for r in ok):
-        order = np.arange(n)
-        for k, r in enumerate(ok):
-            if k:
-                prev = ok[k - 1].shapes[:n][order]
-                rows, cols = linear_sum_assignment(-mac(prev, r.shapes[:n]))
-                order = cols[np.argsort(rows)]
-            lines[:, k] = r.frequencies_hz[order]
-    elif all(len(set(r.labels)) == len(r.labels) and set(keys) <= set(r.labels) for r in ok):
-        for k, r in enumerate(ok):
-            lines[:, k] = [r.frequencies_hz[r.labels.index(lb)] for lb in keys]
-    else:
-        for k, r in enumerate(ok):
-            lines[:, k] = np.sort(r.frequencies_hz)[:n]
+    order = np.arange(n)
+    lines[:, 0] = ok[0].frequencies_hz[:n]
+    for k in range(1, len(ok)):
+        prev, cur = ok[k - 1], ok[k]
+        before = [prev.labels[j] for j in order]
+        if _unique(prev.labels) and _unique(cur.labels) and set(before) <= set(cur.labels):
+            order = np.array([cur.labels.index(lb) for lb in before])
+        elif prev.shapes is not None and cur.shapes is not None:
+            rows, cols = linear_sum_assignment(-mac(prev.shapes[order], cur.shapes))
+            order = cols[np.argsort(rows)]
+        else:
+            cost = np.abs(prev.frequencies_hz[order][:, None] - cur.frequencies_hz[None, :])
+            rows, cols = linear_sum_assignment(cost)
+            order = cols[np.argsort(rows)]
+        lines[:, k] = cur.frequencies_hz[order]
+    keys = []
+    for i, j in enumerate(order):
+        key = ok[-1].labels[j] or f"mode {i + 1}"
+        keys.append(key if key not in keys else f"{key} #{keys.count(key) + 1}")
     return dict(zip(keys, lines))
 
 
@@ -81,16 +91,21 @@ def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: 
                           else m.frequencies_hz[np.argmin(np.abs(m.frequencies_hz - f0))])
                     return fr - order * cb.excitation_hz(params, v)
                 name = key if order == 1 else f"{key} ({order}×)"
+                lo, hi = values[i], values[i + 1]
+                v0 = lo - g[i] * (hi - lo) / (g[i + 1] - g[i])     # linear, from the lines
                 try:
-                    out[name] = brentq(gap, values[i], values[i + 1], xtol=1e-12, rtol=1e-14)
+                    v = brentq(gap, lo, hi, xtol=1e-12, rtol=1e-14)
                 except (ValueError, IndexError):
                     # a body-frame linearisation can lose the mode exactly at the crossing
                     # (its body-frame frequency is 0 there): parabola through points beside it
-                    v0 = values[i] - g[i] * (values[i + 1] - values[i]) / (g[i + 1] - g[i])
-                    x = v0 + 1e-3 * (values[i + 1] - values[i]) * np.array([-3, -2, 2, 3.0])
-                    y = np.array([gap(v) for v in x])
-                    roots = np.roots(np.polyfit(x - v0, y, 2)).real + v0
-                    out[name] = float(roots[np.argmin(np.abs(roots - v0))])
+                    x = v0 + 1e-3 * (hi - lo) * np.array([-3, -2, 2, 3.0])
+                    try:
+                        y = np.array([gap(v) for v in x])
+                        roots = np.roots(np.polyfit(x - v0, y, 2)).real + v0
+                        v = float(roots[np.argmin(np.abs(roots - v0))])
+                    except (ValueError, IndexError):
+                        v = v0
+                out[name] = float(v) if lo <= v <= hi else float(v0)  # never outside its bracket
     return out
 
 
@@ -101,10 +116,12 @@ def _campbell_png(path, scene, values, lines_by_solver, crit, params):
     cb = scene.campbell
     fig, ax = plt.subplots(figsize=(7.5, 4.8))
     styles = ["-", "--", ":", "-."]
+    keys = list(dict.fromkeys(k for lines in lines_by_solver.values() for k in lines))
     for k, lines in enumerate(lines_by_solver.values()):
-        for j, (key, f) in enumerate(lines.items()):
+        for key, f in lines.items():           # one colour per mode, the same in every solver
+            j = keys.index(key)
             ax.plot(values, f, lw=1, ls=styles[k % len(styles)], color=f"C{j % 10}",
-                    label=f"{key}" if k == 0 else None)
+                    label=key if k == 0 else None)
     if cb.excitation_hz is not None:
         for order in cb.orders:
             ax.plot(values, [order * cb.excitation_hz(params, v) for v in values], "k:", lw=1,
@@ -112,7 +129,7 @@ def _campbell_png(path, scene, values, lines_by_solver, crit, params):
     for c in crit.values():
         for v in c.values():
             ax.plot([v], [cb.excitation_hz(params, v)], "ko", ms=3)
-    ax.set_xlabel(f"{cb.parameter} [{cb.unit}]")
+    ax.set_xlabel(f"{cb.parameter} [{cb.unit or '–'}]")
     ax.set_ylabel("frequency [Hz]")
     top = max(np.nanmax(f) for lines in lines_by_solver.values() for f in lines.values())
     ax.set_ylim(0, 1.1 * top)
@@ -161,7 +178,8 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
     for s in chosen:
         log(f"{sc.name}: {s.name} …")
         results.append(solvers.modes(sc, s, params))
-    comparisons = metrics.frequency_comparisons(results, sc.tolerances["frequency"])
+    comparisons = metrics.frequency_comparisons(results, sc.tolerances["frequency"],
+                                                sc.tolerances.get("frequency_by_solver"))
     obj = {"scene": sc.name, "params": params,
            "runs": [{"solver": r.solver, "status": r.status, "wall_s": round(r.wall_s, 6),
                      "frequencies_hz": list(r.frequencies_hz), "labels": r.labels,

@@ -114,9 +114,13 @@ BEARING_ROTOR = Scene(
     channels=("spin_rate", "spin_angle", "journal_a_x", "journal_a_y", "journal_b_x",
               "journal_b_y", "energy_balance", "kinetic", "potential", "motor_work",
               "dissipated"),
-    tolerances={"spin_rate": 1e-4, "spin_angle": 1e-4, "journal_a_x": 1e-3,
-                "journal_a_y": 1e-3, "journal_b_x": 1e-3, "journal_b_y": 1e-3,
-                "kinetic": 1e-4, "motor_work": 1e-4},
+    # Modelling allowances: one model in three solvers, so only the error estimates' own
+    # inaccuracy. Measured (`xval run bearing-rotor`, defaults): deviations beyond both error
+    # estimates ≤ 2.2e-12 of scale (spin rate), 1.6e-12 (motor work), 4.3e-12 (kinetic) and
+    # 2.6e-13 m on the journals (scale 3e-5 m).
+    tolerances={**{c: 1e-10 for c in ("spin_rate", "spin_angle", "kinetic", "motor_work")},
+                **{c: ("abs", 1e-12) for c in ("journal_a_x", "journal_a_y", "journal_b_x",
+                                                "journal_b_y")}},
     key_channel="spin_rate",
     energy_scale_channels=("kinetic", "motor_work"),
     reference_solvers=("quaternion",),

@@ -39,8 +39,18 @@ _MECHANISM = (
 
 CHANNELS = phys.CHANNELS     # each built once, by compare.physics.press.channels
 # the issue's acceptance numbers, as absolute bounds
-TOLERANCES = {"crank_angle": ("abs", 1e-4), "crank_rate": ("abs", 1e-3),
-              "slider_x": ("abs", 1e-7)}
+# Modelling allowances (relative to scale), from the deviations left once both solvers' own
+# error estimates are subtracted (`xval run press`, `xval run press-cycle`, defaults):
+# lagrange-exact and Exudyn: none left (allowance 1e-9, the estimates' own inaccuracy);
+# lagrange-partial, the paper's finite-difference "partial systems" at its 0.1° virtual step
+# (an O(Δ²) model error, README): ≤ 2.1e-6 on angles, rates and the slider; MuJoCo's loop
+# closed by a soft equality constraint (solref): crank_accel 4.1e-5, crank_rate 1.5e-7.
+TOLERANCES = {c: 1e-9 for c in ("crank_angle", "crank_rate", "crank_accel", "rocker_angle",
+                                "slider_x")}
+TOLERANCES["by_solver"] = {
+    "lagrange-partial": {"crank_angle": 5e-6, "crank_rate": 5e-6, "rocker_angle": 5e-6,
+                         "slider_x": 5e-6, "crank_accel": 1e-4},
+    "mujoco": {"crank_accel": 1e-4, "crank_rate": 5e-7}}
 
 
 def _check(p):
@@ -129,8 +139,7 @@ PRESS_CYCLE = Scene(
         Param("release_after", 0.045, "s", "the lock opens at this time", lo=0.0, hi=1e3),
         positive("t_end", 0.06, "s", "horizon", hi=1e3),
         positive("output_dt", 0.00125, "s", "output grid")),
-    channels=CHANNELS, tolerances={"crank_rate": ("abs", 1e-3), "crank_angle": ("abs", 1e-4),
-                                   "slider_x": ("abs", 1e-7)},
+    channels=CHANNELS, tolerances=TOLERANCES,
     key_channel="crank_rate", check=_check, findings=lambda p, trs: cycle_findings(p, trs),
     draw_3d=draw_press, view_channels=("crank_rate", "rocker_angle", "slider_x"),
     campaign_cases=({"name": "press-cycle"},),

@@ -98,7 +98,18 @@ SAIL = Scene(
         positive("output_dt", 0.05, "s", "output grid"),
     ),
     channels=phys.CHANNELS,     # each built once, by compare.physics.sail.channels
-    tolerances={"hub_rate": 1e-3, "tip_angle": ("abs", 1e-3), "deployed_length": 1e-6},
+    # Modelling allowances. The engines step at their explicit stability limit (no accuracy
+    # knob, so no error estimate): their allowance carries what they were measured to deviate
+    # from the conservative custom model. Measured: 2 s (`xval run sail-deploy --set t_end=2`):
+    # hub_rate ≤ 4.9e-7 rad/s (8e-8 of scale), tip 1e-5 of scale, deployed length 1e-9 m,
+    # angular momentum 4e-13; full deployment (previous session, n = 20): hub_rate ≤ 5.9e-5
+    # rad/s before the spool stops and 5e-4 rad/s (8e-5 of scale) in its transient, tip
+    # 1.3e-5 rad. The paper's model (`thread-spool`) differs by its non-conservative release:
+    # hub_rate 3.2e-3 of scale, tip 6.2e-4 rad, angular momentum 3.0e-3 (full deployment).
+    tolerances={"hub_rate": 2e-4, "tip_angle": ("abs", 5e-5), "deployed_length": 1e-7,
+                "angular_momentum": 1e-10,
+                "by_solver": {"thread-spool": {"hub_rate": 5e-3, "tip_angle": ("abs", 1e-3),
+                                               "angular_momentum": 5e-3}}},
     key_channel="tip_angle",
     reference_solvers=("thread-spool-conservative", "exudyn"),
     invariant_channels=("angular_momentum",),

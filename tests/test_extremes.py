@@ -26,6 +26,29 @@ def test_a_step_above_the_stability_limit_ends_diverged_in_every_rotor_solver():
         assert r["outcome"] == "diverged" and 0 < r["t_fail"] <= 0.2, r
 
 
+def test_linear_acceleration_above_its_limit_ends_unstable_in_the_press():
+    sc = get_scene("press")
+    rows = run_case(sc, _case(sc, "linear acceleration 0.56·T_min"), solvers_for(sc.name),
+                    log=lambda m: None)
+    assert {r["solver"] for r in rows} == {"lagrange-exact", "lagrange-partial"}
+    for r in rows:
+        assert r["outcome"] == "diverged" and "unstable" in r["detail"], r
+
+
+@pytest.mark.parametrize("scene_name, solver, settings, over", [
+    ("bearing-rotor", "quaternion", {"integrator": "rk4", "dt": 1e-4}, {"k_b": 1e9,
+                                                                         "t_end": 0.3}),
+    ("sail-deploy", "mujoco", {"dt": 1e-4}, {"t_end": 0.5, "output_dt": 0.01}),
+])
+def test_a_step_above_the_stability_limit_ends_with_a_status(scene_name, solver, settings,
+                                                             over):
+    from compare.scenes import Extreme
+    sc = get_scene(scene_name)
+    case = Extreme("step above the limit", over, settings, expect="status", solvers=(solver,))
+    rows = run_case(sc, case, solvers_for(sc.name), log=lambda m: None)
+    assert len(rows) == 1 and rows[0]["outcome"] in ("diverged", "unstable"), rows
+
+
 def test_closed_form_case_holds_in_every_rotor_solver():
     sc = get_scene("rotor-spinup")
     rows = run_case(sc, _case(sc, "eccentricity 0"), solvers_for(sc.name), log=lambda m: None)

@@ -6,7 +6,7 @@ import numpy as np
 from ..errors import BadInput
 from ..params import Param, positive
 from ..physics import bearing_rotor as physics
-from .base import Finding, Scene
+from .base import Extreme, Finding, Scene
 
 SOURCE = ("seed 001 (001_d37db2f6f0246403.txt): shaft in Rodrigues–Hamilton parameters in the "
           "fixed frame, journals a/b with state-dependent bearing forces, DC motor, defect at a")
@@ -76,6 +76,20 @@ def draw_shaft(rec, params, traj, color, offset):
             static=True)
 
 
+# The spec's extremes (scene-bearing-rotor.md); energy checked against the motor work.
+BEARING_EXTREMES = (
+    Extreme("bearing stiffness 1e9 N/m", {"k_b": 1e9, "t_end": 0.5}, bound=1e-6,
+            why="stiff bearings: the step must adapt or the run says unstable"),
+    Extreme("zero damping", {"c_b": 0.0}, bound=1e-6, why="undamped bearings"),
+    Extreme("defect 1 mm: the journal jumps", {"defect_height": 1e-3}, bound=1e-6,
+            why="a bump 50× the default throws the journal"),
+    Extreme("no defect", {"defect_height": 0.0, "t_end": 4.0}, bound=1e-6,
+            why="the ripple vanishes; the journals sit at the static sag"),
+    Extreme("100 s run", {"t_end": 100.0, "output_dt": 0.01}, bound=1e-6, slow=True,
+            why="norm and energy drift over a long run"),
+)
+
+
 BEARING_ROTOR = Scene(
     name="bearing-rotor",
     title="Two-bearing rotor with a bearing defect, spun up by a DC motor",
@@ -127,6 +141,7 @@ BEARING_ROTOR = Scene(
     check=check,
     findings=findings,
     draw_3d=draw_shaft,
+    extremes=BEARING_EXTREMES,
     campaign_cases=({"name": "bearing-rotor"},),
     notes="Force laws, spin angle (swing–twist about the shaft axis) and every observable are "
           "computed by compare/physics/bearing_rotor.py for all solvers; all start at the "

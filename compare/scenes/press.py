@@ -6,7 +6,7 @@ import numpy as np
 from ..errors import BadInput
 from ..params import Param, positive
 from ..physics import press as phys
-from .base import Finding, Scene
+from .base import Extreme, Finding, Scene
 
 SOURCE = "seed 003 (clutchless crank press; Lagrange partial systems, linear-acceleration method)"
 
@@ -114,6 +114,43 @@ def draw_press(rec, params, traj, color, offset):
                                                 colors=colors).partition([1] * len(rows)))
 
 
+# The spec's extremes (scene-press.md). The linear-acceleration cases use the quiet press of
+# tests/test_press_custom.py (slider 1e9 N/m, motor disconnected), whose fastest period
+# T_min = 3.0786 ms comes from the linearised modes: the Newmark β = 1/6 limit is
+# h = (√3/π)·T_min = 0.5513·T_min.
+_QUIET = {"slider_stiffness": 1e9, "gravity": 0.0, "gear_ratio": 0.0, "omega0": 0.0,
+          "rocker_rate0": 0.01}
+_T_MIN = 3.0786032e-3
+_CUSTOM = ("lagrange-exact", "lagrange-partial")
+
+
+def _linacc(ratio):
+    h = ratio * _T_MIN
+    return {**_QUIET, "output_dt": h, "t_end": 300 * h}
+
+
+PRESS_EXTREMES = (
+    Extreme("toggle: rod vertical", {"t_end": 1.0}, why="left idle the rod reaches the "
+            "vertical, where the (φ, ψ) chart is singular: the minimal-coordinate solvers must "
+            "stop with that reason; full-coordinate engines may pass"),
+    Extreme("slider 1e9 N/m", {"slider_stiffness": 1e9}, bound=1e-6,
+            why="very stiff slider (T_min 3 ms)"),
+    Extreme("linear acceleration 0.54·T_min", _linacc(0.54),
+            {"integrator": "linacc", "dt": 0.54 * _T_MIN}, bound=1e-6, solvers=_CUSTOM,
+            why="just below the limit 0.5513·T_min: stable (the leaf's growth check stays "
+                "quiet) but coarse — Newmark β = 1/6 weighs the potential by 1 − (ωh)²/12, so "
+                "the energy balance is off by ~100 % of this quiet press's tiny energy and the "
+                "adapter reports it 'too coarse'; above the limit the leaf reports "
+                "'unstable'"),
+    Extreme("linear acceleration 0.56·T_min", _linacc(0.56),
+            {"integrator": "linacc", "dt": 0.56 * _T_MIN}, expect="status", solvers=_CUSTOM,
+            why="just above the limit: must end unstable, never ok"),
+    Extreme("100 crank revolutions", {"slider_stiffness": 1e8, "slider_damping": 1e5,
+                                      "t_end": 6.0, "output_dt": 0.01}, bound=1e-6, slow=True,
+            why="long-run drift (stiff damped slider, 113 revolutions)"),
+)
+
+
 PRESS = Scene(
     name="press", title="Crank–rocker press with slider, idle run (2 DOF)", source=SOURCE,
     kind="time", leaves=PRESS_LEAVES,
@@ -122,6 +159,7 @@ PRESS = Scene(
     channels=CHANNELS, tolerances=TOLERANCES, key_channel="crank_rate", check=_check,
     reference_solvers=("lagrange-exact", "mujoco"),
     draw_3d=draw_press, view_channels=("crank_rate", "rocker_angle", "slider_x"),
+    extremes=PRESS_EXTREMES,
     campaign_cases=({"name": "press"},),
     notes="Energy balance = kinetic + spring + gravity − motor work + damper loss.")
 
@@ -142,6 +180,13 @@ PRESS_CYCLE = Scene(
     channels=CHANNELS, tolerances=TOLERANCES,
     key_channel="crank_rate", check=_check, findings=lambda p, trs: cycle_findings(p, trs),
     draw_3d=draw_press, view_channels=("crank_rate", "rocker_angle", "slider_x"),
+    extremes=(
+        Extreme("motor stall: load 50 kN", {"press_force": 5e4}, bound=1e-6,
+                why="the working load overpowers the motor (25× the default): the crank "
+                    "stalls and is thrown back"),
+        Extreme("slider 1e9 N/m", {"slider_stiffness": 1e9}, bound=1e-6,
+                why="stiff slider through lock and release"),
+    ),
     campaign_cases=({"name": "press-cycle"},),
     notes="The lock is a plastic impact located as a state event; energy_balance includes the "
           "press work and the energy lost at the lock.")

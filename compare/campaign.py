@@ -52,12 +52,18 @@ CASE_KEYS = ("name", "scene", "set", "sweep", "solvers", "dt", "rtol", "integrat
              "settings", "timeout_s")
 
 
-def default_campaign() -> dict:
-    """The built-in campaign: every scene's own default cases (`Scene.campaign_cases`)."""
+BUILT_IN = ("default", "long")
+
+
+def default_campaign(name: str = "default") -> dict:
+    """A built-in campaign from the scenes' own cases (`Scene.campaign_cases`): "default" (every
+    scene, every solver, minutes) or "long" (the cases a scene marks `"campaign": "long"`, e.g.
+    the engines' full sail deployment, tens of minutes)."""
     from .scenes import SCENES
-    return {"name": "default",
-            "cases": [{"scene": sc.name, **case} for sc in SCENES.values()
-                      for case in sc.campaign_cases]}
+    return {"name": name,
+            "cases": [{"scene": sc.name, **{k: v for k, v in case.items() if k != "campaign"}}
+                      for sc in SCENES.values() for case in sc.campaign_cases
+                      if case.get("campaign", "default") == name]}
 
 
 # --- the file -------------------------------------------------------------------------------
@@ -68,6 +74,8 @@ def load_campaign(path) -> dict:
     if path is None:
         return default_campaign()
     p = Path(path)
+    if str(path) in BUILT_IN and not p.exists():
+        return default_campaign(str(path))
     try:
         text = p.read_text()
     except (OSError, UnicodeDecodeError) as e:

@@ -3,10 +3,10 @@ import json
 
 import numpy as np
 import pytest
+from conftest import xval
 
 from compare.recording import load_scalar_series
 from compare.scenes import get_scene
-from conftest import xval
 
 CHANNELS = get_scene("rotor-spinup").channels
 
@@ -90,6 +90,7 @@ def test_a_crashing_solver_is_recorded_and_hides_nothing(tmp_path, monkeypatch, 
     """Exit 3, the crash recorded with its message, the other solver's result intact."""
     import sys
     import types
+
     from compare import cli, solvers
     broken = types.ModuleType("broken_leaf")
     broken.DEFAULT_SETTINGS, broken.INTEGRATORS = {"integrator": "x"}, ("x",)

@@ -73,7 +73,7 @@ ROTATING_BEAM = Scene(
     energy_channel=None,
     tolerances={"frequency": FREQUENCY_TOLERANCE,
                 "frequency_by_solver": BLADE_ENGINE_ALLOWANCE},
-    campbell=Campbell("speed", 0.0, 40.0, 41, excitation_hz=rotor_speed_hz),
+    campbell=Campbell("speed", 0.0, 40.0, 21, excitation_hz=rotor_speed_hz),
     campaign_cases=({"name": "rotating-beam"},),
     notes=BLADE_DOC + "; torsion (GJφ')' − I_α(φ̈ + Ω²φ) = 0 as the paper's eq. 30.",
 )
@@ -96,7 +96,7 @@ SPINNING_SHAFT = Scene(
     energy_channel=None,
     tolerances={"frequency": FREQUENCY_TOLERANCE,
                 "frequency_by_solver": SHAFT_ENGINE_ALLOWANCE},
-    campbell=Campbell("spin_ratio", 0.0, 12.0, 49, excitation_hz=shaft_speed_hz, unit=""),
+    campbell=Campbell("spin_ratio", 0.0, 12.0, 25, excitation_hz=shaft_speed_hz, unit=""),
     campaign_cases=({"name": "spinning-shaft"},),
     notes="frequencies_hz dimensional; extra['omega_star'] = ω/ω₀ (Table 2's 'Hz' is ω*).",
 )
@@ -150,7 +150,7 @@ HELICOPTER_CLAMPED = Scene(
     leaves=leaves("helicopter"),
     energy_channel=None,
     tolerances={"frequency": FREQUENCY_TOLERANCE},
-    campbell=Campbell("speed", 0.0, 50.0, 26, excitation_hz=rotor_speed_hz),
+    campbell=Campbell("speed", 0.0, 50.0, 11, excitation_hz=rotor_speed_hz),
     campaign_cases=({"name": "helicopter-clamped"},),
 )
 
@@ -163,7 +163,7 @@ HELICOPTER_HOVER = Scene(
     leaves=leaves("helicopter_hover"),
     energy_channel=None,
     tolerances={"frequency": FREQUENCY_TOLERANCE},
-    campbell=Campbell("speed", 0.0, 50.0, 26, excitation_hz=rotor_speed_hz),
+    campbell=Campbell("speed", 0.0, 50.0, 11, excitation_hz=rotor_speed_hz),
     campaign_cases=({"name": "helicopter-hover"},),
 )
 

@@ -15,8 +15,8 @@
 The model owns the implicit method itself (it knows its events and invariants); see
 `custom_models/thread_spool.py` for an implicit-midpoint stepper built on these.
 """
-import numpy as np
 import numba as nb
+import numpy as np
 
 
 @nb.njit(cache=True)
@@ -80,15 +80,17 @@ def block3_tridiag_solve(B, Dinv, N, r, x):
         y[0, a] = r[0, a]
     for i in range(1, N):
         # y_i = r_i − B[i-1]^T Dinv[i-1] y_{i-1}
-        t0 = Dinv[i - 1, 0, 0] * y[i - 1, 0] + Dinv[i - 1, 0, 1] * y[i - 1, 1] + Dinv[i - 1, 0, 2] * y[i - 1, 2]
-        t1 = Dinv[i - 1, 1, 0] * y[i - 1, 0] + Dinv[i - 1, 1, 1] * y[i - 1, 1] + Dinv[i - 1, 1, 2] * y[i - 1, 2]
-        t2 = Dinv[i - 1, 2, 0] * y[i - 1, 0] + Dinv[i - 1, 2, 1] * y[i - 1, 1] + Dinv[i - 1, 2, 2] * y[i - 1, 2]
+        D, yp = Dinv[i - 1], y[i - 1]
+        t0 = D[0, 0] * yp[0] + D[0, 1] * yp[1] + D[0, 2] * yp[2]
+        t1 = D[1, 0] * yp[0] + D[1, 1] * yp[1] + D[1, 2] * yp[2]
+        t2 = D[2, 0] * yp[0] + D[2, 1] * yp[1] + D[2, 2] * yp[2]
         for a in range(3):
             y[i, a] = r[i, a] - (B[i - 1, 0, a] * t0 + B[i - 1, 1, a] * t1 + B[i - 1, 2, a] * t2)
     for i in range(N - 1, -1, -1):
         if i < N - 1:
             for a in range(3):
-                y[i, a] -= B[i, a, 0] * x[i + 1, 0] + B[i, a, 1] * x[i + 1, 1] + B[i, a, 2] * x[i + 1, 2]
+                xn = x[i + 1]
+                y[i, a] -= B[i, a, 0] * xn[0] + B[i, a, 1] * xn[1] + B[i, a, 2] * xn[2]
         for a in range(3):
             x[i, a] = Dinv[i, a, 0] * y[i, 0] + Dinv[i, a, 1] * y[i, 1] + Dinv[i, a, 2] * y[i, 2]
 

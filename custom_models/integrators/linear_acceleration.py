@@ -33,11 +33,11 @@ ends (second order, like the method). `accel_from_mass_force` builds `acc` from 
 Output layout matches the explicit drivers: rows [q, q', z] on the output grid, NaN after a
 failure, plus (steps, rhs_evals, t_fail, code).
 """
-import numpy as np
 import numba as nb
+import numpy as np
 from numba import types as nt
 
-from .explicit import FAIL_OK, FAIL_NONFINITE, GUARD, _MAT, _VEC
+from .explicit import _MAT, _VEC, FAIL_NONFINITE, FAIL_OK, GUARD
 
 # acc(t, q, q', p) -> [q'', z'] as a first-class function type: the drivers are compiled (and
 # cached on disk) once for every model, as the explicit ones (q, q' may be slices: layout 'A')

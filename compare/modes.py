@@ -12,7 +12,7 @@ import numpy as np
 from scipy.optimize import brentq, linear_sum_assignment
 
 from . import metrics, solvers
-from .atomic import write_json, write_text
+from .atomic import atomic_path, write_json, write_text
 from .errors import BadInput
 from .runner import new_run_dir
 from .scenes import Scene, get_scene
@@ -144,8 +144,9 @@ def _campbell_png(path, scene, values, lines_by_solver, crit, params):
 
 def _campbell_rrd(path, scene, values, lines_by_solver):
     import rerun as rr
-    with rr.RecordingStream("xval", recording_id=f"campbell-{path.parent.name}") as rec:
-        rec.save(str(path))
+    with atomic_path(path) as tmp, \
+            rr.RecordingStream("xval", recording_id=f"campbell-{path.parent.name}") as rec:
+        rec.save(str(tmp))
         idx = [rr.TimeColumn(scene.campbell.parameter, duration=values)]   # 1 s = 1 unit
         for solver, lines in lines_by_solver.items():
             for key, f in lines.items():

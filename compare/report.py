@@ -191,6 +191,14 @@ def write_run_report(out_dir, result):
     figures = [plot_channels(result, out_dir / "channels.png")]
     if len([t for t in result.trajectories if t.status == "ok"]):
         figures.append(plot_deviation(result, out_dir / "deviation.png"))
+    if result.scene.plots is not None:
+        import matplotlib.pyplot as plt
+        plot_style()
+        fig = plt.figure(figsize=(11, 4))
+        result.scene.plots(result.params, result.trajectories, fig)
+        fig.tight_layout()
+        figures.append(save_figure(fig, out_dir / "scene.png"))
+        plt.close(fig)
     path = out_dir / "report.md"
     write_text(path, run_markdown(result, figures))
     return path

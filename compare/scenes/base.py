@@ -89,8 +89,10 @@ class Scene:
     # (json rows, markdown lines) of frequencies identified from time-domain free responses
     campbell: Campbell | None = None
     identify: Callable | None = None
-    # time scenes: draw_3d(rec, params, trajectory, colour, offset) logs the bodies to rerun
+    # time scenes: draw_3d(rec, params, trajectory, colour, offset) logs the bodies to rerun;
+    # plots(params, trajectories, figure) fills a matplotlib figure of scene-specific plots
     draw_3d: Callable | None = None
+    plots: Callable | None = None
     # the default campaign's cases of this scene: [{"name", "set", "solvers", "timeout_s"}]
     campaign_cases: tuple = ()
     # the spec's extreme cases (`xval extremes`)

@@ -90,6 +90,24 @@ BEARING_EXTREMES = (
 )
 
 
+def plots(params, trajectories, fig):
+    """The paper's two pictures: journal a's orbit over the last five revolutions, and the spin
+    rate against the spin angle (the once-per-revolution ripple of the defect)."""
+    orbit, ripple = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
+    for tr in (t for t in trajectories if t.status == "ok"):
+        a = tr.channels["spin_angle"]
+        last = a >= a[-1] - 5 * 2 * np.pi
+        orbit.plot(1e6 * tr.channels["journal_a_x"][last], 1e6 * tr.channels["journal_a_y"][last],
+                   lw=1, label=tr.solver)
+        ripple.plot(np.degrees(np.mod(a[last], 2 * np.pi)), tr.channels["spin_rate"][last], ".",
+                    ms=1.5, label=tr.solver)
+    orbit.set(xlabel="journal a x [µm]", ylabel="journal a y [µm]",
+              title="orbit of journal a, last 5 revolutions")
+    ripple.set(xlabel="spin angle mod 360 [deg]", ylabel="spin rate [rad/s]",
+               title="spin rate against spin angle, last 5 revolutions")
+    orbit.legend(fontsize=7)
+
+
 BEARING_ROTOR = Scene(
     name="bearing-rotor",
     title="Two-bearing rotor with a bearing defect, spun up by a DC motor",
@@ -141,6 +159,7 @@ BEARING_ROTOR = Scene(
     check=check,
     findings=findings,
     draw_3d=draw_shaft,
+    plots=plots,
     extremes=BEARING_EXTREMES,
     campaign_cases=({"name": "bearing-rotor"},),
     notes="Force laws, spin angle (swing–twist about the shaft axis) and every observable are "

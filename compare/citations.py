@@ -1,7 +1,7 @@
 """The papers behind the scenes, cited as papers (authors, title, year, venue) wherever
 user-facing text names a source.
 
-Read from the first lines of /work/shared/seeds/*.txt (scene data still says "seed 000"; `cite`
+Read from the first lines of the seed papers (shared/seeds/*.txt) (scene data still says "seed 000"; `cite`
 turns that into the reference). Evidence for the less obvious fields: 000's DOI
 10.18698/2308-6033-2024-4-2348 (Engineering Journal: Science and Innovation, 2024, no. 4);
 001 says "manuscript received 05.12.2011" and cites the author's Vestnik DSTU 2011 paper, so

@@ -255,3 +255,21 @@ def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) 
     return {"frequencies_hz": np.asarray(f, float), "labels": [fine["labels"][i] for i in idx],
             "damping": np.asarray(fine["damping"])[idx], "shapes": fine["shapes"][idx],
             "notes": notes, "extra": extra}
+
+
+def shaft_result(params: dict, s: dict, linearised, package, method: str):
+    """The spinning shaft through one engine's linearisation (`linearised`) and result
+    packaging (`package`): both engines run it the same way; ω* = ω/ω₀ in extra."""
+    import time
+
+    from compare.physics import mstmm
+    n = checked_segments(s)
+    w0 = mstmm.spinning_shaft_omega0(params["EI_xx"], params["m"], params["L"])
+    spin = params["spin_ratio"] * w0
+    t0 = time.perf_counter()
+    out = solve(lambda k: shaft_chain(params, k, spin), linearised, shaft_modes, n,
+                bool(s["extrapolate"]), int(params["n_modes"]))
+    res = package(out, s, method, {"stations_m": stations(params["L"]), "omega0_rad_s": w0,
+                                   "linearise_s": time.perf_counter() - t0})
+    res.extra["omega_star"] = res.frequencies_hz * 2 * np.pi / w0
+    return res

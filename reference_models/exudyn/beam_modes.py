@@ -126,16 +126,6 @@ def modes(params: dict, settings: dict | None = None) -> ModesResult:
 def shaft_modes(params: dict, settings: dict | None = None) -> ModesResult:
     """Spinning shaft: whirl frequencies (Hz, co-rotating frame) at Ω = spin_ratio·ω₀;
     extra['omega_star'] = ω/ω₀ (Table 2)."""
-    s = merge_settings(settings, SHAFT_MODES_SETTINGS, ())
-    n = bc.checked_segments(s)
-    w0 = mstmm.spinning_shaft_omega0(params["EI_xx"], params["m"], params["L"])
-    spin = params["spin_ratio"] * w0
-    t0 = time.perf_counter()
-    out = bc.solve(lambda k: bc.shaft_chain(params, k, spin), _linearised, bc.shaft_modes, n,
-                   bool(s["extrapolate"]), int(params["n_modes"]))
-    res = _package(out, s, "rigid-segment chain (ObjectKinematicTree) spinning about its axis, "
-                   "linearised about steady spin",
-                   {"stations_m": bc.stations(params["L"]), "omega0_rad_s": w0,
-                    "linearise_s": time.perf_counter() - t0})
-    res.extra["omega_star"] = res.frequencies_hz * 2 * np.pi / w0
-    return res
+    return bc.shaft_result(params, merge_settings(settings, SHAFT_MODES_SETTINGS, ()),
+                           _linearised, _package, "rigid-segment chain (ObjectKinematicTree) "
+                           "spinning about its axis, linearised about steady spin")

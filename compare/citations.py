@@ -1,8 +1,8 @@
 """The papers behind the scenes, cited as papers (authors, title, year, venue) wherever
 user-facing text names a source.
 
-Read from the first lines of the seed papers (shared/seeds/*.txt) (scene data still says "seed 000"; `cite`
-turns that into the reference). Evidence for the less obvious fields: 000's DOI
+Read from the first lines of the seed papers (shared/seeds/*.txt; scene data still says
+"seed 000", `cite` turns that into the reference). Evidence for the less obvious fields: 000's DOI
 10.18698/2308-6033-2024-4-2348 (Engineering Journal: Science and Innovation, 2024, no. 4);
 001 says "manuscript received 05.12.2011" and cites the author's Vestnik DSTU 2011 paper, so
 2012 is the publication year; 003 carries DOI 10.52684/2312-3702-2022-40-2-36-41 (2022,

@@ -169,14 +169,6 @@ HELICOPTER_HOVER = Scene(
 
 SCENES = (ROTATING_BEAM, SPINNING_SHAFT, HELICOPTER_CLAMPED, HELICOPTER_HOVER)
 
-# Campbell sweep per scene (also as each Scene's `campbell`): (parameter, low, high)
-CAMPBELL = {
-    "rotating-beam": ("speed", 0.0, 40.0),
-    "spinning-shaft": ("spin_ratio", 0.0, 12.0),
-    "helicopter-clamped": ("speed", 0.0, 50.0),
-    "helicopter-hover": ("speed", 0.0, 50.0),
-}
-
 # Mode-label vocabulary per scene (labels are "<kind> <n>", e.g. "flap 2"; blade families of
 # the helicopter carry a rotor-symmetry suffix: "flap 1 collective", "lag 1 cyclic",
 # "flap 2 differential"; whole-aircraft modes "fuselage" / "tail"; rigid-body modes are not

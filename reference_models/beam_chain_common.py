@@ -273,3 +273,32 @@ def shaft_result(params: dict, s: dict, linearised, package, method: str):
                                    "linearise_s": time.perf_counter() - t0})
     res.extra["omega_star"] = res.frequencies_hz * 2 * np.pi / w0
     return res
+
+
+def package(out: dict, settings: dict, note: str, extra: dict):
+    """The chain's solution as the leaf contract's ModesResult."""
+    from compare.contract import ModesResult
+    return ModesResult(frequencies_hz=out["frequencies_hz"], labels=out["labels"],
+                       damping=out["damping"], shapes=out["shapes"], settings=settings,
+                       notes=[note] + out["notes"], extra={**extra, **out["extra"]})
+
+
+def blade_result(params: dict, s: dict, linearised, package, method: str, check=None):
+    """The rotating blade through one engine's linearisation and packaging; `check(params, s,
+    section, n)` raises ValueError for what that engine cannot model."""
+    import time
+
+    from compare.physics import mstmm
+    n = checked_segments(s)
+    if not s["rotary_inertia"] and params["speed"] != 0:
+        raise ValueError("rotary_inertia=False (Euler–Bernoulli segments) is consistent only "
+                         "at rest: spinning, its rigid sections have a spurious flap–torsion "
+                         "coupling Ω·I_α")
+    section = mstmm.blade_section_from(params)
+    if check is not None:
+        check(params, s, section, n)
+    t0 = time.perf_counter()
+    out = solve(lambda k: blade_chain(params, section, k, bool(s["rotary_inertia"])),
+                linearised, blade_modes, n, bool(s["extrapolate"]), int(params["n_modes"]))
+    return package(out, s, method, {"stations_m": stations(params["L"]),
+                                    "linearise_s": time.perf_counter() - t0})

@@ -36,6 +36,7 @@ from .explicit import (
     FAIL_STEP_UNDERFLOW,
     FIXED_TABLEAUS,
     GUARD,
+    _error_norm,
 )
 
 RHS_INTO = nt.FunctionType(nt.void(nt.float64, _VEC, _VEC, _VEC))    # f(t, y, p, dy)
@@ -141,28 +142,6 @@ def integrate_fixed_dense(f, guard, y0, p, t_out, dt, A, B, C):
         y[:] = y_new
         K[0] = f_new
     return Y, n_steps, evals, np.nan, FAIL_OK
-
-
-@nb.njit(cache=True)
-def _error_norm(K, h, scale, E, E3):
-    ny = scale.shape[0]
-    e5 = 0.0
-    e3 = 0.0
-    for j in range(ny):
-        a = 0.0
-        for s in range(E.shape[0]):
-            a += E[s] * K[s, j]
-        e5 += (a / scale[j]) ** 2
-        if E3.shape[0] > 0:
-            b = 0.0
-            for s in range(E3.shape[0]):
-                b += E3[s] * K[s, j]
-            e3 += (b / scale[j]) ** 2
-    if E3.shape[0] == 0:           # ordinary embedded pair: RMS norm
-        return abs(h) * np.sqrt(e5 / ny)
-    if e5 == 0.0 and e3 == 0.0:    # DOP853's 5th/3rd-order blend (Hairer & Wanner)
-        return 0.0
-    return abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * ny)
 
 
 @nb.njit(cache=True)

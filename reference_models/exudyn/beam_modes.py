@@ -35,14 +35,11 @@ under load OpenBLAS threading can make the 240×240 eigen solve 10× slower.
 """
 from __future__ import annotations
 
-import time
-
 import exudyn as exu
 import numpy as np
 from exudyn.itemInterface import NodeGenericODE2, ObjectKinematicTree
 
 from compare.contract import ModesResult, merge_settings
-from compare.physics import mstmm
 from reference_models import beam_chain_common as bc
 
 # Convergence study (max relative error over the first five modes; second order checked in
@@ -98,29 +95,15 @@ def _linearised(chain: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return M, K, D
 
 
-def _package(out: dict, settings: dict, note: str, extra: dict) -> ModesResult:
-    return ModesResult(frequencies_hz=out["frequencies_hz"], labels=out["labels"],
-                       damping=out["damping"], shapes=out["shapes"],
-                       settings=settings,
-                       notes=[note] + out["notes"], extra={**extra, **out["extra"]})
+_package = bc.package
 
 
 def modes(params: dict, settings: dict | None = None) -> ModesResult:
     """Rotating blade: flap/lag/torsion frequencies (Hz, rotating frame) at params['speed']."""
-    s = merge_settings(settings, MODES_SETTINGS, ())
-    n = bc.checked_segments(s)
-    if not s["rotary_inertia"] and params["speed"] != 0:
-        raise ValueError("rotary_inertia=False (Euler–Bernoulli segments) is consistent only "
-                         "at rest: spinning, its rigid sections have a spurious flap–torsion "
-                         "coupling Ω·I_α")
-    section = mstmm.blade_section_from(params)
-    t0 = time.perf_counter()
-    out = bc.solve(lambda k: bc.blade_chain(params, section, k, bool(s["rotary_inertia"])),
-                   _linearised, bc.blade_modes, n, bool(s["extrapolate"]), int(params["n_modes"]))
-    return _package(out, s, "rigid-segment chain (ObjectKinematicTree), linearised about steady "
-                    "spin, hub speed held; lag modes carry the section's rotary inertia ρI_lag",
-                    {"stations_m": bc.stations(params["L"]),
-                     "linearise_s": time.perf_counter() - t0})
+    return bc.blade_result(params, merge_settings(settings, MODES_SETTINGS, ()), _linearised,
+                           _package, "rigid-segment chain (ObjectKinematicTree), linearised "
+                           "about steady spin, hub speed held; lag modes carry the section's "
+                           "rotary inertia ρI_lag")
 
 
 def shaft_modes(params: dict, settings: dict | None = None) -> ModesResult:

@@ -22,13 +22,10 @@ Wall time per `modes` call (defaults N = 40 and 20): 0.1–0.2 s (OPENBLAS_NUM_T
 """
 from __future__ import annotations
 
-import time
-
 import mujoco
 import numpy as np
 
 from compare.contract import ModesResult, merge_settings
-from compare.physics import mstmm
 from reference_models import beam_chain_common as bc
 
 # Same chain and convergence as the Exudyn model (see there: default N = 40 with Richardson
@@ -84,38 +81,29 @@ def _linearised(chain: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def _package(out: dict, settings: dict, note: str, extra: dict) -> ModesResult:
-    return ModesResult(frequencies_hz=out["frequencies_hz"], labels=out["labels"],
-                       damping=out["damping"], shapes=out["shapes"],
-                       settings={**settings, "fd_eps": _FD_EPS, "hub_armature_factor": HUB_ARMATURE,
-                                 "linearisation": "mjd_transitionFD (Euler), hub removed"},
-                       notes=[note] + out["notes"], extra={**extra, **out["extra"]})
+    return bc.package(out, {**settings, "fd_eps": _FD_EPS, "hub_armature_factor": HUB_ARMATURE,
+                            "linearisation": "mjd_transitionFD (Euler), hub removed"},
+                      note, extra)
+
+
+def _physical_segments(params, s, section, n):
+    """MuJoCo accepts physical rigid bodies only (I_x ≤ I_y + I_z); the Euler–Bernoulli segment
+    (I_y = I_z = m̄ℓ³/12, I_x = I_α ℓ) breaks it for ℓ < 6 I_α/m̄."""
+    if s["rotary_inertia"]:
+        return
+    ell = 0.5 * params["L"] / n / (2 if s["extrapolate"] else 1)
+    if ell < 6 * section["I_alpha"] / section["m"]:
+        raise ValueError("rotary_inertia=False: MuJoCo rejects Euler–Bernoulli segments "
+                         f"shorter than 6·I_α/m̄ = {6 * section['I_alpha'] / section['m']:.4g}"
+                         " m (I_x > I_y + I_z); use the Exudyn model or fewer segments")
 
 
 def modes(params: dict, settings: dict | None = None) -> ModesResult:
     """Rotating blade: flap/lag/torsion frequencies (Hz, rotating frame) at params['speed']."""
-    s = merge_settings(settings, MODES_SETTINGS, ())
-    n = bc.checked_segments(s)
-    if not s["rotary_inertia"] and params["speed"] != 0:
-        raise ValueError("rotary_inertia=False (Euler–Bernoulli segments) is consistent only "
-                         "at rest: spinning, its rigid sections have a spurious flap–torsion "
-                         "coupling Ω·I_α")
-    section = mstmm.blade_section_from(params)
-    if not s["rotary_inertia"]:
-        # MuJoCo accepts physical rigid bodies only (I_x ≤ I_y + I_z); the Euler–Bernoulli
-        # segment (I_y = I_z = m̄ℓ³/12, I_x = I_α ℓ) breaks it for ℓ < 6 I_α/m̄.
-        ell = 0.5 * params["L"] / n / (2 if s["extrapolate"] else 1)
-        if ell < 6 * section["I_alpha"] / section["m"]:
-            raise ValueError("rotary_inertia=False: MuJoCo rejects Euler–Bernoulli segments "
-                             f"shorter than 6·I_α/m̄ = {6 * section['I_alpha'] / section['m']:.4g}"
-                             " m (I_x > I_y + I_z); use the Exudyn model or fewer segments")
-    t0 = time.perf_counter()
-    out = bc.solve(lambda k: bc.blade_chain(params, section, k, bool(s["rotary_inertia"])),
-                   _linearised, bc.blade_modes, n, bool(s["extrapolate"]), int(params["n_modes"]))
-    return _package(out, s, "rigid-body hinge chain linearised with mjd_transitionFD about "
-                    "steady spin, hub speed held; lag modes carry the section's rotary inertia "
-                    "ρI_lag",
-                    {"stations_m": bc.stations(params["L"]),
-                     "linearise_s": time.perf_counter() - t0})
+    return bc.blade_result(params, merge_settings(settings, MODES_SETTINGS, ()), _linearised,
+                           _package, "rigid-body hinge chain linearised with mjd_transitionFD "
+                           "about steady spin, hub speed held; lag modes carry the section's "
+                           "rotary inertia ρI_lag", check=_physical_segments)
 
 
 def shaft_modes(params: dict, settings: dict | None = None) -> ModesResult:

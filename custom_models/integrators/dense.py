@@ -37,6 +37,7 @@ from .explicit import (
     FIXED_TABLEAUS,
     GUARD,
     _error_norm,
+    initial_step,
 )
 
 RHS_INTO = nt.FunctionType(nt.void(nt.float64, _VEC, _VEC, _VEC))    # f(t, y, p, dy)
@@ -225,17 +226,7 @@ def integrate_adaptive_dense(f, guard, y0, p, t_out, rtol, atol, h_max, max_step
     steps = 0
     rejected = 0
     expo = -1.0 / (err_order + 1)
-    # initial step from the scale of y and f (Hairer's simple estimate)
-    d0 = 0.0
-    d1 = 0.0
-    for j in range(ny):
-        sc = atol + abs(y[j]) * rtol
-        d0 += (y[j] / sc) ** 2
-        d1 += (fy[j] / sc) ** 2
-    d0 = np.sqrt(d0 / ny)
-    d1 = np.sqrt(d1 / ny)
-    h = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
-    h = min(h, h_max)
+    h = min(initial_step(y, fy, rtol, atol), h_max)
     i_out = 1
     just_rejected = False
     while i_out < n_out:

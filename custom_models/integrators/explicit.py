@@ -120,6 +120,21 @@ def integrate_fixed(f, guard, y0, p, t_out, substeps, A, B, C):
 
 
 @nb.njit(cache=True)
+def initial_step(y, fy, rtol, atol):
+    """First step from the scale of y and f (Hairer's simple estimate)."""
+    ny = y.shape[0]
+    d0 = 0.0
+    d1 = 0.0
+    for j in range(ny):
+        sc = atol + abs(y[j]) * rtol
+        d0 += (y[j] / sc) ** 2
+        d1 += (fy[j] / sc) ** 2
+    d0 = np.sqrt(d0 / ny)
+    d1 = np.sqrt(d1 / ny)
+    return 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+
+
+@nb.njit(cache=True)
 def _error_norm(K, h, scale, E, E3):
     ny = scale.shape[0]
     e5 = 0.0
@@ -160,17 +175,7 @@ def integrate_adaptive(f, guard, y0, p, t_out, rtol, atol, h_max, max_steps,
     steps = 0
     rejected = 0
     expo = -1.0 / (err_order + 1)
-    # initial step from the scale of y and f (Hairer's simple estimate)
-    d0 = 0.0
-    d1 = 0.0
-    for j in range(ny):
-        sc = atol + abs(y[j]) * rtol
-        d0 += (y[j] / sc) ** 2
-        d1 += (fy[j] / sc) ** 2
-    d0 = np.sqrt(d0 / ny)
-    d1 = np.sqrt(d1 / ny)
-    h = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
-    h = min(h, h_max)
+    h = min(initial_step(y, fy, rtol, atol), h_max)
     y_new = np.empty(ny)
     scale = np.empty(ny)
     for i in range(n_out - 1):

@@ -458,7 +458,10 @@ def run_campaign(path, out, executor="local", scheduler=None, workers=None, time
     out_dir = Path(out) / "campaign" / camp.get("name", "campaign")
     store = out_dir / "jobs"
     reused = {j.label for j in jobs if is_done(j, store)}
-    todo = [j for j in jobs if j.label not in reused]
+    # A frequency case is one job for all its solvers plus a Campbell sweep: the longest jobs of
+    # a campaign (helicopter 25–35 s against ≤ 8 s for any time job). They go to the pool first
+    # (longest first), so the pool does not end on one worker alone.
+    todo = sorted((j for j in jobs if j.label not in reused), key=lambda j: j.solver is not None)
     pending = {c.name: {j.label for j in todo if j.case == c.name} for c in cases}
     outcome, crashed = {}, {}
     t0 = time.perf_counter()

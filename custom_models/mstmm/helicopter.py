@@ -36,7 +36,11 @@ Decisions from the paper's own numbers (measured with this leaf, `fem` agreeing 
   but the torsion pair 20.596/20.598 is at 19.868 (−3.5 %; ANSYS −4.4 %) — the torsion
   equation (eq. 30) gives √(19.002² + (Ω/2π)²) = 19.87 Hz, and the paper's Table 1 shows the
   same excess at 40 rad/s (20.540 for 20.040) — and 24.894 (no ANSYS value) is nearest
-  24.107 (−3.2 %).
+  24.107 (−3.2 %). That root is the blades' in-plane (axial-cyclic) motion with the hub on the
+  bending shaft: shaft E × 1.1 moves it to 25.085 Hz (+4.1 %), hub density × 1.1 to
+  23.327 Hz (−3.2 %), blade E × 1.1 by +0.17 %, tail E × 1.1 not at all (measured with this
+  leaf, n_modes 21). The paper's value needs an 8 % stiffer shaft or a 9 % lighter hub — a
+  hub/shaft modelling difference the paper does not specify, not an exponent choice.
 - Hover (Table 4): only the reactionless 6.365 and 10.816 and the cyclic 16.079 (+0.19 %)
   are reproduced; the paper's 0.780, 1.082, 2.534, 6.187 and 10.437 Hz are whole-aircraft
   modes of its free rotating-frame model, which the paper does not define (we get 0.360 and

@@ -38,7 +38,7 @@ Decisions from the paper's own numbers (measured with this leaf, `fem` agreeing 
   same excess at 40 rad/s (20.540 for 20.040) — and 24.894 (no ANSYS value) is nearest
   24.107 (−3.2 %). That root is the blades' in-plane (axial-cyclic) motion with the hub on the
   bending shaft: shaft E × 1.1 moves it to 25.085 Hz (+4.1 %), hub density × 1.1 to
-  23.327 Hz (−3.2 %), blade E × 1.1 by +0.17 %, tail E × 1.1 not at all (measured with this
+  23.327 Hz (−3.2 %), blade E × 1.1 by +0.17 %, tail E × 1.1 by +0.3 % (measured with this
   leaf, n_modes 21). The paper's value needs an 8 % stiffer shaft or a 9 % lighter hub — a
   hub/shaft modelling difference the paper does not specify, not an exponent choice.
 - Hover (Table 4): only the reactionless 6.365 and 10.816 and the cyclic 16.079 (+0.19 %)

@@ -47,8 +47,8 @@ def channels(p: dict, Rs: np.ndarray, omegas: np.ndarray, work: np.ndarray,
     U = ½k|γ|² − m r_c·g (the paper's spring −kγ), unless a solver's model variant passes its
     own spring potential. T = ½ ω·(R I_o Rᵀ)·ω."""
     c = constants(p)
-    body_w = np.einsum("nji,nj->ni", Rs, omegas)                  # Rᵀω, body frame
-    kinetic = 0.5 * np.einsum("ni,ij,nj->n", body_w, c["I_o"], body_w)
+    body_w = (Rs.transpose(0, 2, 1) @ omegas[:, :, None])[:, :, 0]   # Rᵀω, body frame
+    kinetic = 0.5 * np.sum((body_w @ c["I_o"]) * body_w, axis=1)
     tl = tilt(Rs)
     u_spring = 0.5 * p["k"] * tl**2 if spring_potential is None else spring_potential
     potential = u_spring - p["m"] * (Rs @ c["rc0"]) @ c["gravity"]

@@ -10,6 +10,7 @@ is recorded as `error` and never hides the others).
 """
 from __future__ import annotations
 
+import functools
 import importlib
 import importlib.metadata
 import signal
@@ -99,8 +100,14 @@ def pick(scene: Scene, names: list[str] | None) -> list[Solver]:
 
 
 def versions(solver):
+    return dict(_versions(solver.engine))
+
+
+@functools.cache
+def _versions(engine):
+    """Package versions behind a run (reading the metadata costs ~10 ms a package: once)."""
     out = {}
-    for pkg in ("numpy", "scipy", solver.engine):
+    for pkg in ("numpy", "scipy", engine):
         try:
             out[pkg] = importlib.metadata.version(pkg)
         except importlib.metadata.PackageNotFoundError:

@@ -112,11 +112,12 @@ def _ladders(sc, solver, overrides, params, dt_out, vary):
     return [(f"{name}={v}", [(st, sc.resolve({**overrides, name: v}))], 0) for v in values]
 
 
-def _walk(rungs, start, run, exhaustive=False):
+def _walk(rungs, start, run, exhaustive=False, patience=2):
     """Run rungs[start], then coarser ones until the error reaches COARSE_ERR or a run fails,
-    then finer ones until the floor: the error at or below FLOOR_ERR, no longer falling (two
-    rungs in a row each less than 2× better), a run slower than RUNG_WALL_S, or a rung refused
-    (bad settings or over the step budget). `run(i)` returns the row (None when refused)."""
+    then finer ones until the floor: the error at or below FLOOR_ERR, no longer falling
+    (`patience` rungs in a row each less than 2× better), a run slower than RUNG_WALL_S, or a
+    rung refused (bad settings or over the step budget). `run(i)` returns the row (None when
+    refused)."""
     if exhaustive:
         return [r for r in map(run, range(len(rungs))) if r is not None]
     rows = {}
@@ -127,7 +128,7 @@ def _walk(rungs, start, run, exhaustive=False):
     stall, prev = 0, rows.get(start)
     for i in range(start + 1, len(rungs)):               # finer
         if prev is None or (prev["rel_error"] is not None and prev["rel_error"] <= FLOOR_ERR) \
-                or prev["wall_s"] > RUNG_WALL_S or stall >= 2:
+                or prev["wall_s"] > RUNG_WALL_S or stall >= patience:
             break
         r = rows[i] = run(i)
         if r is None:
@@ -157,10 +158,14 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
     made; `make_out(out)` creates the output folder (the CLI's, which turns a refusal into one
     line)."""
     sc = get_scene(scene_name)
-    if sc.kind != "time":
-        raise BadInput(f"scene {sc.name!r}: bench sweeps time-domain scenes")
     if not (isinstance(repeats, int) and repeats >= 1):
         raise BadInput(f"--repeats must be at least 1, got {repeats!r}")
+    if sc.kind == "modes":
+        if vary is not None:
+            raise BadInput("--vary: frequency scenes are benched along the solvers' own "
+                           "accuracy knobs only")
+        from .bench_modes import run_bench_modes
+        return run_bench_modes(sc, solver_names, overrides, out, repeats, log, make_out)
     chosen = solvers.pick(sc, solver_names)
     budget.check_output(sc, overrides, len(chosen), max_output_gib)
     params = sc.resolve(overrides)
@@ -179,9 +184,7 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
     # same way
     refs = ([solvers.get_solver(n) for n in sc.reference_solvers]
             or solvers.solvers_for(sc.name)[:2])
-    stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-    out_dir = Path(out) / "bench" / f"{sc.name}-{stamp}"
-    out_dir.mkdir(parents=True, exist_ok=True)
+    out_dir = bench_dir(out, sc.name)
     ref_runs, done = [], {}
     for s in refs:
         st = _tightest(s, sc.name, dt_out)
@@ -209,32 +212,12 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
                                  out_dir, f"{s.name}-{label}-{i}", vary, log)
             rows += _walk(rungs, start, run, exhaustive=vary is not None)
 
-    summary, lines = {}, []
-    for level in LEVELS:
-        best = {}
-        for r in rows:
-            if r["rel_error"] is not None and r["rel_error"] <= level:
-                if r["solver"] not in best or r["wall_s"] < best[r["solver"]]["wall_s"]:
-                    best[r["solver"]] = r
-        if not best:
-            continue
-        fastest = min(best.values(), key=lambda r: r["wall_s"])
-        ratios = {s: r["wall_s"] / fastest["wall_s"] for s, r in best.items()}
-        summary[f"{level:g}"] = {"fastest": fastest["solver"], "method": fastest["method"],
-                                 "wall_s": fastest["wall_s"], "rel_error": fastest["rel_error"],
-                                 "settings": fastest["settings"], "time_ratio": ratios,
-                                 "unreached": [s.name for s in chosen if s.name not in best]}
-        lines.append(f"error ≤ {level:g} on final {key}: fastest {fastest['solver']} "
-                     f"({fastest['method']}, {fastest['wall_s']:.3g} s); ratios "
-                     + ", ".join(f"{s} {v:.2f}×" for s, v in sorted(ratios.items(),
-                                                                   key=lambda x: x[1])))
-    orders = convergence_orders(rows, ref_check)
-    for o in orders:
-        lines.append(f"order {o['solver']} {o['method']}: observed {o['observed']:.2f} "
-                     f"(method {o['expected'] if o['expected'] else '?'}, {o['rungs']} rungs, "
-                     f"dt {o['dt_range'][0]:.3g}–{o['dt_range'][1]:.3g} s)"
-                     + (" — FLAG: below the method's order" if o["flag"] else ""))
-    _plot(out_dir / "work_precision.png", rows, sc.name, key, summary)
+    summary, lines = summarise(rows, [s.name for s in chosen], f"on final {key}")
+    orders = convergence_orders(rows, 100 * max(FLOOR_ERR, ref_check or 0.0), _fixed_dt,
+                                lambda r: ORDERS.get(r["method"]))
+    lines += order_lines(orders, "dt", " s")
+    plot(out_dir / "work_precision.png", rows, sc.name, f"relative error of final {key}",
+         summary)
     obj = {"scene": sc.name, "params": params, "key_channel": key,
            "vary": vary and {"name": vary[0], "values": vary[1]},
            "reference": {"solvers": [s.name for s in refs], "value": ref,
@@ -274,11 +257,7 @@ def _run_rung(sc, solver, leaf, label, st, p, params, done, repeats, ref, key, o
     if tr is not None:
         walls.append(tr.wall_s)
 
-    def wanted():
-        return repeats * (SHORT_REPEATS if walls and walls[0] < SHORT_RUN_S else 1)
-    while len(walls) < wanted() and not (walls and walls[0] > RUNG_WALL_S):
-        tr = solvers.simulate(sc, solver, p, st)
-        walls.append(tr.wall_s)
+    tr = repeat_timed(walls, lambda: solvers.simulate(sc, solver, p, st), repeats) or tr
     tr.save(out_dir / f"{name}.npz")                          # the trajectories stay
     err = abs(tr.final()[key] - ref) / abs(ref) if tr.status == "ok" else None
     evals, t_int = tr.stats.get("rhs_evals"), tr.stats.get("integrate_s")
@@ -298,35 +277,101 @@ def _run_rung(sc, solver, leaf, label, st, p, params, done, repeats, ref, key, o
     return row
 
 
-def convergence_orders(rows, ref_check=None):
-    """Observed order of each fixed-step method: the least-squares slope of log(error) over
-    log(dt) on its finest rungs (up to ORDER_RUNGS) above the floor (100 × the reference's own
-    uncertainty, at least 100 × FLOOR_ERR) and below COARSE_ERR — coarse rungs can be
-    pre-asymptotic — flagged when it falls short of the method's order by more than 0.5."""
-    low = 100 * max(FLOOR_ERR, ref_check or 0.0)
+def repeat_timed(walls, again, repeats):
+    """Append the wall times of `again()` runs to `walls` until the rung has `repeats` of them
+    (SHORT_REPEATS × as many when the first took under SHORT_RUN_S: one scheduler hiccup would
+    be its whole time; one run only when the first took over RUNG_WALL_S). Returns the last
+    result (None when none was needed)."""
+    last = None
+    while len(walls) < repeats * (SHORT_REPEATS if walls and walls[0] < SHORT_RUN_S else 1) \
+            and not (walls and walls[0] > RUNG_WALL_S):
+        last = again()
+        walls.append(last.wall_s)
+    return last
+
+
+def summarise(rows, solver_names, what, unreached_why=None):
+    """For each error level: the fastest solver's row and every other solver's time ratio to
+    it (each solver at its fastest row within the level), and the summary lines. `what` says
+    which error (e.g. "on final omega"); `unreached_why` (solver -> reason) explains a solver
+    that reaches no row within a level."""
+    summary, lines = {}, []
+    for level in LEVELS:
+        best = {}
+        for r in rows:
+            if r["rel_error"] is not None and r["rel_error"] <= level:
+                if r["solver"] not in best or r["wall_s"] < best[r["solver"]]["wall_s"]:
+                    best[r["solver"]] = r
+        if not best:
+            continue
+        fastest = min(best.values(), key=lambda r: r["wall_s"])
+        ratios = {s: r["wall_s"] / fastest["wall_s"] for s, r in best.items()}
+        unreached = [s for s in solver_names if s not in best]
+        summary[f"{level:g}"] = {"fastest": fastest["solver"], "method": fastest["method"],
+                                 "wall_s": fastest["wall_s"], "rel_error": fastest["rel_error"],
+                                 "settings": fastest["settings"], "time_ratio": ratios,
+                                 "unreached": unreached}
+        why = unreached_why or {}
+        lines.append(f"error ≤ {level:g} {what}: fastest {fastest['solver']} "
+                     f"({fastest['method']}, {fastest['wall_s']:.3g} s); ratios "
+                     + ", ".join(f"{s} {v:.2f}×" for s, v in sorted(ratios.items(),
+                                                                   key=lambda x: x[1]))
+                     + ("; not reached by " + ", ".join(
+                         s + (f" ({why[s]})" if why.get(s) else "") for s in unreached)
+                        if unreached else ""))
+    return summary, lines
+
+
+def _fixed_dt(row):
+    """A fixed-step row's step (None for an error-controlled one)."""
+    dt = row["settings"].get("dt")
+    return dt if isinstance(dt, (int, float)) and "rtol" not in row["settings"] else None
+
+
+def convergence_orders(rows, low, step, expected):
+    """Observed order of each ladder with a step: the least-squares slope of log(error) over
+    log(step(row)) on its finest rungs (up to ORDER_RUNGS) above the floor `low` and below
+    COARSE_ERR — coarse rungs can be pre-asymptotic — flagged when it falls short of
+    `expected(row)` (the method's order, None: unknown) by more than 0.5."""
     out = []
     for (s, m) in dict.fromkeys((r["solver"], r["method"]) for r in rows):
-        pts = sorted((r["settings"]["dt"], r["rel_error"]) for r in rows
-                     if r["solver"] == s and r["method"] == m and r["rel_error"]
-                     and isinstance(r["settings"].get("dt"), (int, float))
-                     and "rtol" not in r["settings"] and low < r["rel_error"] < COARSE_ERR)
+        mine = [r for r in rows if r["solver"] == s and r["method"] == m]
+        pts = sorted((step(r), r["rel_error"]) for r in mine if r["rel_error"]
+                     and step(r) is not None and low < r["rel_error"] < COARSE_ERR)
         pts = pts[:ORDER_RUNGS]
         if len(pts) < 2:
             continue
         x, y = np.log(np.array(pts)).T
         slope = float(np.polyfit(x, y, 1)[0]) if np.ptp(x) > 0 else float("nan")
-        expected = ORDERS.get(m)
-        out.append({"solver": s, "method": m, "observed": slope, "expected": expected,
+        order = expected(mine[0])
+        out.append({"solver": s, "method": m, "observed": slope, "expected": order,
                     "rungs": len(pts), "dt_range": [pts[0][0], pts[-1][0]],
-                    "flag": bool(expected is not None and slope < expected - 0.5)})
+                    "flag": bool(order is not None and slope < order - 0.5)})
     return out
+
+
+def order_lines(orders, step_name, unit):
+    return [f"order {o['solver']} {o['method']}: observed {o['observed']:.2f} "
+            f"(method {o['expected'] if o['expected'] else '?'}, {o['rungs']} rungs, "
+            f"{step_name} {o['dt_range'][0]:.3g}–{o['dt_range'][1]:.3g}{unit})"
+            + (" — FLAG: below the method's order" if o["flag"] else "") for o in orders]
+
+
+def bench_dir(out, scene_name):
+    """A new bench folder: OUT/bench/SCENE-YYYYmmdd-HHMMSS."""
+    stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
+    out_dir = Path(out) / "bench" / f"{scene_name}-{stamp}"
+    out_dir.mkdir(parents=True, exist_ok=True)
+    return out_dir
 
 
 def _settings_text(settings):
     return ", ".join(f"{k}={fmt_value(v)}" for k, v in settings.items() if v is not None)
 
 
-def _plot(path, rows, scene, key, summary=None):
+def plot(path, rows, scene, ylabel, summary=None):
+    """The work-precision figure: error over median wall time per ladder, the summary levels
+    and each level's fastest rung starred."""
     plt = plot_style()
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for (s, m) in dict.fromkeys((r["solver"], r["method"]) for r in rows):
@@ -344,7 +389,7 @@ def _plot(path, rows, scene, key, summary=None):
                         (best["wall_s"], level), textcoords="offset points", xytext=(4, 3),
                         fontsize=7)
     ax.set_xlabel("median wall time [s]")
-    ax.set_ylabel(f"relative error of final {key}")
+    ax.set_ylabel(ylabel)
     ax.set_title(f"work-precision: {scene}")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)

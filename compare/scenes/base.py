@@ -53,6 +53,16 @@ class Extreme:
 
 
 @dataclass(frozen=True)
+class PublishedTiming:
+    """A computing time the source reports for one of its tables: `seconds` (tool -> s) for
+    the runs at `cases` (overrides of the scene's defaults, one run each; `xval bench` sums
+    them)."""
+    what: str
+    seconds: dict
+    cases: tuple = ({},)
+
+
+@dataclass(frozen=True)
 class Scene:
     name: str
     title: str
@@ -89,6 +99,9 @@ class Scene:
     # (json rows, markdown lines) of frequencies identified from time-domain free responses
     campbell: Campbell | None = None
     identify: Callable | None = None
+    # mode_shape_3d(params, solver, shape row) -> [(points (n, 3) m, displacement (n, 3))]:
+    # the structure's line strips and one mode's motion Re(displacement·e^{iωt}) on them
+    mode_shape_3d: Callable | None = None
     # time scenes: draw_3d(rec, params, trajectory, colour, offset) logs the bodies to rerun;
     # plots(params, trajectories, figure) fills a matplotlib figure of scene-specific plots
     draw_3d: Callable | None = None
@@ -97,6 +110,9 @@ class Scene:
     campaign_cases: tuple = ()
     # the spec's extreme cases (`xval extremes`)
     extremes: tuple = ()
+    # frequency scenes: the source's computing times (PublishedTiming), which `xval bench`
+    # sets each solver's default-settings time against
+    published_timings: tuple = ()
     # the channels the recording's first screen shows (default: key channel and energy)
     view_channels: tuple[str, ...] = ()
     notes: str = ""

@@ -8,7 +8,8 @@ evidence is in custom_models/mstmm/helicopter.py and the spec.
 import numpy as np
 
 from ..params import Param, positive
-from .base import Campbell, Scene
+from . import mstmm_shapes
+from .base import Campbell, PublishedTiming, Scene
 
 SOURCE = ("seed 002: Yao Song, Rui Xiaoting, Wang Jinghong, 'Calculation of helicopter "
           "vibration in hovering state', Journal of Harbin Institute of Technology 53(6) "
@@ -28,6 +29,16 @@ FREQUENCY_TOLERANCE = 1e-4
 BLADE_ENGINE_ALLOWANCE = {"exudyn": 1.5e-3, "mujoco": 1.5e-3}
 # The shaft chains have no such term: ω* = λ² ± Ω* to 9.1e-7 (tests/test_beam_engines.py).
 SHAFT_ENGINE_ALLOWANCE = {"exudyn": 1e-5, "mujoco": 1e-5}
+
+
+# The paper's computing times (mean of 3 runs): Table 1, the five modes at 0, 20 and 40 rad/s,
+# MATLAB MSTMM 6.3 s, ANSYS Workbench 55.9 s; Table 3, the 13 clamped-helicopter modes,
+# 11.5 s and 81.2 s (seed 002 §3.1, §3.3; `xval bench` sets each solver against them).
+TABLE1_TIMING = PublishedTiming("Table 1 (5 modes at speed 0, 20, 40 rad/s: sum of 3 runs)",
+                                {"MATLAB": 6.3, "ANSYS Workbench": 55.9},
+                                ({"speed": 0.0}, {"speed": 20.0}, {"speed": 40.0}))
+TABLE3_TIMING = PublishedTiming("Table 3 (tail clamped, the default 13 modes)",
+                                {"MATLAB": 11.5, "ANSYS Workbench": 81.2})
 
 
 def leaves(system):
@@ -74,7 +85,9 @@ ROTATING_BEAM = Scene(
     tolerances={"frequency": FREQUENCY_TOLERANCE,
                 "frequency_by_solver": BLADE_ENGINE_ALLOWANCE},
     campbell=Campbell("speed", 0.0, 40.0, 21, excitation_hz=rotor_speed_hz),
+    mode_shape_3d=mstmm_shapes.rotating_beam,
     campaign_cases=({"name": "rotating-beam"},),
+    published_timings=(TABLE1_TIMING,),
     notes=BLADE_DOC + "; torsion (GJφ')' − I_α(φ̈ + Ω²φ) = 0 as the paper's eq. 30.",
 )
 
@@ -97,6 +110,7 @@ SPINNING_SHAFT = Scene(
     tolerances={"frequency": FREQUENCY_TOLERANCE,
                 "frequency_by_solver": SHAFT_ENGINE_ALLOWANCE},
     campbell=Campbell("spin_ratio", 0.0, 12.0, 25, excitation_hz=shaft_speed_hz, unit=""),
+    mode_shape_3d=mstmm_shapes.spinning_shaft,
     campaign_cases=({"name": "spinning-shaft"},),
     notes="frequencies_hz dimensional; extra['omega_star'] = ω/ω₀ (Table 2's 'Hz' is ω*).",
 )
@@ -148,10 +162,12 @@ HELICOPTER_CLAMPED = Scene(
     kind="modes",
     params=helicopter_params(13),
     leaves=leaves("helicopter"),
+    mode_shape_3d=mstmm_shapes.helicopter_clamped,
     energy_channel=None,
     tolerances={"frequency": FREQUENCY_TOLERANCE},
     campbell=Campbell("speed", 0.0, 50.0, 11, excitation_hz=rotor_speed_hz),
     campaign_cases=({"name": "helicopter-clamped"},),
+    published_timings=(TABLE3_TIMING,),
 )
 
 HELICOPTER_HOVER = Scene(
@@ -161,6 +177,7 @@ HELICOPTER_HOVER = Scene(
     kind="modes",
     params=helicopter_params(8),
     leaves=leaves("helicopter_hover"),
+    mode_shape_3d=mstmm_shapes.helicopter_hover,
     energy_channel=None,
     tolerances={"frequency": FREQUENCY_TOLERANCE},
     campbell=Campbell("speed", 0.0, 50.0, 11, excitation_hz=rotor_speed_hz),

@@ -1,0 +1,255 @@
+"""`xval bench` for frequency scenes: the time each solver needs for a given accuracy of the
+natural frequencies, and its default settings against the source's published computing times.
+
+Each solver is walked along its own accuracy knob (coarse → fine, from its default outwards,
+with bench.py's walk): a mesh (integer settings named `*elements` / `*segments`, scaled
+together by factors of 2, each such ladder with the solver's accuracy switch — Richardson
+extrapolation — off and on) or a tolerance (`rtol` of a root refinement, `fd_step` of a finite
+difference, factors of 10); a solver with neither has one rung. A rung's error is the largest
+relative deviation over the scene's modes from the reference (modes paired by label where
+both name them uniquely, else by nearest frequency: `metrics.match_modes`); a rung that pairs
+fewer modes has no error (missed modes). The reference is the finest rung of the scene's first
+reference solver; the second one's best rung confirms it. Times are medians of repeated warm
+calls (each solver is called once first: import and compile time are reported apart). Summary
+and plot are the time bench's.
+"""
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+
+from . import metrics, solvers
+from .atomic import write_json, write_text
+from .bench import (
+    FLOOR_ERR,
+    _walk,
+    bench_dir,
+    convergence_orders,
+    order_lines,
+    plot,
+    repeat_timed,
+    summarise,
+)
+from .scenes import Scene
+
+TOLERANCES = {"rtol": tuple(10.0 ** -k for k in range(1, 14)),      # root refinement
+              "fd_step": tuple(10.0 ** -k for k in range(1, 11))}    # finite-difference step
+MESH_SUFFIXES = ("elements", "segments")
+MESH_FACTORS = tuple(2.0 ** k for k in range(-3, 4))     # 1/8 … 8 × the default mesh
+SWITCHES = ("richardson", "extrapolate")                 # accuracy switches of a mesh
+
+
+def ladders(leaf, preset: dict) -> list[tuple[str, list[dict], int]]:
+    """(label, [settings coarse → fine], index of the default rung) per accuracy knob."""
+    base = {**getattr(leaf, "MODES_SETTINGS", {}), **preset}
+    mesh = [k for k, v in base.items() if k.endswith(MESH_SUFFIXES)
+            and isinstance(v, int) and not isinstance(v, bool)]
+    switch = next((k for k in SWITCHES if isinstance(base.get(k), bool)), None)
+    out = []
+    if mesh:
+        name = mesh[0] if len(mesh) == 1 else "mesh"
+        for on in ((False, True) if switch else (None,)):
+            sts = [{**base, **{k: max(1, round(base[k] * f)) for k in mesh},
+                    **({} if on is None else {switch: on})} for f in MESH_FACTORS]
+            out.append((name + (f"+{switch}" if on else ""), sts, MESH_FACTORS.index(1.0)))
+    for k, values in TOLERANCES.items():
+        if isinstance(base.get(k), (int, float)) and not isinstance(base.get(k), bool):
+            start = int(np.argmin(np.abs(np.log(values) - np.log(base[k]))))
+            out.append((k, [{**base, k: v} for v in values], start))
+    return out or [("defaults", [base], 0)]
+
+
+def deviation(ref, m) -> tuple[float | None, str]:
+    """Largest relative frequency deviation of `m` from `ref` and the mode it is at (or None
+    and why: a failed run, missed modes)."""
+    if m.status != "ok":
+        return None, f"{m.status}: {m.reason}"
+    fr, fm = list(ref.frequencies_hz), list(m.frequencies_hz)
+    pairs = metrics.match_modes(fr, ref.labels, fm, m.labels)
+    if len(pairs) < len(fr):
+        return None, f"paired {len(pairs)} of the reference's {len(fr)} modes"
+    rel = [abs(fm[j] - fr[i]) / abs(fr[i]) for i, j in pairs]
+    k = int(np.argmax(rel))
+    return float(rel[k]), ref.labels[pairs[k][0]] or f"mode {pairs[k][0] + 1}"
+
+
+def _knob_text(knob: dict) -> str:
+    return ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
+                     for k, v in knob.items())
+
+
+def _mesh_step(row) -> float | None:
+    """1/n for a mesh rung whose (first) mesh knob is one number n, the same in every part
+    (a leaf may refine some parts beyond the request: those rungs have no single h)."""
+    if row.get("knob_kind") != "mesh" or row["rel_error"] is None:
+        return None
+    n = next(iter(row["knob"].values()))
+    if isinstance(n, dict):
+        n = set(n.values()).pop() if len(set(n.values())) == 1 else None
+    return 1.0 / n if isinstance(n, int) and n > 0 else None
+
+
+def falling(rows) -> list[dict]:
+    """The mesh rungs that are still converging: per ladder, from the coarsest rung with a
+    single h, each finer one while its error is below half the previous one (the walk's
+    stall rule) — past that the error is at the solver's floor (round-off, the reference)."""
+    out = []
+    for key in dict.fromkeys((r["solver"], r["method"]) for r in rows):
+        mine = sorted((r for r in rows if (r["solver"], r["method"]) == key
+                       and _mesh_step(r) is not None), key=_mesh_step, reverse=True)
+        for i, r in enumerate(mine):
+            if i and not r["rel_error"] < 0.5 * mine[i - 1]["rel_error"]:
+                break
+            out.append(r)
+    return out
+
+
+def _rung(call, s, st, label, kind, knobs, ref, seen, repeats, log):
+    """One rung's row: timed calls (bench.repeat_timed), its error; None where the leaf raised
+    the request to a rung already run (nothing coarser exists)."""
+    m = call(s, st)
+    effective = repr(sorted(m.settings.items())) if m.status == "ok" else None
+    if effective in seen:
+        return None
+    seen.add(effective)
+    walls = [m.wall_s]
+    if m.status == "ok":
+        repeat_timed(walls, lambda: call(s, st), repeats)
+    err, at = deviation(ref, m)
+    row = {"solver": s.name, "method": label, "knob_kind": kind,
+           "knob": {k: m.settings.get(k, st[k]) for k in knobs},
+           "settings": m.settings or st, "status": m.status,
+           "wall_s": float(np.median(walls)), "rel_error": err,
+           "worst_mode" if err is not None else "reason": at, "n_modes": len(m.frequencies_hz)}
+    log(f"  {s.name} {label} {_knob_text(row['knob'])}: err "
+        f"{'—' if err is None else f'{err:.2e}'} ({at}), wall {row['wall_s']:.3g} s")
+    return row
+
+
+def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int = 3,
+                    log=print, make_out=None) -> dict:
+    """The frequency bench (see the module doc); everything is checked before the bench
+    folder is made."""
+    chosen = solvers.pick(sc, solver_names)
+    params = sc.resolve(overrides)
+    timing_params = [[sc.resolve(case) for case in pt.cases] for pt in sc.published_timings]
+    if make_out:
+        make_out(out)
+    out_dir = bench_dir(out, sc.name)
+
+    def call(s, st, p=params):
+        return solvers.modes(sc, s, p, st)
+
+    refs = ([solvers.get_solver(n) for n in sc.reference_solvers]
+            or solvers.solvers_for(sc.name)[:2])
+    ref_settings = ladders(refs[0].leaf(sc), refs[0].preset)[0][1][-1]
+    ref = call(refs[0], ref_settings)
+    if ref.status != "ok":
+        raise RuntimeError(f"reference {refs[0].name} failed: {ref.reason}")
+    log(f"reference {refs[0].name} ({_knob_text(ref.settings)}): "
+        + ", ".join(f"{lb} {f:.10g}" for lb, f in zip(ref.labels, ref.frequencies_hz)) + " Hz")
+
+    rows, first_call = [], {}
+    for s in chosen:
+        t0 = time.perf_counter()
+        call(s, {})                                   # warm-up: import, compile, caches
+        first_call[s.name] = time.perf_counter() - t0
+        seen = set()
+        for label, rungs, start in ladders(s.leaf(sc), s.preset):
+            knobs = [k for k in rungs[0] if any(r[k] != rungs[0][k] for r in rungs)]
+            kind = "mesh" if label not in TOLERANCES and label != "defaults" else "tolerance"
+
+            # one rung that does not halve the error ends a ladder: a finer mesh costs 2–8×
+            rows += _walk(rungs, start, lambda i, s=s, rungs=rungs, label=label, knobs=knobs,
+                          kind=kind, seen=seen: _rung(call, s, rungs[i], label, kind, knobs, ref,
+                                                      seen, repeats, log), patience=1)
+
+    # the reference's confirmation: the second reference solver's best rung (its defaults
+    # when it was not benched)
+    check = None
+    if len(refs) > 1:
+        theirs = [r for r in rows if r["solver"] == refs[1].name and r["rel_error"] is not None]
+        if theirs:
+            best = min(theirs, key=lambda r: r["rel_error"])
+            check = {"solver": refs[1].name, "rel": best["rel_error"],
+                     "settings": best["settings"], "worst_mode": best["worst_mode"]}
+        else:
+            m = call(refs[1], {})
+            err, at = deviation(ref, m)
+            check = {"solver": refs[1].name, "rel": err, "settings": m.settings,
+                     "worst_mode": at}
+    confirmed = check["rel"] if check and check["rel"] is not None else None
+    what = f"(largest relative error over the {len(ref.frequencies_hz)} modes)"
+    best_err = {s.name: min((r["rel_error"] for r in rows if r["solver"] == s.name
+                             and r["rel_error"] is not None), default=None) for s in chosen}
+    allowance = sc.tolerances.get("frequency_by_solver") or {}
+    why = {s: (f"best {e:.1e}" if e is not None else "no rung ok")
+           + (f"; its model differs by up to the scene's allowance {allowance[s]:g}"
+              if s in allowance else "") for s, e in best_err.items()}
+    summary, lines = summarise(rows, [s.name for s in chosen], what, why)
+    # errors within 3× the level the two references agree to are not resolved from the
+    # reference's uncertainty; nor, for a solver whose model differs (the scene's allowance),
+    # those within 10× that difference
+    low = 3 * max(FLOOR_ERR, confirmed or 0.0)
+    orders = convergence_orders([r for r in falling(rows)
+                                 if r["rel_error"] > 10 * allowance.get(r["solver"], 0.0)],
+                                low, _mesh_step, lambda r: None)
+    lines += order_lines(orders, "h = 1/n,", "")
+
+    published, timing_lines = [], []
+    for pt, cases in zip(sc.published_timings, timing_params):
+        for s in chosen:
+            walls_per_case, ok = [], True
+            for p in cases:
+                walls = []
+                m = repeat_timed(walls, lambda s=s, p=p: call(s, {}, p), repeats)
+                ok &= m.status == "ok"
+                walls_per_case.append(float(np.median(walls)))
+            total = sum(walls_per_case)
+            entry = {"what": pt.what, "solver": s.name, "wall_s": total, "ok": ok,
+                     "per_case_s": walls_per_case, "cases": list(pt.cases),
+                     "published_s": dict(pt.seconds),
+                     "ratio": {tool: total / t for tool, t in pt.seconds.items()}}
+            published.append(entry)
+            timing_lines.append(
+                f"{pt.what}: {s.name} {total:.3g} s" + ("" if ok else " (a run failed)")
+                + ",".join(f" vs {t:g} s {tool} = " + (f"1/{t / total:.0f}" if total < t
+                                                        else f"{total / t:.2f}×")
+                           for tool, t in pt.seconds.items()))
+    lines += timing_lines
+
+    plot(out_dir / "work_precision.png", rows, sc.name, "largest relative frequency error",
+         summary)
+    blas = os.environ.get("OPENBLAS_NUM_THREADS")
+    obj = {"scene": sc.name, "kind": "modes", "params": params, "repeats": repeats,
+           "reference": {"solver": refs[0].name, "settings": ref.settings,
+                         "labels": ref.labels, "frequencies_hz": list(ref.frequencies_hz),
+                         "confirmed_by": check},
+           "first_call_s": first_call, "blas_threads": blas, "rows": rows,
+           "summary": summary, "orders": orders, "published_timings": published,
+           "summary_lines": lines}
+    md = [f"# Work-precision: {sc.name} (natural frequencies)", "",
+          f"Reference: {refs[0].name} ({_knob_text(ref.settings)}): "
+          + ", ".join(f"{lb} {f:.10g} Hz" for lb, f in zip(ref.labels, ref.frequencies_hz)),
+          "", (f"Confirmed by {check['solver']} ({_knob_text(check['settings'])}) to "
+               + (f"{check['rel']:.1e} relative (at {check['worst_mode']})"
+                  if check['rel'] is not None else f"— ({check['worst_mode']})"))
+          if check else "No second reference solver.", "",
+          "First call (import, compile): " + ", ".join(f"{s} {t:.2f} s"
+                                                       for s, t in first_call.items())
+          + f"; OPENBLAS_NUM_THREADS={blas or 'unset'}; median of {repeats} warm calls "
+            f"({repeats * 5} under 50 ms).", "", *[f"- {x}" for x in lines], "",
+          "| solver | ladder | setting | max rel. error | at | median wall [s] |",
+          "|---|---|---|---|---|---|"]
+    for r in rows:
+        err = r["rel_error"]
+        md.append(f"| {r['solver']} | {r['method']} | {_knob_text(r['knob'])} | "
+                  f"{'—' if err is None else format(err, '.2e')} | "
+                  f"{r.get('worst_mode') or r.get('reason')} | {r['wall_s']:.4g} |")
+    md += ["", "![work-precision](work_precision.png)"]
+    write_text(out_dir / "report.md", "\n".join(md) + "\n")
+    write_json(out_dir / "bench.json", obj)
+    obj["report"] = str(out_dir / "report.md")
+    return obj

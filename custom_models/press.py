@@ -22,24 +22,25 @@ import numpy as np
 from compare.contract import LeafResult, merge_settings
 from compare.physics import press as phys
 
-from .integrators import ADAPTIVE_TABLEAUS, FAIL_REASONS, FIXED_TABLEAUS, LA_REASONS
+from .integrators import FAIL_REASONS, FIXED_TABLEAUS, LA_REASONS
+from .integrators.dense import DENSE_TABLEAUS
 from .press_driver import LA_INTEGRATORS, integrate_cycle, integrate_idle
 from .press_equations import (
     FAIL_ENERGY,
     FAIL_SINGULAR,
     FAIL_STENCIL,
-    acc_any,
     acc_exact,
     energy_terms,
     guard_any,
-    lagrange_exact,
+    mass_matrix_any,
+    output_terms,
     rod_sine,
 )
-from .press_model import E0, E_SCALE, MODE, SOLVER, SOLVER_IDS, U, pack
+from .press_model import E0, E_SCALE, SOLVER, SOLVER_IDS, U, pack
 
 CHANNELS = phys.CHANNELS
-INTEGRATORS = tuple(LA_INTEGRATORS) + tuple(FIXED_TABLEAUS) + tuple(ADAPTIVE_TABLEAUS)
-ADAPTIVE = tuple(ADAPTIVE_TABLEAUS)
+INTEGRATORS = tuple(LA_INTEGRATORS) + tuple(FIXED_TABLEAUS) + tuple(DENSE_TABLEAUS)
+ADAPTIVE = tuple(DENSE_TABLEAUS)
 # the settings both solvers take (each leaf adds its integrator and step)
 COMMON_SETTINGS = {"theta": 1.4, "newton_tol": 1e-10, "max_iter": 30, "rtol": None,
                    "atol": None, "h_max": None, "max_steps": 10**8, "singular_tol": 0.02,
@@ -78,22 +79,9 @@ def initial_state(par: dict, p: np.ndarray) -> np.ndarray:
 def channels(par: dict, Y: np.ndarray, modes: np.ndarray, p: np.ndarray, t_out: np.ndarray,
              lost: np.ndarray) -> dict:
     """The scene's channels (compare.physics.press.channels) from the solver's states."""
-    n = len(t_out)
-    cols = {k: np.full(n, np.nan) for k in ("phidd", "xC", "T", "V")}
-    mode0 = p[MODE]
-    for r in range(n):
-        y = Y[r]
-        if not np.all(np.isfinite(y)):
-            continue
-        p[MODE] = modes[r]
-        T, Vs, Vg, _ = energy_terms(y, p)
-        cols["phidd"][r] = acc_any(t_out[r], y[:2], y[2:4], p)[0]
-        cols["xC"][r] = phys.loop_closure(y[0], y[1], par["l1"], par["l2"], par["l3"],
-                                          phys.assembly_sign(par))[4]
-        cols["T"][r], cols["V"][r] = T, Vs + Vg
-    p[MODE] = mode0
-    return phys.channels(par, Y[:, 0], Y[:, 2], cols["phidd"], Y[:, 1], cols["xC"], cols["T"],
-                         cols["V"], Y[:, 4], Y[:, 5], Y[:, 6], lost)
+    o = output_terms(np.ascontiguousarray(Y), np.ascontiguousarray(modes, float), p)
+    return phys.channels(par, Y[:, 0], Y[:, 2], o[:, 0], Y[:, 1], o[:, 1], o[:, 2], o[:, 3],
+                         Y[:, 4], Y[:, 5], Y[:, 6], lost)
 
 
 def _reason(code, Y, p):
@@ -160,7 +148,7 @@ def simulate(solver: str, defaults: dict, params: dict, t_out: np.ndarray,
     else:
         Y, stats, t_fail, code, used = integrate_idle(y0, p, t_out, s)
         modes, lost = np.zeros(n), np.zeros(n)
-    stats["integrate_s"] = time.perf_counter() - t0
+    stats.setdefault("integrate_s", time.perf_counter() - t0)   # the drivers' own where given
     ch = channels(params, Y, modes, p, t_out, lost)
     extra.update({"motor_work": Y[:, 4].copy(), "damper_loss": Y[:, 5].copy()})
     ok = code == 0
@@ -177,13 +165,13 @@ def linearised_modes(params: dict, q=None) -> tuple:
     p = pack(params)
     q0 = np.radians([params["phi0"], params["psi0"]]) if q is None else np.asarray(q, float)
     p[U] = 0.0                                  # no motor torque: the conservative part only
-    base, G, A, dA = lagrange_exact(q0, p)
+    A = mass_matrix_any(q0[0], q0[1], p)
     K = np.zeros((2, 2))
     for k, dq in enumerate(np.eye(2) * 1e-6):
         fp = acc_exact(0.0, q0 + dq, np.zeros(2), p)[:2]
         fm = acc_exact(0.0, q0 - dq, np.zeros(2), p)[:2]
-        Ap = lagrange_exact(q0 + dq, p)[2]
-        Am = lagrange_exact(q0 - dq, p)[2]
+        Ap = mass_matrix_any(*(q0 + dq), p)
+        Am = mass_matrix_any(*(q0 - dq), p)
         K[:, k] = -(Ap @ fp - Am @ fm) / 2e-6     # K = −∂Q/∂q
     w2 = np.sort(np.linalg.eigvals(np.linalg.solve(A, K)).real)[::-1]
     w = np.sqrt(np.maximum(w2, 0.0))

@@ -1,21 +1,14 @@
 """Time integration of the custom press model with the shared integrators: an idle run
-(`press`: fixed-step RK, adaptive RK or linear acceleration) and the lock/release cycle
-(`press-cycle`: segments of the shared event-capable driver, the lock located as a state event).
+(`press`: fixed-step RK or adaptive RK with dense output, or linear acceleration) and the
+lock/release cycle (`press-cycle`: segments of the shared event-capable driver, the lock located
+as a state event). Runge–Kutta methods take the allocation-free right-hand side `f_any_into`.
 """
 import math
 
 import numpy as np
 
-from .integrators import (
-    ADAPTIVE_TABLEAUS,
-    FIXED_TABLEAUS,
-    MODE_FIXED_POINT,
-    MODE_NEWTON,
-    MODE_PC,
-    integrate_adaptive,
-    integrate_fixed,
-    integrate_wilson,
-)
+from .integrators import FIXED_TABLEAUS, MODE_FIXED_POINT, MODE_NEWTON, MODE_PC, integrate_wilson
+from .integrators.dense import DENSE_TABLEAUS, solve
 from .integrators.events import (
     C_EVENT_ON,
     C_EVENT_TOL,
@@ -28,13 +21,12 @@ from .integrators.events import (
 from .press_equations import (
     acc_any,
     energy_terms,
-    f_any,
+    f_any_into,
     guard_any,
-    lagrange_exact,
-    lagrange_partial,
     lock_event,
+    mass_matrix_any,
 )
-from .press_model import E_LOST, MODE, SOLVER
+from .press_model import E_LOST, MODE
 
 # linear-acceleration variants: (θ or None = the `theta` setting, iteration mode)
 LA_INTEGRATORS = {"linacc": (1.0, MODE_NEWTON), "wilson": (None, MODE_NEWTON),
@@ -55,30 +47,25 @@ def la_args(s: dict) -> tuple:
 
 
 def integrate_idle(y0: np.ndarray, p: np.ndarray, t_out: np.ndarray, s: dict):
-    """One idle run (scene `press`). Returns (Y, stats, t_fail, code, settings used)."""
+    """One idle run (scene `press`). Returns (Y, stats, t_fail, code, settings used).
+
+    Runge–Kutta methods run on the dense-output drivers: the adaptive step is set by the
+    tolerance alone (no cap unless h_max is given), a fixed step need not divide the output
+    step (outputs between step ends by cubic Hermite)."""
     name = s["integrator"]
-    if name in ADAPTIVE_TABLEAUS:
-        tb = ADAPTIVE_TABLEAUS[name]
+    if name in DENSE_TABLEAUS or name in FIXED_TABLEAUS:
         rtol = float(s["rtol"] or 1e-10)
-        atol = float(s["atol"] or rtol * 1e-2)
-        h_max = float(s["h_max"] or (t_out[1] - t_out[0]))
-        Y, steps, evals, rej, t_fail, code = integrate_adaptive(
-            f_any, guard_any, y0, p, t_out, rtol, atol, h_max, int(s["max_steps"]), tb["A"],
-            tb["B"], tb["C"], tb["E"], tb["E3"], tb["err_order"])
-        return Y, {"steps": int(steps), "rhs_evals": int(evals), "rejected": int(rej)}, \
-            t_fail, code, {"rtol": rtol, "atol": atol, "h_max": h_max}
+        Y, stats, t_fail, code, used = solve(
+            f_any_into, guard_any, y0, p, t_out, name, dt=s["dt"], rtol=rtol, atol=s["atol"],
+            h_max=s["h_max"], max_steps=int(s["max_steps"]))
+        used.pop("integrator")
+        return Y, stats, t_fail, code, used
     n_sub = steps_per_output(t_out, s["dt"])
-    used = {"dt": float((t_out[1] - t_out[0]) / n_sub)}
-    if name in FIXED_TABLEAUS:
-        tb = FIXED_TABLEAUS[name]
-        Y, steps, evals, t_fail, code = integrate_fixed(f_any, guard_any, y0, p, t_out, n_sub,
-                                                        tb["A"], tb["B"], tb["C"])
-    else:
-        theta, mode = la_args(s)
-        Y, steps, evals, t_fail, code = integrate_wilson(
-            acc_any, guard_any, y0, 2, p, t_out, n_sub, theta, mode, float(s["newton_tol"]),
-            int(s["max_iter"]))
-        used["theta"] = theta
+    theta, mode = la_args(s)
+    Y, steps, evals, t_fail, code = integrate_wilson(
+        acc_any, guard_any, y0, 2, p, t_out, n_sub, theta, mode, float(s["newton_tol"]),
+        int(s["max_iter"]))
+    used = {"dt": float((t_out[1] - t_out[0]) / n_sub), "theta": theta}
     return Y, {"steps": int(steps), "rhs_evals": int(evals)}, t_fail, code, used
 
 
@@ -99,7 +86,7 @@ def _method(s: dict, h: float):
 def plastic_lock(y: np.ndarray, p: np.ndarray) -> tuple:
     """The plastic lock: ψ' → 0 keeping the crank's generalized momentum p_φ = A11 φ' + A12 ψ'
     (A of the solver's own description). Returns (new state, kinetic energy lost)."""
-    A = lagrange_partial(y[:2], p)[2] if p[SOLVER] != 0.0 else lagrange_exact(y[:2], p)[2]
+    A = mass_matrix_any(y[0], y[1], p)
     T_before = energy_terms(y, p)[0]
     y = y.copy()
     y[2] = y[2] + A[0, 1] / A[0, 0] * y[3]
@@ -111,7 +98,7 @@ def integrate_cycle(y0: np.ndarray, p: np.ndarray, par: dict, t_out: np.ndarray,
     """press-cycle: idle → lock at ψ = lock_angle (first crossing after lock_after, located by
     bisection) → locked crank–slider under the working load → release at release_after → idle.
     Returns (Y, per-row mode, stats, t_fail, code, settings used, lock record)."""
-    if s["integrator"] in ADAPTIVE_TABLEAUS:
+    if s["integrator"] in DENSE_TABLEAUS:
         raise ValueError(f"press-cycle runs fixed-step integrators only, got {s['integrator']!r}")
     h = (t_out[1] - t_out[0]) / steps_per_output(t_out, s["dt"])
     tab, cfg, used = _method(s, h)
@@ -131,7 +118,7 @@ def integrate_cycle(y0: np.ndarray, p: np.ndarray, par: dict, t_out: np.ndarray,
         if t_stop > t:
             cfg[C_EVENT_ON], cfg[C_EVENT_TOL] = float(ev), float(s["event_tol"])
             code, t_new, y_new, i_new, st, evs = integrate_segment(
-                f_any, acc_any, guard_any, lock_event, y, p, t, t_stop, t_out, i, Y, h, tab,
+                f_any_into, acc_any, guard_any, lock_event, y, p, t, t_stop, t_out, i, Y, h, tab,
                 cfg)
             modes[i:i_new] = md
             stats["steps"] += st

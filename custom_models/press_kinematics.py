@@ -17,7 +17,7 @@ import numpy as np
 
 from compare.physics.press import loop_closure
 
-from .press_model import DPHI, DPSI, L1, L2, L3, NB, PHI, PSI, SIGMA, TH2, XA, XB, XC, YA, YB
+from .press_model import DPHI, DPSI, L1, L2, L3, NB, SIGMA
 
 
 # ---- exact kinematics ---------------------------------------------------------------------
@@ -34,8 +34,10 @@ def rod_sine(phi, psi, p):
 
 
 @nb.njit(cache=True)
-def exact_derivatives(phi, psi, p):
-    """Base coordinates, their gradients G (8, 2) and Hessians H (8, 2, 2), analytically.
+def exact_kinematics(phi, psi, p):
+    """Base coordinates, their gradients and Hessians, analytically, as tuples over the base
+    coordinates XA … PSI (values, not arrays: nothing is allocated per call):
+    (base, ∂/∂φ, ∂/∂ψ, ∂²/∂φ², ∂²/∂φ∂ψ, ∂²/∂ψ²).
 
     sin θ2 = s(φ, ψ), cos θ2 = c2 = σ√(1 − s²):  ∇θ2 = ∇s/c2,  ∇²θ2 = ∇²s/c2 + s ∇s∇sᵀ/c2³;
     x_B = x_A + l2 c2 with ∇c2 = −s ∇θ2 and ∇²c2 = −∇θ2∇sᵀ − s ∇²θ2."""
@@ -43,9 +45,6 @@ def exact_derivatives(phi, psi, p):
     cf, sf, cp, sp = math.cos(phi), math.sin(phi), math.cos(psi), math.sin(psi)
     s = (l3 * sp - l1 * sf) / l2
     c2 = p[SIGMA] * math.sqrt(max(0.0, 1.0 - s * s))
-    base = np.empty(NB)
-    G = np.zeros((NB, 2))
-    H = np.zeros((NB, 2, 2))
     gs0, gs1 = -l1 * cf / l2, l3 * cp / l2
     hs00, hs11 = l1 * sf / l2, -l3 * sp / l2
     gt0, gt1 = gs0 / c2, gs1 / c2
@@ -53,28 +52,32 @@ def exact_derivatives(phi, psi, p):
     ht00 = hs00 / c2 + s * gs0 * gs0 / c3
     ht01 = s * gs0 * gs1 / c3
     ht11 = hs11 / c2 + s * gs1 * gs1 / c3
-    base[XA], base[YA] = l1 * cf, l1 * sf
-    G[XA, 0], H[XA, 0, 0] = -l1 * sf, -l1 * cf
-    G[YA, 0], H[YA, 0, 0] = l1 * cf, -l1 * sf
-    # x_B = x_A + l2 c2
-    base[XB] = base[XA] + l2 * c2
-    G[XB, 0] = G[XA, 0] - l2 * s * gt0
-    G[XB, 1] = -l2 * s * gt1
-    H[XB, 0, 0] = H[XA, 0, 0] + l2 * (-gt0 * gs0 - s * ht00)
-    H[XB, 0, 1] = l2 * (-gt0 * gs1 - s * ht01)
-    H[XB, 1, 0] = H[XB, 0, 1]
-    H[XB, 1, 1] = l2 * (-gt1 * gs1 - s * ht11)
-    base[YB] = l3 * sp
-    G[YB, 1], H[YB, 1, 1] = l3 * cp, -l3 * sp
-    base[XC] = base[XB] - l3 * cp
-    G[XC, 0], G[XC, 1] = G[XB, 0], G[XB, 1] + l3 * sp
-    H[XC, 0, 0], H[XC, 0, 1], H[XC, 1, 0] = H[XB, 0, 0], H[XB, 0, 1], H[XB, 1, 0]
-    H[XC, 1, 1] = H[XB, 1, 1] + l3 * cp
-    base[PHI], G[PHI, 0] = phi, 1.0
-    base[TH2], G[TH2, 0], G[TH2, 1] = math.atan2(s, c2), gt0, gt1
-    H[TH2, 0, 0], H[TH2, 0, 1], H[TH2, 1, 0], H[TH2, 1, 1] = ht00, ht01, ht01, ht11
-    base[PSI], G[PSI, 1] = psi, 1.0
-    return base, G, H
+    xA, yA = l1 * cf, l1 * sf
+    xB = xA + l2 * c2                                  # x_B = x_A + l2 c2
+    gB0, gB1 = -l1 * sf - l2 * s * gt0, -l2 * s * gt1
+    hB00 = -l1 * cf + l2 * (-gt0 * gs0 - s * ht00)
+    hB01 = l2 * (-gt0 * gs1 - s * ht01)
+    hB11 = l2 * (-gt1 * gs1 - s * ht11)
+    base = (xA, yA, xB, l3 * sp, xB - l3 * cp, phi, math.atan2(s, c2), psi)
+    g0 = (-l1 * sf, l1 * cf, gB0, 0.0, gB0, 1.0, gt0, 0.0)
+    g1 = (0.0, 0.0, gB1, l3 * cp, gB1 + l3 * sp, 0.0, gt1, 1.0)
+    h00 = (-l1 * cf, -l1 * sf, hB00, 0.0, hB00, 0.0, ht00, 0.0)
+    h01 = (0.0, 0.0, hB01, 0.0, hB01, 0.0, ht01, 0.0)
+    h11 = (0.0, 0.0, hB11, -l3 * sp, hB11 + l3 * cp, 0.0, ht11, 0.0)
+    return base, g0, g1, h00, h01, h11
+
+
+@nb.njit(cache=True)
+def exact_derivatives(phi, psi, p):
+    """`exact_kinematics` as arrays: base (8,), gradients G (8, 2), Hessians H (8, 2, 2)."""
+    base, g0, g1, h00, h01, h11 = exact_kinematics(phi, psi, p)
+    b = np.empty(NB)
+    G = np.empty((NB, 2))
+    H = np.empty((NB, 2, 2))
+    for k in range(NB):
+        b[k], G[k, 0], G[k, 1] = base[k], g0[k], g1[k]
+        H[k, 0, 0], H[k, 0, 1], H[k, 1, 0], H[k, 1, 1] = h00[k], h01[k], h01[k], h11[k]
+    return b, G, H
 
 
 # ---- the paper's "partial systems": velocity analogues by central differences --------------
@@ -88,36 +91,52 @@ NEIGH = np.array([[0, 1, 2, 3, 4], [1, 5, 0, 9, 10], [2, 0, 6, 11, 12], [3, 9, 1
 
 
 @nb.njit(cache=True)
-def _stencil_positions(phi, psi, p, n_pts):
-    """x_A, y_A, x_B, y_B, x_C at the first n_pts stencil points; ok False if any is unreal."""
-    P = np.empty((n_pts, 5))
-    dphi, dpsi = p[DPHI], p[DPSI]
+def _point(phi, psi, k, p):
+    """(x_A, y_A, x_B, y_B, x_C) at stencil point k, and whether the loop closes there."""
+    xA, yA, xB, yB, xC, ok = positions(phi + STENCIL[k, 0] * p[DPHI],
+                                       psi + STENCIL[k, 1] * p[DPSI], p)
+    return (xA, yA, xB, yB, xC), ok
+
+
+@nb.njit(cache=True)
+def stencil_positions(phi, psi, p):
+    """`_point` at the 13 stencil points (a tuple: nothing allocated); ok False if any is
+    unreal."""
+    P = (_point(phi, psi, 0, p), _point(phi, psi, 1, p), _point(phi, psi, 2, p),
+         _point(phi, psi, 3, p), _point(phi, psi, 4, p), _point(phi, psi, 5, p),
+         _point(phi, psi, 6, p), _point(phi, psi, 7, p), _point(phi, psi, 8, p),
+         _point(phi, psi, 9, p), _point(phi, psi, 10, p), _point(phi, psi, 11, p),
+         _point(phi, psi, 12, p))
     ok = True
-    for k in range(n_pts):
-        xA, yA, xB, yB, xC, good = positions(phi + STENCIL[k, 0] * dphi,
-                                             psi + STENCIL[k, 1] * dpsi, p)
-        P[k, 0], P[k, 1], P[k, 2], P[k, 3], P[k, 4] = xA, yA, xB, yB, xC
-        ok = ok and good
+    for k in range(13):
+        ok = ok and P[k][1]
     return P, ok
 
 
 @nb.njit(cache=True)
-def fd_gradients(P, nb_idx, p):
-    """Velocity analogues (∂r/∂φ, ∂r/∂ψ) of the partial systems PS1 (ψ frozen) and PS2 (φ
-    frozen) by central differences (eqs. 6–8, 12–13); link angular-velocity analogues from the
-    cross-product formula ω* = (AB × v*_BA)/|AB|² (eqs. 9, 14–15), the crank's exactly e_z."""
-    c, fp, fm, sp, sm = nb_idx[0], nb_idx[1], nb_idx[2], nb_idx[3], nb_idx[4]
-    G = np.zeros((NB, 2))
-    inv = (0.5 / p[DPHI], 0.5 / p[DPSI])
-    for b in range(5):
-        G[b, 0] = (P[fp, b] - P[fm, b]) * inv[0]
-        G[b, 1] = (P[sp, b] - P[sm, b]) * inv[1]
-    G[PHI, 0] = 1.0
-    dx, dy = P[c, 2] - P[c, 0], P[c, 3] - P[c, 1]          # AB
-    ex, ey = P[c, 4] - P[c, 2], -P[c, 3]                   # BC (y_C = 0)
-    for k in range(2):
-        vx, vy = G[XB, k] - G[XA, k], G[YB, k] - G[YA, k]  # v*_BA
-        G[TH2, k] = (dx * vy - dy * vx) / (dx * dx + dy * dy)
-        wx, wy = G[XC, k] - G[XB, k], -G[YB, k]            # v*_CB
-        G[PSI, k] = (ex * wy - ey * wx) / (ex * ex + ey * ey)
-    return G
+def _link_analogues(v, c):
+    """(θ2, ψ) analogues of one partial system from the cross-product formula
+    ω* = (AB × v*_BA)/|AB|² (eqs. 9, 14–15); v = the joints' analogues, c = the joints."""
+    dx, dy = c[2] - c[0], c[3] - c[1]                  # AB
+    ex, ey = c[4] - c[2], -c[3]                        # BC (y_C = 0)
+    vx, vy = v[2] - v[0], v[3] - v[1]                  # v*_BA
+    wx, wy = v[4] - v[2], -v[3]                        # v*_CB
+    return (dx * vy - dy * vx) / (dx * dx + dy * dy), (ex * wy - ey * wx) / (ex * ex + ey * ey)
+
+
+@nb.njit(cache=True)
+def fd_gradients(P, n, p):
+    """Velocity analogues (∂r/∂φ, ∂r/∂ψ) at neighbourhood n (NEIGH[n]) of the stencil P: the
+    partial systems PS1 (ψ frozen) and PS2 (φ frozen) by central differences (eqs. 6–8,
+    12–13), the links' angular analogues by `_link_analogues`, the crank's exactly e_z. Two
+    tuples over the base coordinates XA … PSI."""
+    c, fp, fm = P[NEIGH[n, 0]][0], P[NEIGH[n, 1]][0], P[NEIGH[n, 2]][0]
+    sp, sm = P[NEIGH[n, 3]][0], P[NEIGH[n, 4]][0]
+    i0, i1 = 0.5 / p[DPHI], 0.5 / p[DPSI]
+    a = ((fp[0] - fm[0]) * i0, (fp[1] - fm[1]) * i0, (fp[2] - fm[2]) * i0,
+         (fp[3] - fm[3]) * i0, (fp[4] - fm[4]) * i0)
+    b = ((sp[0] - sm[0]) * i1, (sp[1] - sm[1]) * i1, (sp[2] - sm[2]) * i1,
+         (sp[3] - sm[3]) * i1, (sp[4] - sm[4]) * i1)
+    ta, pa = _link_analogues(a, c)
+    tb, pb = _link_analogues(b, c)
+    return (a[0], a[1], a[2], a[3], a[4], 1.0, ta, pa), (b[0], b[1], b[2], b[3], b[4], 0.0, tb, pb)

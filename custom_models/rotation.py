@@ -86,11 +86,14 @@ def quat_to_matrix(q):
 @nb.njit(cache=True)
 def quat_times_vector(q, v):
     """q ⊗ (0, v): the kinematic product of q' = ½ q ⊗ (0, ω_body)."""
-    w, x, y, z = q
-    return np.array([-x * v[0] - y * v[1] - z * v[2],
-                     w * v[0] + y * v[2] - z * v[1],
-                     w * v[1] + z * v[0] - x * v[2],
-                     w * v[2] + x * v[1] - y * v[0]])
+    return np.array(quat_times_vector_t(q[0], q[1], q[2], q[3], v[0], v[1], v[2]))
+
+
+@nb.njit(cache=True)
+def quat_times_vector_t(w, x, y, z, v0, v1, v2):
+    """`quat_times_vector` as a 4-tuple."""
+    return (-x * v0 - y * v1 - z * v2, w * v0 + y * v2 - z * v1, w * v1 + z * v0 - x * v2,
+            w * v2 + x * v1 - y * v0)
 
 
 @nb.njit(cache=True)

@@ -62,7 +62,7 @@ def test_zero_damping_and_zero_defect_are_admissible():
 def test_bad_settings_raise_value_error():
     p = SCENE.resolve({"t_end": 0.01})
     t = SCENE.output_grid(p)
-    for s in ({"integrator": "bogus"}, {"integrator": "rk4", "dt": 3e-4}, {"project": "maybe"},
+    for s in ({"integrator": "bogus"}, {"integrator": "rk4", "dt": -1e-4}, {"project": "maybe"},
               {"nonsense": 1}):
         with pytest.raises(ValueError):
             leaf.simulate(p, t, s)

@@ -116,21 +116,33 @@ def wrap(a):
 
 
 @nb.njit(cache=True)
-def twist_angle(q) -> float:
-    """Twist about the body z axis of the swing–twist split q = q_swing ⊗ q_twist (wrapped).
+def twist_of(w, z) -> float:
+    """Twist about the body z axis of the swing–twist split q = q_swing ⊗ q_twist (wrapped),
+    from q's w and z.
 
     With q_twist = (cos φ/2, 0, 0, sin φ/2) and a swing without z part, the product has
     w = c·cos φ/2 and z = c·sin φ/2, so φ = 2 atan2(z, w) for any norm and sign of q."""
-    return wrap(2.0 * np.arctan2(q[3], q[0]))
+    return wrap(2.0 * np.arctan2(z, w))
+
+
+@nb.njit(cache=True)
+def twist_angle(q) -> float:
+    """twist_of a quaternion array (w, x, y, z)."""
+    return twist_of(q[0], q[3])
+
+
+@nb.njit(cache=True)
+def twist_rate_t(w, x, y, z, ox, oy, oz):
+    """dφ/dt of twist_angle for q' = ½ (0, ω) ⊗ q, ω in the fixed frame (scalars)."""
+    dw = -0.5 * (ox * x + oy * y + oz * z)
+    dz = 0.5 * (w * oz + ox * y - oy * x)
+    return 2.0 * (w * dz - z * dw) / (w * w + z * z)
 
 
 @nb.njit(cache=True)
 def twist_rate(q, omega):
-    """dφ/dt of twist_angle for q' = ½ (0, ω) ⊗ q, ω in the fixed frame."""
-    w, x, y, z = q
-    dw = -0.5 * (omega[0] * x + omega[1] * y + omega[2] * z)
-    dz = 0.5 * (w * omega[2] + omega[0] * y - omega[1] * x)
-    return 2.0 * (w * dz - z * dw) / (w * w + z * z)
+    """twist_rate_t of a quaternion array and a fixed-frame ω array."""
+    return twist_rate_t(q[0], q[1], q[2], q[3], omega[0], omega[1], omega[2])
 
 
 def spin_angle(quats: np.ndarray, t: np.ndarray | None = None,
@@ -172,23 +184,6 @@ def defect_lift_slope(twist, p) -> float:
 
 
 @nb.njit(cache=True)
-def bearing_forces(r_a, v_a, r_b, v_b, twist, p):
-    """Forces (fixed frame) on journals a and b: radial spring–dampers toward the bearing
-    centres minus the lift at a, and the axial spring on z of journal a."""
-    h = defect_lift(twist, p)
-    k, c = p[I_KB], p[I_CB]
-    F_a = np.empty(3)
-    F_b = np.empty(3)
-    F_a[0] = -k * (r_a[0] + h * p[I_LX]) - c * v_a[0]      # d_a = −h ĝ
-    F_a[1] = -k * (r_a[1] + h * p[I_LY]) - c * v_a[1]
-    F_a[2] = -p[I_KAX] * (r_a[2] - 0.5 * p[I_L])
-    F_b[0] = -k * r_b[0] - c * v_b[0]
-    F_b[1] = -k * r_b[1] - c * v_b[1]
-    F_b[2] = 0.0
-    return F_a, F_b
-
-
-@nb.njit(cache=True)
 def shaft_torques(omega_z, Fa_radial_norm, Fb_radial_norm, p):
     """(motor, friction) moments about the shaft axis e3."""
     motor = p[I_STALL] * (1.0 - omega_z / p[I_NOLOAD])
@@ -206,33 +201,63 @@ def journals(r_cm, v_cm, R, omega, p):
 
 
 @nb.njit(cache=True)
-def body_loads(r_cm, q, v_cm, omega, p):
-    """Everything but gravity acting on the shaft, reduced to the centre of mass (fixed frame):
-    (force (3,), moment (3,), motor power Ẇ, dissipation power Ḋ). ω in the fixed frame."""
-    R = quat_matrix(q)
-    e3 = np.array([R[0, 2], R[1, 2], R[2, 2]])
-    r_a, v_a, r_b, v_b = journals(r_cm, v_cm, R, omega, p)
-    phi = twist_angle(q)
-    F_a, F_b = bearing_forces(r_a, v_a, r_b, v_b, phi, p)
-    na = np.sqrt(F_a[0] ** 2 + F_a[1] ** 2)
-    nb_ = np.sqrt(F_b[0] ** 2 + F_b[1] ** 2)
-    w_z = dot(omega, e3)
-    motor, friction = shaft_torques(w_z, na, nb_, p)
-    force = F_a + F_b
-    moment = cross(r_a - r_cm, F_a) + cross(r_b - r_cm, F_b) + (motor + friction) * e3
-    # Ḋ: dampers + friction + the lift's work k_b (δ_a − d_a)·ḋ_a (see module docstring)
+def loads_t(rx, ry, rz, qw, qx, qy, qz, vx, vy, vz, wx, wy, wz, p):
+    """Everything but gravity acting on the shaft, reduced to the centre of mass (fixed frame),
+    from the centre's position r and velocity v, the orientation q (w, x, y, z; any norm) and
+    the fixed-frame ω, as scalars: (F_x, F_y, F_z, M_x, M_y, M_z, Ẇ_motor, Ḋ).
+
+    The one implementation of the force laws (module docstring); scalar code that allocates
+    nothing, because every solver evaluates it once per right-hand side (the engines through
+    `body_loads`)."""
+    s = 1.0 / (qw * qw + qx * qx + qy * qy + qz * qz)
+    ex = 2 * s * (qx * qz + qw * qy)                 # e3 = R(q)·(0, 0, 1), the shaft axis
+    ey = 2 * s * (qy * qz - qw * qx)
+    ez = 1 - 2 * s * (qx * qx + qy * qy)
+    half = 0.5 * p[I_L]
+    ax, ay, az = half * ex, half * ey, half * ez    # arm from the centre to journal a
+    ux, uy = wy * az - wz * ay, wz * ax - wx * az    # (ω × arm)_x,y: journal velocity about r
+    phi = twist_of(qw, qz)
     h = defect_lift(phi, p)
-    dh = defect_lift_slope(phi, p) * twist_rate(q, omega)
-    lift_power = -p[I_KB] * ((r_a[0] + h * p[I_LX]) * p[I_LX]
-                             + (r_a[1] + h * p[I_LY]) * p[I_LY]) * dh
-    damp = p[I_CB] * (v_a[0] ** 2 + v_a[1] ** 2 + v_b[0] ** 2 + v_b[1] ** 2)
-    return force, moment, motor * w_z, damp - friction * w_z + lift_power
+    k, c, lx, ly = p[I_KB], p[I_CB], p[I_LX], p[I_LY]
+    # radial spring–dampers (d_a = −h ĝ at a) and the axial spring on journal a's z
+    sax, say = rx + ax + h * lx, ry + ay + h * ly    # δ_a − d_a
+    vax, vay, vbx, vby = vx + ux, vy + uy, vx - ux, vy - uy
+    fax, fay = -k * sax - c * vax, -k * say - c * vay
+    faz = -p[I_KAX] * (rz + az - half)
+    fbx, fby = -k * (rx - ax) - c * vbx, -k * (ry - ay) - c * vby
+    w_z = wx * ex + wy * ey + wz * ez
+    motor, friction = shaft_torques(w_z, np.sqrt(fax * fax + fay * fay),
+                                    np.sqrt(fbx * fbx + fby * fby), p)
+    tq = motor + friction
+    # moment: arm × F_a + (−arm) × F_b (F_b has no z part) + the shaft torques about e3
+    mx = ay * faz - az * fay + az * fby + tq * ex
+    my = az * fax - ax * faz - az * fbx + tq * ey
+    mz = ax * fay - ay * fax - (ax * fby - ay * fbx) + tq * ez
+    # Ḋ: dampers + friction + the lift's work k_b (δ_a − d_a)·ḋ_a (see module docstring)
+    dh = defect_lift_slope(phi, p) * twist_rate_t(qw, qx, qy, qz, wx, wy, wz)
+    lift_power = -k * (sax * lx + say * ly) * dh
+    damp = c * (vax * vax + vay * vay + vbx * vbx + vby * vby)
+    return (fax + fbx, fay + fby, faz, mx, my, mz, motor * w_z,
+            damp - friction * w_z + lift_power)
+
+
+@nb.njit(cache=True)
+def body_loads(r_cm, q, v_cm, omega, p):
+    """`loads_t` for arrays (the engines' call): (force (3,), moment (3,), motor power Ẇ,
+    dissipation power Ḋ). ω in the fixed frame."""
+    L = loads_t(r_cm[0], r_cm[1], r_cm[2], q[0], q[1], q[2], q[3], v_cm[0], v_cm[1], v_cm[2],
+                omega[0], omega[1], omega[2], p)
+    force = np.empty(3)
+    moment = np.empty(3)
+    for i in range(3):
+        force[i] = L[i]
+        moment[i] = L[3 + i]
+    return force, moment, L[6], L[7]
 
 
 def powers(r_cm, q, v_cm, omega, p):
     """(Ẇ_motor, Ḋ) — the integrands of the work channels (see body_loads)."""
-    _, _, pw, pd = body_loads(r_cm, q, v_cm, omega, p)
-    return pw, pd
+    return loads_t(*r_cm, *q, *v_cm, *omega, p)[6:]
 
 
 # ---------------------------------------------------------------- energy

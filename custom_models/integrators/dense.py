@@ -18,7 +18,10 @@ are written: after a failure every later row stays NaN and the failure time is t
 The right-hand side writes into a given array: `f(t, y, p, dy)` (type `RHS_INTO`), so one
 evaluation allocates nothing. Like `explicit`, the drivers are compiled once for first-class
 function types (cached on disk); `explicit`'s drivers stay for the models that use them.
+`solve` runs a method by name with the settings every leaf shares (dt or rtol/atol/h_max).
 """
+import time
+
 import numba as nb
 import numpy as np
 from numba import types as nt
@@ -277,3 +280,37 @@ def integrate_adaptive_dense(f, guard, y0, p, t_out, rtol, atol, h_max, max_step
         # a clipped last step says little about the next one: keep h unless it grew
         h = min(h_max, max(h, h_try * fac) if last else h_try * fac)
     return Y, steps, evals, rejected, np.nan, FAIL_OK
+
+
+def solve(f, guard, y0: np.ndarray, p: np.ndarray, t_out: np.ndarray, integrator: str, *,
+          dt: float | None = None, rtol: float = 1e-10, atol: float | None = None,
+          h_max: float | None = None, max_steps: int = 10**8):
+    """One run of a named method (`DENSE_TABLEAUS`: error-controlled, `FIXED`: step `dt`) on
+    `f(t, y, p, dy)`: (Y, stats, t_fail, code, settings used). atol defaults to rtol/100; no
+    cap on the adaptive step unless h_max > 0. stats: steps, rhs_evals (rejected), and
+    integrate_s, the wall time of the compiled driver alone."""
+    t_out = np.ascontiguousarray(t_out, float)
+    if integrator in FIXED:
+        tb = FIXED[integrator]
+        t0 = time.perf_counter()
+        Y, steps, evals, t_fail, code = integrate_fixed_dense(f, guard, y0, p, t_out, float(dt),
+                                                              tb["A"], tb["B"], tb["C"])
+        stats = {"steps": int(steps), "rhs_evals": int(evals),
+                 "integrate_s": time.perf_counter() - t0}
+        span = t_out[-1] - t_out[0]
+        used = {"integrator": integrator,
+                "dt": float(span / steps if code == 0 and span > 0 else dt)}
+        return Y, stats, t_fail, int(code), used
+    tb = DENSE_TABLEAUS[integrator]
+    rtol = float(rtol)
+    atol = float(atol or rtol * 1e-2)
+    h_max = float(h_max or 0.0)
+    t0 = time.perf_counter()
+    Y, steps, evals, rej, t_fail, code = integrate_adaptive_dense(
+        f, guard, y0, p, t_out, rtol, atol, h_max, int(max_steps), tb["A"], tb["B"], tb["C"],
+        tb["E"], tb["E3"], tb["err_order"], tb["dense"], tb["P"], tb["AX"], tb["CX"], tb["D"])
+    stats = {"steps": int(steps), "rhs_evals": int(evals), "rejected": int(rej),
+             "integrate_s": time.perf_counter() - t0}
+    used = {"integrator": integrator, "rtol": rtol, "atol": atol,
+            **({"h_max": h_max} if h_max > 0 else {})}
+    return Y, stats, t_fail, int(code), used

@@ -212,8 +212,11 @@ def build_parser():
 
     sp = sub.add_parser("bench", help="speed/accuracy (work-precision) sweep",
                         description="Work-precision: each solver along its accuracy knob (step "
-                                    "or tolerance), error of the key channel's final value "
-                                    "against a tight reference, median wall time.")
+                                    "or tolerance; frequency scenes: mesh, segments or root "
+                                    "tolerance), error of the key channel's final value "
+                                    "(frequency scenes: the largest relative frequency error, "
+                                    "and the paper's computing times against each solver's "
+                                    "defaults) against a tight reference, median wall time.")
     common(sp)
     sp.add_argument("--repeats", type=_positive_int("--repeats"), default=3, metavar="N",
                     help="timed runs per rung; the median counts (default 3)")

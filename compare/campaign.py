@@ -582,8 +582,9 @@ def _finish_modes(case, job, store, case_dir, crashed):
             publish(f, case_dir / f.name)
     obj = json.loads((case_dir / "modes.json").read_text())
     obj["report"] = str(case_dir / "report.md")
-    if obj.get("recording"):
-        obj["recording"] = str(case_dir / Path(obj["recording"]).name)
+    for key in ("recording", "mode_shapes_recording", "mode_shapes_figure"):
+        if obj.get(key):
+            obj[key] = str(case_dir / Path(obj[key]).name)
     obj.setdefault("findings", [])
     return obj
 

@@ -1,8 +1,10 @@
 """`xval modes`: natural frequencies from every solver that can linearise, matched mode by mode;
 for a scene that declares a Campbell sweep, each solver's mode lines over the sweep (tracked by
 mode-shape correlation where the leaves return shapes, else by label) with the critical speeds
-where a line crosses an excitation line, and the scene's own identification hook (frequencies
-identified from free responses of its time-domain solvers). Nothing here names a scene.
+where a line crosses an excitation line, the mode shapes in 3D where the scene has a
+`mode_shape_3d` hook (compare/mode_shapes.py), and the scene's own identification hook
+(frequencies identified from free responses of its time-domain solvers). Nothing here names a
+scene.
 """
 from __future__ import annotations
 
@@ -11,7 +13,7 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import brentq, linear_sum_assignment
 
-from . import metrics, solvers
+from . import metrics, mode_shapes, solvers
 from .atomic import atomic_path, write_json, write_text
 from .errors import BadInput
 from .runner import new_run_dir
@@ -195,6 +197,12 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
     md += ["", "| a | b | mode | rel. difference | verdict |", "|---|---|---|---|---|"]
     md += [f"| {c.a} | {c.b} | {c.channel} | {c.max_rel:.2e} | {c.verdict} |"
            for c in comparisons]
+    if sc.mode_shape_3d:
+        drawn = mode_shapes.write(out_dir, sc, params, results)
+        if drawn:
+            obj["mode_shapes_recording"] = str(drawn["recording"])
+            obj["mode_shapes_figure"] = str(drawn["figure"])
+            md += ["", "## Mode shapes", "", drawn["text"], "", "![mode shapes](mode_shapes.png)"]
     if sc.campbell and campbell_sweep:
         values = sc.campbell.values(params)
         lines, crit = {}, {}

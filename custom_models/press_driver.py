@@ -8,16 +8,19 @@ import math
 import numpy as np
 
 from .integrators import FIXED_TABLEAUS, MODE_FIXED_POINT, MODE_NEWTON, MODE_PC, integrate_wilson
-from .integrators.dense import DENSE_TABLEAUS, solve
+from .integrators.dense import DENSE_TABLEAUS, RHS_INTO, first_class, solve
 from .integrators.events import (
     C_EVENT_ON,
     C_EVENT_TOL,
     EVENT,
+    EVENT_FN,
     M_LA,
     M_RK,
     config,
     integrate_segment,
 )
+from .integrators.explicit import GUARD
+from .integrators.linear_acceleration import ACC
 from .press_equations import (
     acc_any,
     energy_terms,
@@ -63,8 +66,8 @@ def integrate_idle(y0: np.ndarray, p: np.ndarray, t_out: np.ndarray, s: dict):
     n_sub = steps_per_output(t_out, s["dt"])
     theta, mode = la_args(s)
     Y, steps, evals, t_fail, code = integrate_wilson(
-        acc_any, guard_any, y0, 2, p, t_out, n_sub, theta, mode, float(s["newton_tol"]),
-        int(s["max_iter"]))
+        first_class(acc_any, ACC), first_class(guard_any, GUARD), y0, 2, p, t_out, n_sub, theta,
+        mode, float(s["newton_tol"]), int(s["max_iter"]))
     used = {"dt": float((t_out[1] - t_out[0]) / n_sub), "theta": theta}
     return Y, {"steps": int(steps), "rhs_evals": int(evals)}, t_fail, code, used
 
@@ -118,8 +121,9 @@ def integrate_cycle(y0: np.ndarray, p: np.ndarray, par: dict, t_out: np.ndarray,
         if t_stop > t:
             cfg[C_EVENT_ON], cfg[C_EVENT_TOL] = float(ev), float(s["event_tol"])
             code, t_new, y_new, i_new, st, evs = integrate_segment(
-                f_any_into, acc_any, guard_any, lock_event, y, p, t, t_stop, t_out, i, Y, h, tab,
-                cfg)
+                first_class(f_any_into, RHS_INTO), first_class(acc_any, ACC),
+                first_class(guard_any, GUARD), first_class(lock_event, EVENT_FN), y, p, t,
+                t_stop, t_out, i, Y, h, tab, cfg)
             modes[i:i_new] = md
             stats["steps"] += st
             stats["rhs_evals"] += evs

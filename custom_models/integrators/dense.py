@@ -20,11 +20,13 @@ evaluation allocates nothing. Like `explicit`, the drivers are compiled once for
 function types (cached on disk); `explicit`'s drivers stay for the models that use them.
 `solve` runs a method by name with the settings every leaf shares (dt or rtol/atol/h_max).
 """
+import functools
 import time
 
 import numba as nb
 import numpy as np
 from numba import types as nt
+from numba.experimental.function_type import _get_wrapper_address
 from scipy.integrate import DOP853 as _DOP853
 from scipy.integrate import RK23 as _RK23
 from scipy.integrate import RK45 as _RK45
@@ -46,6 +48,32 @@ from .explicit import (
 RHS_INTO = nt.FunctionType(nt.void(nt.float64, _VEC, _VEC, _VEC))    # f(t, y, p, dy)
 
 DENSE_POLY, DENSE_DOP853 = 1, 2
+
+
+class FirstClass:
+    """A jitted function as a first-class function value of type `ftype` (numba's wrapper
+    address protocol: `_numba_type_`, `signature`, `__wrapper_address__`), its machine address
+    looked up once. Passed as a plain dispatcher, numba types it and looks the address up again
+    on every call of a driver: 80–150 µs per function argument, more than a short run's whole
+    integration. The address is numba's own for that argument (`_get_wrapper_address`), taken
+    on first use, so building one costs nothing at import."""
+
+    def __init__(self, fn, ftype):
+        self._fn, self._numba_type_, self._addr = fn, ftype, None
+
+    def signature(self):
+        return self._numba_type_.signature
+
+    def __wrapper_address__(self):
+        if self._addr is None:
+            self._addr = _get_wrapper_address(self._fn, self.signature())
+        return self._addr
+
+
+@functools.cache
+def first_class(fn, ftype) -> FirstClass:
+    """The one `FirstClass` value of a jitted function for type `ftype`."""
+    return FirstClass(fn, ftype)
 _NONE, _NONE_1D = np.zeros((0, 0)), np.zeros(0)
 
 
@@ -290,6 +318,7 @@ def solve(f, guard, y0: np.ndarray, p: np.ndarray, t_out: np.ndarray, integrator
     cap on the adaptive step unless h_max > 0. stats: steps, rhs_evals (rejected), and
     integrate_s, the wall time of the compiled driver alone."""
     t_out = np.ascontiguousarray(t_out, float)
+    f, guard = first_class(f, RHS_INTO), first_class(guard, GUARD)
     if integrator in FIXED:
         tb = FIXED[integrator]
         t0 = time.perf_counter()

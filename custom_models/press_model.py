@@ -34,23 +34,18 @@ def inertia_items(par: dict):
     the shared link layout: crank COM at f·A, rod COM at (1 − f)A + fB, rocker COM at
     (1 − f)C + fB (y_C = 0), slider mass at C. Items with the same coefficients are merged."""
     lay = phys.link_layout(par)
-    items, heights = [], np.zeros(NB)
+    items, heights = {}, np.zeros(NB)        # coefficients (a tuple) -> summed weight
 
     def add(coef, w):
-        if not np.any(coef):
-            return
-        for k, (c, w0) in enumerate(items):
-            if np.array_equal(c, coef):
-                items[k] = (c, w0 + w)
-                return
-        items.append((coef, w))
+        if any(coef):
+            items[coef] = items.get(coef, 0.0) + w
 
     def c(**kw):
-        v = np.zeros(NB)
+        v = [0.0] * NB
         for name, val in kw.items():
             v[{"xA": XA, "yA": YA, "xB": XB, "yB": YB, "xC": XC, "phi": PHI, "th2": TH2,
                "psi": PSI}[name]] = val
-        return v
+        return tuple(v)
     cx, m, J = lay["crank"]
     f = cx / float(par["l1"])
     add(c(xA=f), m)
@@ -71,7 +66,7 @@ def inertia_items(par: dict):
     add(c(psi=1), J)
     heights[YB] += m * f
     add(c(xC=1), float(par["m4"]))
-    return items, heights
+    return list(items.items()), heights
 
 
 def pack(par: dict, dphi_deg: float = 0.1, dpsi_deg: float = 0.1, singular_tol: float = 0.02,

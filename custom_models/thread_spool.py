@@ -51,7 +51,7 @@ its velocity turn and unforced stored inertia show as energy drifts.
 
 Integrators (thread_spool_driver.py)
 -------------------------------------
-"rk4" (the paper's, rotating frame, through the shared fixed-step RK driver) and "imr"
+"rk4" (the paper's, rotating frame, through the shared fixed-step dense driver) and "imr"
 (default: implicit midpoint rule with energy–momentum spring forces, inertial frame).
 `dt="auto"` (default): 1e-3 s for "imr"; for "rk4" 0.8 × 2.785/λ_max with
 λ_max = 2 sqrt(c/m_min) + 4 d/m_min (highest chain frequency, m_min including the hub's reduced
@@ -148,13 +148,15 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> L
     P, m, used = pack(params, s)
     n = int(P[NN])
     dt = _step(s, params)
-    bt, bo, br, _ = phys.breakpoints(params, t_out)
+    bt, bo, br, be = phys.breakpoints(params, t_out)
     inertial = s["integrator"] == "imr"
     y0 = _initial_state(P, n, inertial)
     w0 = time.perf_counter()
-    run = run_imr if inertial else run_rk4
-    Y, b_out, stats, t_fail, code = run(y0, P, m, bt, bo, br, dt, len(t_out),
-                                        *((s["newton_tol"],) if inertial else ()))
+    if inertial:
+        Y, b_out, stats, t_fail, code = run_imr(y0, P, m, bt, bo, br, dt, len(t_out),
+                                                s["newton_tol"])
+    else:
+        Y, b_out, stats, t_fail, code = run_rk4(y0, P, m, bt, bo, br, be, dt, len(t_out))
     stats["integrate_s"] = time.perf_counter() - w0
     if inertial:
         X = Y[:, OFF:OFF + 3 * n].reshape(len(Y), n, 3)

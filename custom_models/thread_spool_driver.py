@@ -1,8 +1,10 @@
 """Drivers of the thread-spool model: explicit RK4 in the rotating frame through the shared
-fixed-step integrator (custom_models/integrators), and the implicit midpoint rule with
-energy–momentum spring forces in the inertial frame (its own step: the discrete gradient is the
-method). Both land a step on every breakpoint (outputs, releases, end of payout) and release
-nodes there.
+fixed-step dense-output driver (custom_models/integrators/dense.py, allocation-free right-hand
+side), and the implicit midpoint rule with energy–momentum spring forces in the inertial frame
+(its own step: the discrete gradient is the method). Both land a step on every release and at
+the end of payout and release nodes there; the implicit midpoint also steps onto every output,
+RK4 interpolates them (cubic Hermite). Both integrate only the released nodes: the stored ones
+sit on the spool until their release.
 
 - "rk4": the paper's fixed-step explicit RK4 in the rotating frame. A step above the stability
   limit is caught (spring stretch beyond `stretch_limit`·l0, or a non-finite state).
@@ -22,19 +24,22 @@ import numpy as np
 
 from compare.physics.sail import release_state
 
-from .integrators import FIXED_TABLEAUS, integrate_fixed
+from .integrators import FIXED_TABLEAUS
+from .integrators.dense import integrate_fixed_dense
 from .integrators.implicit import block3_tridiag_factor, bordered_block3_solve
 from .thread_spool_equations import _forces_dg, _lengths, _max_stretch, _rhs_rot, _spring_jac
 from .thread_spool_model import (
     CC,
     DD,
     EPS,
+    JH,
     LC,
     NN,
     NP,
     OFF,
     RR,
     SLIM,
+    STORED,
     TURN,
     WSP,
     imr_work,
@@ -104,6 +109,16 @@ def release_in(y, P, j):
 
 
 @nb.njit(cache=True)
+def copy_active(src, dst, n, Nb):
+    """dst = src on the entries a step changes: hub, D, W and nodes 0..Nb−1 (the stored nodes
+    are neither read nor written until their release)."""
+    for q in range(OFF + 3 * Nb):
+        dst[q] = src[q]
+    for q in range(OFF + 3 * n, OFF + 3 * n + 3 * Nb):
+        dst[q] = src[q]
+
+
+@nb.njit(cache=True)
 def step_imr(t, h, y, P, m, b, tol, w):
     """One step of the implicit midpoint rule with energy–momentum spring forces, inertial
     frame. Unknowns: midpoint velocities of nodes 0..b and the midpoint hub rate (Newton,
@@ -118,11 +133,9 @@ def step_imr(t, h, y, P, m, b, tol, w):
     J1 = 0.5 * j_eff(P, m, b)            # one blade's share of the hub
     Nb = b + 1
     tm = t + hh
-    ny = y.shape[0]
     _lengths(y, P, b, np.sin(y[1]), np.cos(y[1]), l_a)
-    for q in range(ny):
-        Ym[q] = y[q]
-        Y1[q] = y[q]
+    copy_active(y, Ym, n, Nb)
+    copy_active(y, Y1, n, Nb)
     it = 0
     dprev = np.inf
     fqx = fqy = diss = wsp = 0.0
@@ -187,9 +200,9 @@ def step_imr(t, h, y, P, m, b, tol, w):
         gw2 = G[2, 0] * w0 + G[2, 1] * w1
         U[b, 0], U[b, 1], U[b, 2] = -gw0, -gw1, -gw2
         delta = J1 + w0 * gw0 + w1 * gw1
-        if not block3_tridiag_factor(Dm, Bm, Nb, Dinv):
+        if not block3_tridiag_factor(Dm, Bm, Nb, Dinv, w.Wf):
             return FAIL_NEWTON, it
-        dOm = bordered_block3_solve(Bm, Dinv, Nb, U, delta, R, rho, X)
+        dOm = bordered_block3_solve(Bm, Dinv, Nb, U, delta, R, rho, X, w.Xu)
         Ym[0] += dOm
         vmax = 1e-3
         dmax = 0.0
@@ -214,19 +227,19 @@ def step_imr(t, h, y, P, m, b, tol, w):
     return 0, it - 1
 
 
-# ---- RK4, rotating frame, through the shared fixed-step driver --------------------------------
-# The shared drivers take f(t, y, p) and guard(t, y, p) with one float array p: here
-# p = [P (NP entries), b (the boundary index), m (n node masses)].
+# ---- RK4, rotating frame, through the shared fixed-step dense driver --------------------------
+# Between two releases the boundary index b is constant and the stored nodes sit rigidly on the
+# spool, so each such stretch integrates the released nodes 0..b only (state `_active`): their
+# parameters p = [P with n = b + 1 and the stored thread's inertia folded into J_hub (j_eff, as
+# the full model counts it), b, m_0..m_b] — the shared drivers take one float array p.
 B_AT, M_AT = NP, NP + 1
 
 
 @nb.njit(cache=True)
-def rhs_rotating(t, y, p):
+def rhs_rotating_into(t, y, p, dy):
     n = int(p[NN])
-    dy = np.empty(y.shape[0])
     # the forces go straight into the acceleration slots (each is read before it is replaced)
     _rhs_rot(t, y, p, p[M_AT:M_AT + n], int(p[B_AT]), dy[OFF + 3 * n:], dy)
-    return dy
 
 
 @nb.njit(cache=True)
@@ -234,35 +247,51 @@ def guard_rotating(t, y, p):
     return FAIL_STRETCH if _max_stretch(y, p, int(p[B_AT]), t, False) > p[SLIM] else 0
 
 
-def run_rk4(y0, P, m, bk_t, bk_out, bk_rel, dt, n_out):
-    """Fixed-step RK4 in the rotating frame; steps land on every breakpoint. Returns (Y, b_out,
-    stats, t_fail, code)."""
+def _active(P, m, b):
+    """Parameters of a stretch with boundary node b, and the index of the active states in the
+    full state vector (Ω, ψ, D, W, x_0..x_b, v_0..v_b)."""
+    n, na = int(P[NN]), b + 1
+    Pa = P.copy()
+    Pa[NN], Pa[JH], Pa[STORED] = na, j_eff(P, m, b), 0.0
+    idx = np.r_[0:OFF + 3 * na, OFF + 3 * n:OFF + 3 * n + 3 * na]
+    return np.concatenate((Pa, [float(b)], m[:na])), idx
+
+
+def run_rk4(y0, P, m, bk_t, bk_out, bk_rel, bk_end, dt, n_out):
+    """Fixed-step RK4 in the rotating frame, one driver call per stretch between releases (and
+    the end of payout, a kink in the Q-spring's rest length); the outputs inside a stretch come
+    from the driver's dense output. Returns (Y, b_out, stats, t_fail, code)."""
     tb = FIXED_TABLEAUS["rk4"]
-    p = np.concatenate((P, [0.0], m))
     Y = np.full((n_out, y0.shape[0]), np.nan)
     b_out = np.zeros(n_out, np.int64)
     y = y0.copy()
     b = 0
     release_rot(y, P, 0)
+    if bk_out[0] >= 0:
+        Y[bk_out[0]] = y
     steps = evals = 0
-    for ib in range(bk_t.shape[0]):
-        if ib > 0:
-            t0 = bk_t[ib - 1]
-            ns, _ = split(bk_t[ib] - t0, dt)
-            p[B_AT] = b
-            Ys, st, ev, t_fail, code = integrate_fixed(
-                rhs_rotating, guard_rotating, y, p, np.array([t0, bk_t[ib]]), ns, tb["A"],
-                tb["B"], tb["C"])
-            steps, evals = steps + st, evals + ev
-            if code != 0:
-                return Y, b_out, {"steps": steps, "rhs_evals": evals}, t_fail, code
-            y = Ys[1].copy()
-        j = bk_rel[ib]
-        if j > 0:
-            b = j
-            release_rot(y, P, j)
-        if bk_out[ib] >= 0:
-            Y[bk_out[ib]], b_out[bk_out[ib]] = y, b
+    ends = {i for i in range(1, len(bk_t)) if bk_rel[i] > 0 or bk_end[i]} | {len(bk_t) - 1}
+    i0 = 0
+    for i1 in sorted(ends - {0}):
+        p, idx = _active(P, m, b)
+        Ya, st, ev, t_fail, code = integrate_fixed_dense(
+            rhs_rotating_into, guard_rotating, y[idx], p, bk_t[i0:i1 + 1], dt, tb["A"], tb["B"],
+            tb["C"])
+        steps, evals = steps + st, evals + ev
+        rows = bk_out[i0 + 1:i1 + 1]
+        out = rows >= 0
+        Ys = np.repeat(y[None, :], len(Ya) - 1, axis=0)      # stored nodes: unchanged
+        Ys[:, idx] = Ya[1:]
+        Y[rows[out]], b_out[rows[out]] = Ys[out], b
+        if code != 0:
+            return Y, b_out, {"steps": steps, "rhs_evals": evals}, t_fail, code
+        y = Ys[-1].copy()
+        if bk_rel[i1] > 0:
+            b = bk_rel[i1]
+            release_rot(y, P, b)
+            if bk_out[i1] >= 0:
+                Y[bk_out[i1]], b_out[bk_out[i1]] = y, b
+        i0 = i1
     return Y, b_out, {"steps": steps, "rhs_evals": evals}, np.nan, 0
 
 
@@ -274,12 +303,13 @@ def _imr_loop(y0, P, m, bk_t, bk_out, bk_rel, dt, n_out, tol):
     Y = np.full((n_out, ny), np.nan)
     b_out = np.zeros(n_out, np.int64)
     w = imr_work(n, ny)
-    ysave = np.empty(ny)
+    ysave = w.ysave
     y = y0.copy()
     b = 0
     release_in(y, P, 0)
     steps = 0
     iters = 0
+    evals = 0
     retries = 0
     slim = P[SLIM]
     for ib in range(bk_t.shape[0]):
@@ -290,8 +320,7 @@ def _imr_loop(y0, P, m, bk_t, bk_out, bk_rel, dt, n_out, tol):
                 t = t0 + k * h
                 # Newton may fail where the boundary segment is nearly zero-length (just after
                 # a release, stiff springs): retry the step as 2, 4, ... 4096 sub-steps
-                for q in range(ny):
-                    ysave[q] = y[q]
+                copy_active(y, ysave, n, b + 1)
                 for lev in range(13):
                     nsub = 1 << lev
                     hs = h / nsub
@@ -300,17 +329,17 @@ def _imr_loop(y0, P, m, bk_t, bk_out, bk_rel, dt, n_out, tol):
                         code, it = step_imr(t + ks * hs, hs, y, P, m, b, tol, w)
                         steps += 1
                         iters += it
+                        evals += it + (code == 0)   # force evaluations
                         if code != 0:
                             break
                     if code == 0:
                         break
                     retries += 1
-                    for q in range(ny):
-                        y[q] = ysave[q]
+                    copy_active(ysave, y, n, b + 1)
                 if code != 0:
-                    return Y, b_out, steps, iters, retries, t + h, code
+                    return Y, b_out, steps, iters, evals, retries, t + h, code
                 if _max_stretch(y, P, b, t + h, True) > slim:
-                    return Y, b_out, steps, iters, retries, t + h, FAIL_STRETCH
+                    return Y, b_out, steps, iters, evals, retries, t + h, FAIL_STRETCH
         j = bk_rel[ib]
         if j > 0:
             b = j
@@ -318,13 +347,14 @@ def _imr_loop(y0, P, m, bk_t, bk_out, bk_rel, dt, n_out, tol):
         if bk_out[ib] >= 0:
             Y[bk_out[ib]] = y
             b_out[bk_out[ib]] = b
-    return Y, b_out, steps, iters, retries, np.nan, 0
+    return Y, b_out, steps, iters, evals, retries, np.nan, 0
 
 
 def run_imr(y0, P, m, bk_t, bk_out, bk_rel, dt, n_out, tol):
     """Implicit midpoint rule in the inertial frame. Returns (Y, b_out, stats, t_fail, code);
-    stats: steps, newton_iters, retries (the failed steps retried with sub-steps)."""
-    Y, b_out, steps, iters, retries, t_fail, code = _imr_loop(y0, P, m, bk_t, bk_out, bk_rel,
-                                                              dt, n_out, tol)
-    return Y, b_out, {"steps": int(steps), "rhs_evals": -1, "newton_iters": int(iters),
+    stats: steps, newton_iters, retries (the failed steps retried with sub-steps), rhs_evals
+    (evaluations of the midpoint forces: one per Newton pass, each followed by an O(n) solve)."""
+    Y, b_out, steps, iters, evals, retries, t_fail, code = _imr_loop(
+        y0, P, m, bk_t, bk_out, bk_rel, dt, n_out, tol)
+    return Y, b_out, {"steps": int(steps), "rhs_evals": int(evals), "newton_iters": int(iters),
                       "retries": int(retries)}, t_fail, code

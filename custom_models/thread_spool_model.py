@@ -22,16 +22,17 @@ OFF = 4                       # x starts at y[OFF], v at y[OFF + 3n]
 
 # working arrays of one implicit-midpoint step (n nodes, ny state entries): forces F, midpoint
 # state Ym and end state Y1, the bordered block-tridiagonal Newton system (Dm, Bm, Dinv, U, R,
-# X, G), spring lengths at the step's start and end (l_a, l_e), transverse stiffnesses TR
-ImrWork = namedtuple("ImrWork", "F Ym Y1 Dm Bm Dinv U R X G l_a l_e TR")
+# X, G) and its solver's scratch (Wf, Xu), spring lengths at the step's start and end (l_a,
+# l_e), transverse stiffnesses TR, the state saved for a retried step (ysave)
+ImrWork = namedtuple("ImrWork", "F Ym Y1 Dm Bm Dinv U R X G Wf Xu l_a l_e TR ysave")
 
 
 @nb.njit(cache=True)
 def imr_work(n, ny):
     return ImrWork(np.empty(3 * n), np.empty(ny), np.empty(ny), np.empty((n, 3, 3)),
                    np.zeros((n, 3, 3)), np.empty((n, 3, 3)), np.zeros((n, 3)),
-                   np.zeros((n, 3)), np.zeros((n, 3)), np.empty((3, 3)), np.empty(n),
-                   np.empty(n), np.empty(n))
+                   np.zeros((n, 3)), np.zeros((n, 3)), np.empty((3, 3)), np.empty((2, 3, 3)),
+                   np.empty((n, 3)), np.empty(n), np.empty(n), np.empty(n), np.empty(ny))
 
 
 def variant_switches(settings: dict) -> dict:

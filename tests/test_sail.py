@@ -351,9 +351,9 @@ def test_bordered_block_tridiagonal_solver_matches_dense_solve():
     full = np.block([[A, U.reshape(-1, 1)], [U.reshape(1, -1), np.array([[delta]])]])
     ref = np.linalg.solve(full, np.concatenate([r.ravel(), [rho]]))
     Dinv = np.empty((N, 3, 3))
-    assert block3_tridiag_factor(D, B, N, Dinv)
+    assert block3_tridiag_factor(D, B, N, Dinv, np.empty((2, 3, 3)))
     x = np.empty((N, 3))
-    z = bordered_block3_solve(B, Dinv, N, U, delta, r, rho, x)
+    z = bordered_block3_solve(B, Dinv, N, U, delta, r, rho, x, np.empty((N, 3)))
     np.testing.assert_allclose(np.append(x.ravel(), z), ref, rtol=1e-10, atol=1e-12)
 
 

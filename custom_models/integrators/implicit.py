@@ -40,14 +40,14 @@ def inv3(a, out):
 
 
 @nb.njit(cache=True)
-def block3_tridiag_factor(D, B, N, Dinv):
+def block3_tridiag_factor(D, B, N, Dinv, work):
     """Factor the symmetric block-tridiagonal matrix with diagonal blocks D[0..N-1] and
     off-diagonal blocks B[i] = A[i, i+1] = A[i+1, i] (symmetric 3x3 blocks).
 
-    Stores the inverses of the Schur-reduced diagonal blocks in Dinv. Returns False if a pivot
-    block is singular."""
-    tmp = np.empty((3, 3))
-    L = np.empty((3, 3))
+    Stores the inverses of the Schur-reduced diagonal blocks in Dinv; work: a (2, 3, 3) scratch
+    array (an implicit step factors several times per step: nothing is allocated here). Returns
+    False if a pivot block is singular."""
+    tmp, L = work[0], work[1]
     for i in range(N):
         for a in range(3):
             for c in range(3):
@@ -74,43 +74,43 @@ def block3_tridiag_factor(D, B, N, Dinv):
 
 @nb.njit(cache=True)
 def block3_tridiag_solve(B, Dinv, N, r, x):
-    """Solve A x = r with the factorisation from `block3_tridiag_factor` (r, x: (N, 3))."""
-    y = np.empty((N, 3))
+    """Solve A x = r with the factorisation from `block3_tridiag_factor` (r, x: (N, 3)); the
+    forward sweep's intermediate lives in x (nothing allocated)."""
     for a in range(3):
-        y[0, a] = r[0, a]
+        x[0, a] = r[0, a]
     for i in range(1, N):
         # y_i = r_i − B[i-1]^T Dinv[i-1] y_{i-1}
-        D, yp = Dinv[i - 1], y[i - 1]
+        D, yp = Dinv[i - 1], x[i - 1]
         t0 = D[0, 0] * yp[0] + D[0, 1] * yp[1] + D[0, 2] * yp[2]
         t1 = D[1, 0] * yp[0] + D[1, 1] * yp[1] + D[1, 2] * yp[2]
         t2 = D[2, 0] * yp[0] + D[2, 1] * yp[1] + D[2, 2] * yp[2]
         for a in range(3):
-            y[i, a] = r[i, a] - (B[i - 1, 0, a] * t0 + B[i - 1, 1, a] * t1 + B[i - 1, 2, a] * t2)
+            x[i, a] = r[i, a] - (B[i - 1, 0, a] * t0 + B[i - 1, 1, a] * t1 + B[i - 1, 2, a] * t2)
     for i in range(N - 1, -1, -1):
+        y0, y1, y2 = x[i, 0], x[i, 1], x[i, 2]
         if i < N - 1:
-            for a in range(3):
-                xn = x[i + 1]
-                y[i, a] -= B[i, a, 0] * xn[0] + B[i, a, 1] * xn[1] + B[i, a, 2] * xn[2]
+            xn = x[i + 1]
+            y0 -= B[i, 0, 0] * xn[0] + B[i, 0, 1] * xn[1] + B[i, 0, 2] * xn[2]
+            y1 -= B[i, 1, 0] * xn[0] + B[i, 1, 1] * xn[1] + B[i, 1, 2] * xn[2]
+            y2 -= B[i, 2, 0] * xn[0] + B[i, 2, 1] * xn[1] + B[i, 2, 2] * xn[2]
         for a in range(3):
-            x[i, a] = Dinv[i, a, 0] * y[i, 0] + Dinv[i, a, 1] * y[i, 1] + Dinv[i, a, 2] * y[i, 2]
+            x[i, a] = Dinv[i, a, 0] * y0 + Dinv[i, a, 1] * y1 + Dinv[i, a, 2] * y2
 
 
 @nb.njit(cache=True)
-def bordered_block3_solve(B, Dinv, N, U, delta, r, rho, x):
+def bordered_block3_solve(B, Dinv, N, U, delta, r, rho, x, xu):
     """Solve [[A, U], [Uᵀ, δ]] [x; z] = [r; rho] given A's factorisation. Returns z; x is
-    written in place. U, r, x: (N, 3)."""
-    xr = np.empty((N, 3))
-    xu = np.empty((N, 3))
-    block3_tridiag_solve(B, Dinv, N, r, xr)
+    written in place. U, r, x and the scratch xu (A⁻¹ U): (N, 3)."""
+    block3_tridiag_solve(B, Dinv, N, r, x)
     block3_tridiag_solve(B, Dinv, N, U, xu)
     ur = 0.0
     uu = 0.0
     for i in range(N):
         for a in range(3):
-            ur += U[i, a] * xr[i, a]
+            ur += U[i, a] * x[i, a]
             uu += U[i, a] * xu[i, a]
     z = (rho - ur) / (delta - uu)
     for i in range(N):
         for a in range(3):
-            x[i, a] = xr[i, a] - xu[i, a] * z
+            x[i, a] -= xu[i, a] * z
     return z

@@ -290,11 +290,12 @@ def repeat_timed(walls, again, repeats):
     return last
 
 
-def summarise(rows, solver_names, what, unreached_why=None):
+def summarise(rows, solver_names, what, unreached_why=None, describe=None):
     """For each error level: the fastest solver's row and every other solver's time ratio to
     it (each solver at its fastest row within the level), and the summary lines. `what` says
     which error (e.g. "on final omega"); `unreached_why` (solver -> reason) explains a solver
-    that reaches no row within a level."""
+    that reaches no row within a level; `describe(row)` names the fastest rung (default: its
+    method)."""
     summary, lines = {}, []
     for level in LEVELS:
         best = {}
@@ -313,7 +314,8 @@ def summarise(rows, solver_names, what, unreached_why=None):
                                  "unreached": unreached}
         why = unreached_why or {}
         lines.append(f"error ≤ {level:g} {what}: fastest {fastest['solver']} "
-                     f"({fastest['method']}, {fastest['wall_s']:.3g} s); ratios "
+                     f"({(describe or (lambda r: r['method']))(fastest)}, "
+                     f"{fastest['wall_s']:.3g} s); ratios "
                      + ", ".join(f"{s} {v:.2f}×" for s, v in sorted(ratios.items(),
                                                                    key=lambda x: x[1]))
                      + ("; not reached by " + ", ".join(

@@ -80,8 +80,18 @@ def deviation(ref, m) -> tuple[float | None, str]:
 
 
 def _knob_text(knob: dict) -> str:
-    return ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
-                     for k, v in knob.items())
+    def text(v):
+        if isinstance(v, dict):            # per part (e.g. a mesh per mode family)
+            return (str(next(iter(v.values()))) if len(set(v.values())) == 1
+                    else "/".join(f"{k} {x}" for k, x in v.items()))
+        return f"{v:g}" if isinstance(v, float) else str(v)
+    return ", ".join(f"{k}={text(v)}" for k, v in knob.items())
+
+
+def _rung_text(row) -> str:
+    """e.g. "rtol=1e-09", "n_segments=10, extrapolate"."""
+    switch = row["method"].partition("+")[2]
+    return (_knob_text(row["knob"]) or row["method"]) + (f", {switch}" if switch else "")
 
 
 def _mesh_step(row) -> float | None:
@@ -130,6 +140,38 @@ def _rung(call, s, st, label, kind, knobs, ref, seen, repeats, log):
     log(f"  {s.name} {label} {_knob_text(row['knob'])}: err "
         f"{'—' if err is None else f'{err:.2e}'} ({at}), wall {row['wall_s']:.3g} s")
     return row
+
+
+def against_published(sc, chosen, timing_params, call, repeats):
+    """Each solver's default-settings time for each of the scene's published timings (the
+    sum over its cases of the median warm wall time; CPU time beside it, the better estimate
+    on a shared machine) and its ratio to each published time: (entries, lines)."""
+    entries, lines = [], []
+    for pt, cases in zip(sc.published_timings, timing_params):
+        for s in chosen:
+            wall, cpu, ok = [], [], True
+            for p in cases:
+                walls, cpus = [], []
+
+                def timed(s=s, p=p, cpus=cpus):
+                    c0 = time.process_time()
+                    m = call(s, {}, p)
+                    cpus.append(time.process_time() - c0)
+                    return m
+                ok &= repeat_timed(walls, timed, repeats).status == "ok"
+                wall.append(float(np.median(walls)))
+                cpu.append(float(np.median(cpus)))
+            total = sum(wall)
+            entries.append({"what": pt.what, "solver": s.name, "wall_s": total,
+                            "cpu_s": sum(cpu), "ok": ok, "per_case_s": wall,
+                            "cases": list(pt.cases), "published_s": dict(pt.seconds),
+                            "ratio": {tool: total / t for tool, t in pt.seconds.items()}})
+            lines.append(f"{pt.what}: {s.name} {total:.3g} s (CPU {sum(cpu):.3g} s)"
+                         + ("" if ok else " (a run failed)")
+                         + ",".join(f" vs {t:g} s {tool} = " + (f"1/{t / total:.0f}" if total < t
+                                                                 else f"{total / t:.2f}×")
+                                    for tool, t in pt.seconds.items()))
+    return entries, lines
 
 
 def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int = 3,
@@ -194,7 +236,7 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
     why = {s: (f"best {e:.1e}" if e is not None else "no rung ok")
            + (f"; its model differs by up to the scene's allowance {allowance[s]:g}"
               if s in allowance else "") for s, e in best_err.items()}
-    summary, lines = summarise(rows, [s.name for s in chosen], what, why)
+    summary, lines = summarise(rows, [s.name for s in chosen], what, why, _rung_text)
     # an error within 3× of a floor is not resolved from it: the level the two references
     # agree to, and for a solver whose model differs, the scene's allowance for it
     low = 3 * max(FLOOR_ERR, confirmed or 0.0)
@@ -203,26 +245,7 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
                                 low, _mesh_step, lambda r: None)
     lines += order_lines(orders, "h = 1/n,", "")
 
-    published, timing_lines = [], []
-    for pt, cases in zip(sc.published_timings, timing_params):
-        for s in chosen:
-            walls_per_case, ok = [], True
-            for p in cases:
-                walls = []
-                m = repeat_timed(walls, lambda s=s, p=p: call(s, {}, p), repeats)
-                ok &= m.status == "ok"
-                walls_per_case.append(float(np.median(walls)))
-            total = sum(walls_per_case)
-            entry = {"what": pt.what, "solver": s.name, "wall_s": total, "ok": ok,
-                     "per_case_s": walls_per_case, "cases": list(pt.cases),
-                     "published_s": dict(pt.seconds),
-                     "ratio": {tool: total / t for tool, t in pt.seconds.items()}}
-            published.append(entry)
-            timing_lines.append(
-                f"{pt.what}: {s.name} {total:.3g} s" + ("" if ok else " (a run failed)")
-                + ",".join(f" vs {t:g} s {tool} = " + (f"1/{t / total:.0f}" if total < t
-                                                        else f"{total / t:.2f}×")
-                           for tool, t in pt.seconds.items()))
+    published, timing_lines = against_published(sc, chosen, timing_params, call, repeats)
     lines += timing_lines
 
     plot(out_dir / "work_precision.png", rows, sc.name, "largest relative frequency error",

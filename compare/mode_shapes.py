@@ -25,6 +25,7 @@ from .recording import APPLICATION_ID, PALETTE
 FRACTION = 0.1      # largest drawn displacement / the structure's largest dimension
 FRAMES = 36         # frames per period in the recording
 TIMELINE = "t_over_T"   # the recording's timeline: 1 s of it = one period of each mode
+STYLES = ["-", "--", ":", "-."]      # line style per solver in the figure
 
 
 @dataclass
@@ -124,9 +125,11 @@ def write_figure(path, panels_: list[Panel], colors: dict):
             lines = [p + d.real for p, d in zip(pts, ds)]
             if _whirls(ds):
                 lines += [p[-1] + np.real(np.outer(phase, d[-1])) for p, d in zip(pts, ds)]
-            # narrower for each later solver, so that coinciding lines all stay visible
+            # a line style per solver (as in the Campbell diagram): coinciding lines show
+            # every solver's colour in turn
             ax.add_collection3d(Line3DCollection(lines, colors=[colors[solver]],
-                                                 linewidths=max(2.8 - j, 0.7),
+                                                 linewidths=2.0 if j == 0 else 1.5,
+                                                 linestyles=STYLES[j % len(STYLES)],
                                                  zorder=2 + j))
             every += lines
         allp = np.vstack(every)
@@ -141,7 +144,8 @@ def write_figure(path, panels_: list[Panel], colors: dict):
         ax.tick_params(labelsize=5, pad=0)
         ax.set_title(f"{pn.label}: {pn.frequency_hz:.5g} Hz", fontsize=8)
     solvers = list(dict.fromkeys(s for pn in panels_ for s in pn.solvers))
-    handles = [plt.Line2D([], [], color=colors[s], label=s) for s in solvers]
+    handles = [plt.Line2D([], [], color=colors[s], ls=STYLES[j % len(STYLES)], label=s)
+               for j, s in enumerate(solvers)]
     handles.append(plt.Line2D([], [], color="0.75", label="undeformed"))
     fig.legend(handles=handles, loc="upper center", ncol=len(handles), fontsize=8,
                frameon=False)

@@ -380,7 +380,7 @@ def plot(path, rows, scene, ylabel, summary=None):
         pts = [(r["wall_s"], r["rel_error"]) for r in rows
                if r["solver"] == s and r["method"] == m and r["rel_error"]]
         if pts:
-            x, y = zip(*sorted(pts))
+            x, y = zip(*pts)             # ladder order: coarse → fine
             ax.loglog(x, y, "o-", ms=4, label=f"{s} {m}")
     for level in LEVELS:
         ax.axhline(level, color="grey", lw=0.6, ls=":")

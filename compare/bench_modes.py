@@ -11,7 +11,10 @@ both name them uniquely, else by nearest frequency: `metrics.match_modes`; where
 modes unpaired, by order); a rung with fewer modes has no error (missed modes). The reference
 is the finest rung of the scene's first reference solver; the second one's best rung confirms
 it. Times are medians of repeated warm calls (each solver is called once first: import and
-compile time are reported apart). Summary and plot are the time bench's.
+compile time are reported apart); the summary ranks wall times, as the time bench does, and
+each row keeps its CPU time too (on a shared machine the better estimate of an idle one's
+wall time, with single-threaded BLAS: the OPENBLAS_NUM_THREADS in effect is recorded).
+Summary and plot are the time bench's.
 """
 from __future__ import annotations
 
@@ -123,19 +126,26 @@ def falling(rows) -> list[dict]:
 def _rung(call, s, st, label, kind, knobs, ref, seen, repeats, log):
     """One rung's row: timed calls (bench.repeat_timed), its error; None where the leaf raised
     the request to a rung already run (nothing coarser exists)."""
-    m = call(s, st)
+    cpus = []
+
+    def timed():
+        c0 = time.process_time()
+        m = call(s, st)
+        cpus.append(time.process_time() - c0)
+        return m
+    m = timed()
     effective = repr(sorted(m.settings.items())) if m.status == "ok" else None
     if effective in seen:
         return None
     seen.add(effective)
     walls = [m.wall_s]
     if m.status == "ok":
-        repeat_timed(walls, lambda: call(s, st), repeats)
+        repeat_timed(walls, timed, repeats)
     err, at = deviation(ref, m)
     row = {"solver": s.name, "method": label, "knob_kind": kind,
            "knob": {k: m.settings.get(k, st[k]) for k in knobs},
            "settings": m.settings or st, "status": m.status,
-           "wall_s": float(np.median(walls)), "rel_error": err,
+           "wall_s": float(np.median(walls)), "cpu_s": float(np.median(cpus)), "rel_error": err,
            "worst_mode" if err is not None else "reason": at, "n_modes": len(m.frequencies_hz)}
     log(f"  {s.name} {label} {_knob_text(row['knob'])}: err "
         f"{'—' if err is None else f'{err:.2e}'} ({at}), wall {row['wall_s']:.3g} s")
@@ -269,13 +279,14 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
                                                        for s, t in first_call.items())
           + f"; OPENBLAS_NUM_THREADS={blas or 'unset'}; median of {repeats} warm calls "
             f"({repeats * 5} under 50 ms).", "", *[f"- {x}" for x in lines], "",
-          "| solver | ladder | setting | max rel. error | at | median wall [s] |",
-          "|---|---|---|---|---|---|"]
+          "| solver | ladder | setting | max rel. error | at | median wall [s] | median CPU [s] |",
+          "|---|---|---|---|---|---|---|"]
     for r in rows:
         err = r["rel_error"]
         md.append(f"| {r['solver']} | {r['method']} | {_knob_text(r['knob'])} | "
                   f"{'—' if err is None else format(err, '.2e')} | "
-                  f"{r.get('worst_mode') or r.get('reason')} | {r['wall_s']:.4g} |")
+                  f"{r.get('worst_mode') or r.get('reason')} | {r['wall_s']:.4g} | "
+                  f"{r['cpu_s']:.4g} |")
     md += ["", "![work-precision](work_precision.png)"]
     write_text(out_dir / "report.md", "\n".join(md) + "\n")
     write_json(out_dir / "bench.json", obj)

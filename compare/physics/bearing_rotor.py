@@ -145,6 +145,25 @@ def twist_rate(q, omega):
     return twist_rate_t(q[0], q[1], q[2], q[3], omega[0], omega[1], omega[2])
 
 
+@nb.njit(cache=True)
+def _twists(quats):
+    out = np.empty(quats.shape[0])
+    for i in range(quats.shape[0]):
+        out[i] = twist_of(quats[i, 0], quats[i, 3])
+    return out
+
+
+@nb.njit(cache=True)
+def _unwrap_by_rate(phi, t, rate):
+    """The 2π branch of each angle nearest the trapezoidal prediction from the previous one."""
+    out = np.empty_like(phi)
+    out[0] = phi[0]
+    for i in range(1, phi.shape[0]):
+        pred = out[i - 1] + 0.5 * (rate[i] + rate[i - 1]) * (t[i] - t[i - 1])
+        out[i] = phi[i] + 2.0 * np.pi * np.rint((pred - phi[i]) / (2.0 * np.pi))
+    return out
+
+
 def spin_angle(quats: np.ndarray, t: np.ndarray | None = None,
                spin_rate: np.ndarray | None = None) -> np.ndarray:
     """Unwrapped spin angle of a quaternion series (n, 4).
@@ -152,15 +171,11 @@ def spin_angle(quats: np.ndarray, t: np.ndarray | None = None,
     Without rates, consecutive samples must differ by less than π (np.unwrap). With `t` and
     `spin_rate` the 2π branch is the one nearest the trapezoidal prediction, so a coarse output
     grid (many radians per sample) still unwraps correctly."""
-    phi = np.array([twist_angle(np.asarray(q, float)) for q in quats])
+    phi = _twists(np.ascontiguousarray(quats, float).reshape(-1, 4))
     if t is None or spin_rate is None:
         return np.unwrap(phi)
-    out = np.empty_like(phi)
-    out[0] = phi[0]
-    for i in range(1, len(phi)):
-        pred = out[i - 1] + 0.5 * (spin_rate[i] + spin_rate[i - 1]) * (t[i] - t[i - 1])
-        out[i] = phi[i] + 2.0 * np.pi * np.round((pred - phi[i]) / (2.0 * np.pi))
-    return out
+    f = np.ascontiguousarray
+    return _unwrap_by_rate(phi, f(t, float), f(spin_rate, float))
 
 
 # ---------------------------------------------------------------- force laws
@@ -323,11 +338,19 @@ def channels(params: dict, t: np.ndarray, r_cm: np.ndarray, v_cm: np.ndarray,
             "energy_balance": o[:, 6] + potential - motor_work + dissipated}
 
 
+@nb.njit(cache=True)
+def _axes(quats):
+    """Shaft axis e3 = R(q)·(0, 0, 1) per row (n, 3)."""
+    out = np.empty((quats.shape[0], 3))
+    for i in range(quats.shape[0]):
+        out[i] = quat_matrix(quats[i])[:, 2]
+    return out
+
+
 def journal_positions(params: dict, r_cm: np.ndarray, quats: np.ndarray):
     """(n, 3) positions of journals a and b (for the 3D recording)."""
-    p = pack(params)
-    half = 0.5 * p[I_L]
-    axes = np.array([quat_matrix(np.asarray(q, float))[:, 2] for q in quats])
+    half = 0.5 * float(params["l"])
+    axes = _axes(np.ascontiguousarray(quats, float).reshape(-1, 4))
     return r_cm + half * axes, r_cm - half * axes
 
 

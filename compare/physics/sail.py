@@ -117,12 +117,13 @@ def formula18_discrete(params: dict, t) -> np.ndarray:
     I0 = J + 2 * m.sum() * Lc**2
     t = np.asarray(t, float)
     out = np.empty_like(t)
-    for i, ti in enumerate(t):
-        phi = min(w * ti, L / r)
-        b = min(int(np.floor(phi * n * r / L + 1e-12)), n - 1)
-        lt = r * phi - l0 * b
-        R = Lc + lt + l0 * (b - np.arange(b + 1))
-        I = J + 2 * (np.sum(m[:b + 1] * R**2) + m[b + 1:].sum() * Lc**2)
+    phi = np.minimum(w * t, L / r)
+    bs = np.minimum(np.floor(phi * n * r / L + 1e-12).astype(np.int64), n - 1)
+    for b in np.unique(bs):                      # the instants of one boundary node at once
+        i = np.nonzero(bs == b)[0]
+        lt = r * phi[i] - l0 * b
+        R = Lc + lt[:, None] + l0 * (b - np.arange(b + 1))
+        I = J + 2 * (np.sum(m[:b + 1] * R**2, axis=1) + m[b + 1:].sum() * Lc**2)
         out[i] = I0 * params["Omega0"] / I
     return out
 
@@ -156,7 +157,8 @@ def channels(params: dict, t, psi, omega, X, V, b_out, dissipated=None, spool_wo
     output grid (which aliases the fast ringing of the boundary tension: 4e-4 J at 0.05 s
     sampling for a 0.07 J system). Returns (channels, extra)."""
     n, l0, m, _ = thread(params)
-    Lc, r, c, d = params["L_c"], params["r"], params["stiffness"], params["damping"]
+    Lc, r, c, d, J = (params["L_c"], params["r"], params["stiffness"], params["damping"],
+                      params["J_hub"])
     rw = r * params["omega_spool"]
     N = len(t)
     out = {k: np.full(N, np.nan) for k in CHANNELS}
@@ -168,45 +170,50 @@ def channels(params: dict, t, psi, omega, X, V, b_out, dissipated=None, spool_wo
     wrel = np.zeros(N)
     # the drawing's input: released nodes tip → boundary, then Q (one blade, inertial frame)
     shape = np.full((N, n + 1, 3), np.nan)
-    for i in range(N):
-        b = int(b_out[i])
-        if b < 0 or not np.isfinite(omega[i]):
-            continue
-        cp, sp = np.cos(psi[i]), np.sin(psi[i])
-        Q = np.array([Lc * cp, Lc * sp, r])
+    b_out = np.asarray(b_out).astype(np.int64)
+    valid = (b_out >= 0) & np.isfinite(omega)
+    # rows of one boundary index b at once (b is constant between releases)
+    for b in np.unique(b_out[valid]):
+        i = np.nonzero(valid & (b_out == b))[0]
+        om, cp, sp = omega[i], np.cos(psi[i]), np.sin(psi[i])
+        Q = np.stack([Lc * cp, Lc * sp, np.full(len(i), r)], axis=1)
         shape[i, :b + 1], shape[i, b + 1] = X[i, :b + 1], Q
-        VQ = omega[i] * np.array([-Q[1], Q[0], 0.0])
+        VQ = om[:, None] * np.stack([-Q[:, 1], Q[:, 0], np.zeros(len(i))], axis=1)
         x, v, mm = X[i, :b + 1], V[i, :b + 1], m[:b + 1]
         ms = m[b + 1:].sum()
-        H = params["J_hub"] * omega[i] + 2 * (ms * Lc**2 * omega[i] + np.sum(
-            mm * (x[:, 0] * v[:, 1] - x[:, 1] * v[:, 0])))
-        T = (0.5 * params["J_hub"] * omega[i]**2 + ms * Lc**2 * omega[i]**2
-             + np.sum(mm * (v**2).sum(1)))
-        seg = np.diff(x, axis=0)
-        lens = np.sqrt((seg**2).sum(1))
-        e = seg / np.where(lens > 0, lens, 1.0)[:, None]
-        sd = (e * np.diff(v, axis=0)).sum(1)
-        dq = Q - x[b]
-        lq = np.sqrt(dq @ dq)
-        eq = dq / lq if lq > 1e-10 else -np.array([cp, sp, 0.0])
-        ldot = eq @ (VQ - v[b])
-        paid, rate, q_on = payout_of(params, t[i])
-        w = (ldot - rate) if q_on else 0.0
-        s = (lq - (paid - b * l0)) if q_on else 0.0
-        U = c * (np.sum((lens - l0) ** 2) + s * s)            # two blades
-        rate_D[i] = 2 * d * (np.sum(sd**2) + w * w)
+        H = J * om + 2 * (ms * Lc**2 * om + np.sum(
+            mm * (x[..., 0] * v[..., 1] - x[..., 1] * v[..., 0]), axis=1))
+        T = 0.5 * J * om**2 + ms * Lc**2 * om**2 + np.sum(mm * (v**2).sum(2), axis=1)
+        seg = np.diff(x, axis=1)
+        lens = np.sqrt((seg**2).sum(2))
+        e = seg / np.where(lens > 0, lens, 1.0)[..., None]
+        sd = (e * np.diff(v, axis=1)).sum(2)
+        dq = Q - x[:, b]
+        lq = np.sqrt((dq**2).sum(1))
+        far = lq > 1e-10
+        eq = np.where(far[:, None], dq / np.where(far, lq, 1.0)[:, None],
+                      -np.stack([cp, sp, np.zeros(len(i))], axis=1))
+        ldot = (eq * (VQ - v[:, b])).sum(1)
+        paid, rate, q_on = np.array([payout_of(params, ti) for ti in t[i]], float).T
+        q_on = q_on > 0.5
+        w = np.where(q_on, ldot - rate, 0.0)
+        s = np.where(q_on, lq - (paid - b * l0), 0.0)
+        U = c * (np.sum((lens - l0) ** 2, axis=1) + s * s)            # two blades
+        rate_D[i] = 2 * d * (np.sum(sd**2, axis=1) + w * w)
         rate_W[i] = -2 * (c * s + d * w) * rate
         TU[i] = T + U
         kinetic[i] = T
         wrel[i] = np.sum(m[:b + 1]) * rw**2          # 2 blades x ½ m (rω)²
-        out["hub_rate"][i] = omega[i]
+        out["hub_rate"][i] = om
         out["angular_momentum"][i] = H
-        out["deployed_length"][i] = lens.sum() + (lq if q_on else 0.0)
-        tip = x[0] - Q                                # Δu [19], in the body frame
-        tb = np.array([cp * tip[0] + sp * tip[1], -sp * tip[0] + cp * tip[1], tip[2]])
-        nt = np.sqrt(tb @ tb)
-        out["tip_angle"][i] = np.arccos(np.clip(tb[0] / nt, -1, 1)) if nt > 0 else 0.0
-        signed[i] = np.arctan2(tb[1], tb[0]) if nt > 0 else 0.0
+        out["deployed_length"][i] = lens.sum(1) + np.where(q_on, lq, 0.0)
+        tip = x[:, 0] - Q                             # Δu [19], in the body frame
+        tb0, tb1 = cp * tip[:, 0] + sp * tip[:, 1], -sp * tip[:, 0] + cp * tip[:, 1]
+        nt = np.sqrt(tb0**2 + tb1**2 + tip[:, 2] ** 2)
+        pos = nt > 0
+        out["tip_angle"][i] = np.where(
+            pos, np.arccos(np.clip(tb0 / np.where(pos, nt, 1.0), -1, 1)), 0.0)
+        signed[i] = np.where(pos, np.arctan2(tb1, tb0), 0.0)
     ok = np.isfinite(TU)
     dt = np.diff(t)
     if dissipated is None:

@@ -1,20 +1,20 @@
 """`xval bench` for frequency scenes: the time each solver needs for a given accuracy of the
 natural frequencies, and its default settings against the source's published computing times.
 
-Each solver is walked along its own accuracy knob (coarse → fine, from its default outwards,
-with bench.py's walk): a mesh (integer settings named `*elements` / `*segments`, scaled
+Each solver is walked along its own accuracy knobs (coarse → fine, from its default outwards,
+with bench.py's walk): a tolerance (`rtol` of a root refinement, `fd_step` of a finite
+difference, factors of 10), a mesh (integer settings named `*elements` / `*segments`, scaled
 together by factors of 2, each such ladder with the solver's accuracy switch — Richardson
-extrapolation — off and on) or a tolerance (`rtol` of a root refinement, `fd_step` of a finite
-difference, factors of 10); a solver with neither has one rung. A rung's error is the largest
-relative deviation over the scene's modes from the reference (modes paired by label where
-both name them uniquely, else by nearest frequency: `metrics.match_modes`; where that leaves
-modes unpaired, by order); a rung with fewer modes has no error (missed modes). The reference
-is the finest rung of the scene's first reference solver; the second one's best rung confirms
-it. Times are medians of repeated warm calls (each solver is called once first: import and
-compile time are reported apart); the summary ranks wall times, as the time bench does, and
-each row keeps its CPU time too (on a shared machine the better estimate of an idle one's
-wall time, with single-threaded BLAS: the OPENBLAS_NUM_THREADS in effect is recorded).
-Summary and plot are the time bench's.
+extrapolation — off and on), a root search's grid step (`step_hz`, factors of 2); a solver with
+none has one rung. A rung's error is the largest relative deviation over the scene's modes from
+the reference (modes paired by label where both name them uniquely, else by nearest frequency:
+`metrics.match_modes`; where that leaves modes unpaired, by order); a rung with fewer modes has
+no error (missed modes). The reference is the finest rung of the scene's first reference
+solver; the second one's best rung confirms it. Times are medians of repeated warm calls (each
+solver is called once first: import and compile time are reported apart); the summary ranks
+wall times, as the time bench does, and each row keeps its CPU time too (on a shared machine
+the better estimate of an idle one's wall time, with single-threaded BLAS: the
+OPENBLAS_NUM_THREADS in effect is recorded). Summary and plot are the time bench's.
 """
 from __future__ import annotations
 
@@ -42,25 +42,33 @@ TOLERANCES = {"rtol": tuple(10.0 ** -k for k in range(1, 14)),      # root refin
 MESH_SUFFIXES = ("elements", "segments")
 MESH_FACTORS = tuple(2.0 ** k for k in range(-3, 4))     # 1/8 … 8 × the default mesh
 SWITCHES = ("richardson", "extrapolate")                 # accuracy switches of a mesh
+# a root search's grid step (bracketing; too coarse a grid misses roots): 8× … 1/8× the default
+GRID_STEPS = ("step_hz",)
 
 
 def ladders(leaf, preset: dict) -> list[tuple[str, list[dict], int]]:
-    """(label, [settings coarse → fine], index of the default rung) per accuracy knob."""
+    """(label, [settings coarse → fine], index of the default rung) per accuracy knob:
+    tolerances first (the finest rung of a solver's first ladder is its tightest run, the
+    bench's reference), then meshes, then grid steps."""
     base = {**getattr(leaf, "MODES_SETTINGS", {}), **preset}
+    out = []
+    for k, values in TOLERANCES.items():
+        if isinstance(base.get(k), (int, float)) and not isinstance(base.get(k), bool):
+            start = int(np.argmin(np.abs(np.log(values) - np.log(base[k]))))
+            out.append((k, [{**base, k: v} for v in values], start))
     mesh = [k for k, v in base.items() if k.endswith(MESH_SUFFIXES)
             and isinstance(v, int) and not isinstance(v, bool)]
     switch = next((k for k in SWITCHES if isinstance(base.get(k), bool)), None)
-    out = []
     if mesh:
         name = mesh[0] if len(mesh) == 1 else "mesh"
         for on in ((False, True) if switch else (None,)):
             sts = [{**base, **{k: max(1, round(base[k] * f)) for k in mesh},
                     **({} if on is None else {switch: on})} for f in MESH_FACTORS]
             out.append((name + (f"+{switch}" if on else ""), sts, MESH_FACTORS.index(1.0)))
-    for k, values in TOLERANCES.items():
-        if isinstance(base.get(k), (int, float)) and not isinstance(base.get(k), bool):
-            start = int(np.argmin(np.abs(np.log(values) - np.log(base[k]))))
-            out.append((k, [{**base, k: v} for v in values], start))
+    for k in GRID_STEPS:
+        if isinstance(base.get(k), float):
+            out.append((k, [{**base, k: base[k] / f} for f in MESH_FACTORS],
+                        MESH_FACTORS.index(1.0)))
     return out or [("defaults", [base], 0)]
 
 
@@ -124,8 +132,11 @@ def falling(rows) -> list[dict]:
 
 
 def _rung(call, s, st, label, kind, knobs, ref, seen, repeats, log):
-    """One rung's row: timed calls (bench.repeat_timed), its error; None where the leaf raised
-    the request to a rung already run (nothing coarser exists)."""
+    """One rung's row: timed calls (bench.repeat_timed), its error. `seen` (effective
+    settings -> row) spares a rerun: a rung another ladder of the solver ran (its default) is
+    that row again; one this ladder ran is None (the leaf raised the request to a rung already
+    run: nothing coarser exists)."""
+    effective = lambda m: repr(sorted(m.settings.items()))   # noqa: E731
     cpus = []
 
     def timed():
@@ -134,10 +145,11 @@ def _rung(call, s, st, label, kind, knobs, ref, seen, repeats, log):
         cpus.append(time.process_time() - c0)
         return m
     m = timed()
-    effective = repr(sorted(m.settings.items())) if m.status == "ok" else None
-    if effective in seen:
-        return None
-    seen.add(effective)
+    old = seen.get(effective(m)) if m.status == "ok" else None
+    if old is not None:
+        return None if old["method"] == label else {
+            **old, "method": label, "knob_kind": kind,
+            "knob": {k: m.settings.get(k, st[k]) for k in knobs}}
     walls = [m.wall_s]
     if m.status == "ok":
         repeat_timed(walls, timed, repeats)
@@ -147,6 +159,8 @@ def _rung(call, s, st, label, kind, knobs, ref, seen, repeats, log):
            "settings": m.settings or st, "status": m.status,
            "wall_s": float(np.median(walls)), "cpu_s": float(np.median(cpus)), "rel_error": err,
            "worst_mode" if err is not None else "reason": at, "n_modes": len(m.frequencies_hz)}
+    if m.status == "ok":
+        seen[effective(m)] = row
     log(f"  {s.name} {label} {_knob_text(row['knob'])}: err "
         f"{'—' if err is None else f'{err:.2e}'} ({at}), wall {row['wall_s']:.3g} s")
     return row
@@ -214,10 +228,10 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
 
     rows = []
     for s in chosen:
-        seen = set()
+        seen = {}
         for label, rungs, start in ladders(s.leaf(sc), s.preset):
             knobs = [k for k in rungs[0] if any(r[k] != rungs[0][k] for r in rungs)]
-            kind = "tolerance" if label in TOLERANCES else "mesh"
+            kind = "mesh" if any(k.endswith(MESH_SUFFIXES) for k in knobs) else "tolerance"
 
             # one rung that does not halve the error ends a ladder: a finer mesh costs 2–8×
             rows += _walk(rungs, start, lambda i, s=s, rungs=rungs, label=label, knobs=knobs,

@@ -182,9 +182,9 @@ def shaft_modes(chain: dict, M, K, D, n_modes: int) -> dict:
         else:
             inertial = np.sign(whirl_sense(u_x, v_y)) * s[i].imag + spin
             kinds.append("forward whirl" if inertial * spin > 0 else "backward whirl")
+    # at rest the planes decouple: 'whirl 1' … 'whirl 6', one label per mode as mstmm and fem
+    # number them, so every solver pairs mode by mode (comparisons match by label)
     labels = family_labels(kinds)
-    if spin == 0:      # degenerate pairs share a number: whirl 1, whirl 1, whirl 2, …
-        labels = [f"whirl {j // 2 + 1}" for j in range(len(kinds))]
     s = s[:n_modes]
     return {"frequencies_hz": s.imag / (2 * np.pi), "labels": labels[:n_modes],
             "shapes": np.array(shapes[:n_modes]), "damping": -s.real / np.abs(s),
@@ -272,6 +272,8 @@ def shaft_result(params: dict, s: dict, linearised, package, method: str):
     res = package(out, s, method, {"stations_m": stations(params["L"]), "omega0_rad_s": w0,
                                    "linearise_s": time.perf_counter() - t0})
     res.extra["omega_star"] = res.frequencies_hz * 2 * np.pi / w0
+    if spin == 0:      # the extrapolation may swap a degenerate pair: number in final order
+        res.labels = family_labels(["whirl"] * len(res.labels))
     return res
 
 

@@ -29,7 +29,6 @@ import hashlib
 import itertools
 import json
 import multiprocessing
-import os
 import sys
 import time
 import tomllib
@@ -438,11 +437,7 @@ def make_executor(kind, scheduler, workers):
                                          dashboard_address=None, silence_logs=50))
         return client.get_executor(), client
     # spawn: engines start threads; a forked child would inherit a half-initialised state.
-    # One BLAS thread per worker: the workers already fill the cores, and oversubscribed
-    # eigen-solves of the frequency scenes ran ~10× slower (the spawned children read the
-    # variable when numpy loads)
-    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(var, "1")
+    # The children inherit one BLAS thread each (compare/__init__.py)
     return ProcessPoolExecutor(max_workers=workers or 2,
                                mp_context=multiprocessing.get_context("spawn")), None
 

@@ -10,7 +10,6 @@ the tolerance alone (no cap at the output interval unless `h_max` is given) and 
 need not divide the output interval. The right-hand sides write into a given array and are
 fused scalar code (`rotation.*_t` helpers): no allocation per evaluation.
 """
-import time
 
 import numba as nb
 import numpy as np
@@ -19,7 +18,7 @@ from compare.contract import LeafResult, merge_settings
 from compare.physics import rotor as physics
 
 from .integrators import FAIL_REASONS, FIXED_TABLEAUS
-from .integrators.dense import DENSE_TABLEAUS, integrate_adaptive_dense, integrate_fixed_dense
+from .integrators.dense import DENSE_TABLEAUS, solve
 from .rotation import matrices_to_quats, rotation_tensor
 
 INTEGRATORS = tuple(DENSE_TABLEAUS) + tuple(FIXED_TABLEAUS)
@@ -76,31 +75,10 @@ def check_settings(settings, t_out=None):
 def integrate(rhs, guard, y0, p, t_out, settings):
     """Run one of the shared integrators; returns (Y, stats, t_fail, reason, used settings)."""
     s = check_settings(settings, t_out)
-    name = s["integrator"]
-    if name in FIXED_TABLEAUS:
-        tb = FIXED_TABLEAUS[name]
-        dt = float(s["dt"] or 1e-3)
-        t0 = time.perf_counter()
-        Y, steps, evals, t_fail, code = integrate_fixed_dense(rhs, guard, y0, p, t_out, dt,
-                                                              tb["A"], tb["B"], tb["C"])
-        span = t_out[-1] - t_out[0]
-        used = {"integrator": name, "dt": span / steps if code == 0 and span > 0 else dt}
-        stats = {"steps": int(steps), "rhs_evals": int(evals)}
-    else:
-        tb = DENSE_TABLEAUS[name]
-        rtol = float(s["rtol"])
-        atol = float(s["atol"] or rtol * 1e-2)
-        h_max = float(s["h_max"] or 0.0)           # 0: no cap, the tolerance sets the step
-        t0 = time.perf_counter()
-        Y, steps, evals, rej, t_fail, code = integrate_adaptive_dense(
-            rhs, guard, y0, p, t_out, rtol, atol, h_max, int(s["max_steps"]),
-            tb["A"], tb["B"], tb["C"], tb["E"], tb["E3"], tb["err_order"],
-            tb["dense"], tb["P"], tb["AX"], tb["CX"], tb["D"])
-        used = {"integrator": name, "rtol": rtol, "atol": atol,
-                **({"h_max": h_max} if h_max > 0 else {})}
-        stats = {"steps": int(steps), "rhs_evals": int(evals), "rejected": int(rej)}
-    stats["integrate_s"] = time.perf_counter() - t0
-    return Y, stats, (None if code == 0 else float(t_fail)), REASONS.get(int(code)), used
+    Y, stats, t_fail, code, used = solve(rhs, guard, y0, p, t_out, s["integrator"],
+                                         dt=s["dt"] or 1e-3, rtol=s["rtol"], atol=s["atol"],
+                                         h_max=s["h_max"], max_steps=s["max_steps"])
+    return Y, stats, (None if code == 0 else float(t_fail)), REASONS.get(code), used
 
 
 def result(params, t_out, Y, stats, t_fail, reason, used, motion, p, invariants=None,

@@ -54,7 +54,7 @@ from compare.contract import ModesResult, merge_settings
 from compare.physics.mstmm import helicopter_layout
 
 from . import elements as el
-from .roots import find_roots
+from .roots import SEARCH_RTOL, find_roots
 
 
 def skew(r):
@@ -229,6 +229,7 @@ def frequencies(L, spin, hub_radius, clamped, omega_max, rtol=1e-10, step_hz=0.1
     frequencies (counted by the nullity of U_all there), then the deflated characteristic
     function on a grid that is refined ±cluster_width (relative) around every isolated-blade
     frequency, where the coupled blade modes crowd."""
+    rtol = min(rtol, SEARCH_RTOL)
     iso = isolated_blade_roots(L, spin, hub_radius, omega_max)
     exact = []
     for r in iso:

@@ -231,6 +231,10 @@ def modes_for(params, settings, clamped):
     L = helicopter_layout(params)
     spin, n_modes = params["speed"], params["n_modes"]
     mesh = (s["blade_elements"], s["shaft_elements"], s["tail_elements"])
+    if not all(isinstance(m, int) and m >= 1 for m in mesh) or mesh[0] % (BLADE_STATIONS - 1):
+        raise ValueError(f"blade_elements must be a positive multiple of {BLADE_STATIONS - 1} "
+                         f"(the mode-shape stations sit on nodes), shaft_elements and "
+                         f"tail_elements positive integers; got {mesh}")
     w, shapes, unstable = frequencies(L, spin, mesh, clamped, n_modes)
     notes = []
     if s["richardson"]:

@@ -1,9 +1,7 @@
 """Time integrators shared by every custom model: one place, one file per family.
 
-- `explicit`: fixed-step and adaptive embedded Runge–Kutta methods as coefficient tables
-  (numba-compiled drivers; the right-hand side is a jitted `f(t, y, p)`; steps land on the
-  output times).
-- `dense`: the same methods with dense output (DOP853's 7th-order extension, Dopri5/RK23
+- `explicit`: the Runge–Kutta coefficient tables, failure codes, guard type, error norm.
+- `dense`: the drivers, with dense output (DOP853's 7th-order extension, Dopri5/RK23
   interpolants, cubic Hermite for fixed steps): the step is set by the tolerance or `dt` alone;
   the right-hand side writes into a given array, `f(t, y, p, dy)`.
 - `linear_acceleration`: the linear-acceleration (Wilson-θ) method for M(q) q'' = Q(q, q', t).
@@ -14,8 +12,6 @@ from .explicit import (
                        ADAPTIVE_TABLEAUS,
                        FAIL_REASONS,
                        FIXED_TABLEAUS,
-                       integrate_adaptive,
-                       integrate_fixed,
                        no_guard,
 )
 from .implicit import block3_tridiag_factor, block3_tridiag_solve, bordered_block3_solve, inv3
@@ -30,8 +26,7 @@ from .linear_acceleration import (
                        wilson_step,
 )
 
-__all__ = ["FIXED_TABLEAUS", "ADAPTIVE_TABLEAUS", "FAIL_REASONS", "integrate_fixed",
-           "integrate_adaptive", "no_guard",
+__all__ = ["FIXED_TABLEAUS", "ADAPTIVE_TABLEAUS", "FAIL_REASONS", "no_guard",
            "integrate_wilson", "wilson_step", "accel_from_mass_force", "as_first_order",
            "LA_REASONS", "MODE_NEWTON", "MODE_FIXED_POINT", "MODE_PC",
            "block3_tridiag_factor", "block3_tridiag_solve", "bordered_block3_solve", "inv3"]

@@ -1,8 +1,8 @@
 """Runge–Kutta drivers with dense output: the step is set by the tolerance (or `dt`) alone.
 
-The drivers in `explicit` land a step on every output time, so an adaptive run can never take
-a step longer than the output interval (the rotor's DOP853 took 1004 steps at rtol 1e-5, 1e-7
-and 1e-9 alike). Here the step runs free and the output grid is filled by each method's
+Drivers that land a step on every output time can never take an adaptive step longer than the
+output interval (the rotor's DOP853 took 1004 steps at rtol 1e-5, 1e-7 and 1e-9 alike, before
+every model moved here). Here the step runs free and the output grid is filled by each method's
 continuous extension, evaluated only for the outputs inside an accepted step:
 
 - DOP853: the 7th-order extension of Hairer, Nørsett & Wanner (three extra stages, computed only
@@ -16,8 +16,9 @@ The guard is checked on every accepted step (at its end), before the outputs ins
 are written: after a failure every later row stays NaN and the failure time is the step's end.
 
 The right-hand side writes into a given array: `f(t, y, p, dy)` (type `RHS_INTO`), so one
-evaluation allocates nothing. Like `explicit`, the drivers are compiled once for first-class
-function types (cached on disk); `explicit`'s drivers stay for the models that use them.
+evaluation allocates nothing. The drivers are compiled once for first-class function types
+(fixed signatures, called through a pointer), which numba caches on disk: one compiled driver
+serves every model, where a specialisation per model would compile again in every process.
 `solve` runs a method by name with the settings every leaf shares (dt or rtol/atol/h_max).
 """
 import functools

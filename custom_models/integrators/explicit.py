@@ -1,18 +1,11 @@
-"""Explicit Runge–Kutta integrators as coefficient tables, compiled with numba.
+"""Explicit Runge–Kutta methods as coefficient tables, and the pieces every driver shares.
 
-Both drivers take a jitted right-hand side `f(t, y, p) -> dy` (p: float64 parameter array) and a
-jitted `guard(t, y, p) -> int` that returns 0 while the state is valid and a model-specific code
-(>= 10) when the model's description breaks down. They return the solution on the output grid;
-after a failure the remaining rows are NaN and the failure time and code are returned, so a
-diverged run can never look like a finite result.
-
-Steps always land on the output times (the adaptive driver shortens a step to hit the next output
-instead of interpolating), so outputs carry the integrator's own accuracy.
-
-Why function arguments: one compiled driver serves every model. The drivers are compiled for
-first-class function types (`RHS`, `GUARD`: fixed signatures, called through a pointer), which
-numba caches on disk like any other type — a specialisation on a particular jitted function
-would not be cached, and every process paid ~8 s to compile it again.
+The tables (`FIXED_TABLEAUS`, `ADAPTIVE_TABLEAUS`: A, B, C, the embedded error weights E/E3)
+feed the dense-output drivers of `dense` and the event stepping of `events`; so do the failure
+codes, the guard type `GUARD` (`guard(t, y, p) -> int`: 0 while the state is valid, a
+model-specific code ≥ 10 when the model's description breaks down), Hairer's initial-step
+estimate and the error norm. (The drivers that landed a step on every output time lived here
+until every model had moved to `dense`.)
 """
 import numba as nb
 import numpy as np
@@ -60,63 +53,12 @@ ADAPTIVE_TABLEAUS = {
 
 
 _VEC, _MAT = nt.float64[::1], nt.float64[:, ::1]       # C-contiguous: models reshape slices
-RHS = nt.FunctionType(_VEC(nt.float64, _VEC, _VEC))          # f(t, y, p) -> dy
 GUARD = nt.FunctionType(nt.int64(nt.float64, _VEC, _VEC))    # guard(t, y, p) -> code
 
 
 @nb.njit(cache=True)
 def no_guard(t, y, p):
     return 0
-
-
-@nb.njit(cache=True)
-def _stages(f, t, y, p, h, A, C, K):
-    """Fill K[0..s-1] with the stage derivatives (K[0] must hold f(t, y) already)."""
-    n_st = A.shape[0]
-    ny = y.shape[0]
-    ys = np.empty(ny)
-    for s in range(1, n_st):
-        for j in range(ny):
-            acc = 0.0
-            for r in range(s):
-                acc += A[s, r] * K[r, j]
-            ys[j] = y[j] + h * acc
-        K[s] = f(t + C[s] * h, ys, p)
-
-
-@nb.njit(nt.Tuple((_MAT, nt.int64, nt.int64, nt.float64, nt.int64))(
-    RHS, GUARD, _VEC, _VEC, _VEC, nt.int64, _MAT, _VEC, _VEC), cache=True)
-def integrate_fixed(f, guard, y0, p, t_out, substeps, A, B, C):
-    """Fixed step h = (t_out[i+1] - t_out[i]) / substeps.
-
-    Returns (Y, steps, rhs_evals, t_fail, code)."""
-    n_out, ny, n_st = t_out.shape[0], y0.shape[0], B.shape[0]
-    Y = np.full((n_out, ny), np.nan)
-    K = np.empty((n_st, ny))
-    y = y0.copy()
-    Y[0] = y
-    steps = 0
-    evals = 0
-    for i in range(n_out - 1):
-        h = (t_out[i + 1] - t_out[i]) / substeps
-        for k in range(substeps):
-            t = t_out[i] + k * h
-            K[0] = f(t, y, p)
-            _stages(f, t, y, p, h, A, C, K)
-            evals += n_st
-            for j in range(ny):
-                acc = 0.0
-                for s in range(n_st):
-                    acc += B[s] * K[s, j]
-                y[j] += h * acc
-            steps += 1
-            if not np.all(np.isfinite(y)):
-                return Y, steps, evals, t + h, FAIL_NONFINITE
-            code = guard(t + h, y, p)
-            if code != 0:
-                return Y, steps, evals, t + h, code
-        Y[i + 1] = y
-    return Y, steps, evals, np.nan, FAIL_OK
 
 
 @nb.njit(cache=True)
@@ -154,71 +96,3 @@ def _error_norm(K, h, scale, E, E3):
     if e5 == 0.0 and e3 == 0.0:    # DOP853's 5th/3rd-order blend (Hairer & Wanner)
         return 0.0
     return abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * ny)
-
-
-@nb.njit(nt.Tuple((_MAT, nt.int64, nt.int64, nt.int64, nt.float64, nt.int64))(
-    RHS, GUARD, _VEC, _VEC, _VEC, nt.float64, nt.float64, nt.float64, nt.int64,
-    _MAT, _VEC, _VEC, _VEC, _VEC, nt.int64), cache=True)
-def integrate_adaptive(f, guard, y0, p, t_out, rtol, atol, h_max, max_steps,
-                       A, B, C, E, E3, err_order):
-    """Error-controlled embedded RK (FSAL), steps clipped to land on every output time.
-
-    Returns (Y, steps, rhs_evals, rejected, t_fail, code)."""
-    n_out, ny, n_st = t_out.shape[0], y0.shape[0], B.shape[0]
-    Y = np.full((n_out, ny), np.nan)
-    K = np.empty((n_st + 1, ny))
-    y = y0.copy()
-    Y[0] = y
-    t = t_out[0]
-    fy = f(t, y, p)
-    evals = 1
-    steps = 0
-    rejected = 0
-    expo = -1.0 / (err_order + 1)
-    h = min(initial_step(y, fy, rtol, atol), h_max)
-    y_new = np.empty(ny)
-    scale = np.empty(ny)
-    for i in range(n_out - 1):
-        t_next = t_out[i + 1]
-        while t < t_next:
-            if steps + rejected >= max_steps:
-                return Y, steps, evals, rejected, t, FAIL_MAX_STEPS
-            last = False
-            if t + h >= t_next - 1e-12 * abs(t_next):
-                h_try = t_next - t
-                last = True
-            else:
-                h_try = h
-            if h_try < 10.0 * np.abs(np.nextafter(t, np.inf) - t):
-                return Y, steps, evals, rejected, t, FAIL_STEP_UNDERFLOW
-            K[0] = fy
-            _stages(f, t, y, p, h_try, A, C, K)
-            for j in range(ny):
-                acc = 0.0
-                for s in range(n_st):
-                    acc += B[s] * K[s, j]
-                y_new[j] = y[j] + h_try * acc
-            f_new = f(t + h_try, y_new, p)
-            K[n_st] = f_new
-            evals += n_st
-            for j in range(ny):
-                scale[j] = atol + max(abs(y[j]), abs(y_new[j])) * rtol
-            err = _error_norm(K, h_try, scale, E, E3)
-            if not np.isfinite(err):
-                err = 1e10           # a NaN trial step: retry smaller, fail by underflow
-            if err < 1.0:
-                fac = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** expo)
-                t = t_next if last else t + h_try
-                y[:] = y_new
-                fy = f_new
-                steps += 1
-                code = guard(t, y, p)
-                if code != 0:
-                    return Y, steps, evals, rejected, t, code
-                # a clipped last step says little about the next one: keep h unless it grew
-                h = min(h_max, max(h, h_try * fac) if last else h_try * fac)
-            else:
-                rejected += 1
-                h = h_try * max(0.2, 0.9 * err ** expo)
-        Y[i + 1] = y
-    return Y, steps, evals, rejected, np.nan, FAIL_OK

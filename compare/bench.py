@@ -35,8 +35,9 @@ SHORT_RUN_S, SHORT_REPEATS = 0.05, 5     # runs this short are timed 5 × `repea
 MAX_DOUBLINGS = 7          # a fixed step goes at most 2^7 coarser or finer than the default
 ORDER_RUNGS = 4            # the observed order is fitted on this many finest rungs
 # the order a fixed-step method should show (its observed order is flagged when lower)
-ORDERS = {"euler": 1, "explicit_euler": 1, "midpoint": 2, "rk4": 4, "rk44": 4, "rk67": 6,
-          "generalized_alpha": 2, "trapezoidal": 2, "imr": 2, "implicitfast": 1, "implicit": 1}
+ORDERS = {"euler": 1, "explicit_euler": 1, "midpoint": 2, "linacc": 2, "rk4": 4, "rk44": 4,
+          "rk67": 6, "generalized_alpha": 2, "trapezoidal": 2, "imr": 2, "implicitfast": 1,
+          "implicit": 1}
 
 
 def _snap(dt, dt_out):
@@ -333,14 +334,22 @@ def _fixed_dt(row):
 def convergence_orders(rows, low, step, expected):
     """Observed order of each ladder with a step: the least-squares slope of log(error) over
     log(step(row)) on its finest rungs (up to ORDER_RUNGS) above the floor `low` and below
-    COARSE_ERR — coarse rungs can be pre-asymptotic — flagged when it falls short of
+    COARSE_ERR (coarse rungs can be pre-asymptotic), less the floor where the error stops
+    falling (a model's own error) — flagged when it falls short of
     `expected(row)` (the method's order, None: unknown) by more than 0.5."""
     out = []
     for (s, m) in dict.fromkeys((r["solver"], r["method"]) for r in rows):
         mine = [r for r in rows if r["solver"] == s and r["method"] == m]
-        pts = sorted((step(r), r["rel_error"]) for r in mine if r["rel_error"]
-                     and step(r) is not None and low < r["rel_error"] < COARSE_ERR)
-        pts = pts[:ORDER_RUNGS]
+        pts = sorted(((step(r), r["rel_error"]) for r in mine if r["rel_error"]
+                      and step(r) is not None and low < r["rel_error"] < COARSE_ERR),
+                     reverse=True)
+        # coarse → fine: where the error stops falling it sits on a floor of the model (e.g.
+        # the paper's finite differences), not of the method; the order is read from
+        # error − floor on the rungs well above it
+        if any(pts[i][1] > pts[i - 1][1] / 1.5 for i in range(1, len(pts))):
+            floor = min(e for _, e in pts)
+            pts = [(h, e - floor) for h, e in pts if e > 3 * floor]
+        pts = sorted(pts)[:ORDER_RUNGS]
         if len(pts) < 2:
             continue
         x, y = np.log(np.array(pts)).T

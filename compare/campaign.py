@@ -453,10 +453,7 @@ def run_campaign(path, out, executor="local", scheduler=None, workers=None, time
     out_dir = Path(out) / "campaign" / camp.get("name", "campaign")
     store = out_dir / "jobs"
     reused = {j.label for j in jobs if is_done(j, store)}
-    # A frequency case is one job for all its solvers plus a Campbell sweep: the longest jobs of
-    # a campaign (helicopter 25–35 s against ≤ 8 s for any time job). They go to the pool first
-    # (longest first), so the pool does not end on one worker alone.
-    todo = sorted((j for j in jobs if j.label not in reused), key=lambda j: j.solver is not None)
+    todo = dispatch_order([j for j in jobs if j.label not in reused])
     pending = {c.name: {j.label for j in todo if j.case == c.name} for c in cases}
     outcome, crashed = {}, {}
     t0 = time.perf_counter()
@@ -499,6 +496,22 @@ def run_campaign(path, out, executor="local", scheduler=None, workers=None, time
     from .campaign_report import write_campaign_report
     return write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed,
                                  time.perf_counter() - t0)
+
+
+def dispatch_order(jobs):
+    """Round robin over scene families (a scene module's scenes share their compiled kernels):
+    on a fresh clone each worker compiles what its job needs, and two workers starting the same
+    family at once compiled the same kernels twice (the sail, press and bearing solver pairs
+    each paid ~10 s twice). Each family leads with its frequency cases — one job for all their
+    solvers plus a Campbell sweep, the longest jobs (helicopter 26 s against ≤ 8 s for a time
+    job) — in reverse registry order, which lists the simplest first: so the pool does not end
+    on one worker alone."""
+    families: dict = {}
+    rank = {id(j): ((0, -i) if j.solver is None else (1, i)) for i, j in enumerate(jobs)}
+    for j in sorted(jobs, key=lambda j: rank[id(j)]):
+        families.setdefault(_scene_module(get_scene(j.scene)), []).append(j)
+    waves = itertools.zip_longest(*families.values())
+    return [j for wave in waves for j in wave if j is not None]
 
 
 def _started(jobs, store, since):

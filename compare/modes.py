@@ -75,16 +75,25 @@ def track(results: list[Modes]) -> dict[str, np.ndarray]:
 
 def _refine(gap, lo, hi, v0):
     """The root of `gap` in [lo, hi] to 1e-10 relative. Every evaluation is a whole modes run
-    (~0.5 s on the helicopter), so first a bracket of ±2 % of the step around the lines' linear
-    estimate v0 (≈ 6 evaluations where the whole step took ≈ 10); the whole step where v0 is
-    off by more."""
+    (~0.5 s on the helicopter), so the step is first cut at ±2 % around the lines' linear
+    estimate v0, and brentq runs on the piece holding the sign change; values are remembered
+    (brentq evaluates its bracket's ends again). The step's ends are evaluated anew: the swept
+    lines follow a mode by shape, `gap` by label, and near-degenerate pairs (the hovering
+    fuselage's) swap labels between sweep points."""
+    memo: dict = {}
+
+    def f(v):
+        if v not in memo:
+            memo[v] = gap(v)
+        return memo[v]
     d = 0.02 * (hi - lo)
-    a, b = max(lo, v0 - d), min(hi, v0 + d)
-    if lo < a and b < hi:
-        ga, gb = gap(a), gap(b)
-        if ga * gb < 0:
-            return brentq(gap, a, b, xtol=1e-10 * abs(b), rtol=1e-14)
-    return brentq(gap, lo, hi, xtol=1e-10 * abs(hi), rtol=1e-14)
+    cuts = sorted({lo, max(lo, v0 - d), min(hi, v0 + d), hi})
+    for x0, x1 in zip(cuts, cuts[1:]):
+        if f(x0) == 0.0:
+            return x0
+        if f(x0) * f(x1) < 0:
+            return brentq(f, x0, x1, xtol=1e-10 * abs(x1), rtol=1e-14)
+    raise ValueError("no sign change of the gap in the step")
 
 
 def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: np.ndarray,

@@ -242,7 +242,12 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
                   f"{fmt_value(r['compile_s'], 3) if r['compile_s'] else '—'} | {r['steps']} | "
                   f"{r['rhs_evals'] or '—'} | "
                   f"{'—' if r['ns_per_rhs'] is None else format(r['ns_per_rhs'], '.0f')} |")
-    md += ["", "![work-precision](work_precision.png)"]
+    return write_outputs(out_dir, obj, md)
+
+
+def write_outputs(out_dir, obj, md):
+    """report.md (the figure linked at its end) and bench.json; the result with its report."""
+    md = md + ["", "![work-precision](work_precision.png)"]
     write_text(out_dir / "report.md", "\n".join(md) + "\n")
     write_json(out_dir / "bench.json", obj)
     obj["report"] = str(out_dir / "report.md")

@@ -24,7 +24,6 @@ import time
 import numpy as np
 
 from . import metrics, solvers
-from .atomic import write_json, write_text
 from .bench import (
     FLOOR_ERR,
     _walk,
@@ -34,6 +33,7 @@ from .bench import (
     plot,
     repeat_timed,
     summarise,
+    write_outputs,
 )
 from .scenes import Scene
 
@@ -301,8 +301,4 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
                   f"{'—' if err is None else format(err, '.2e')} | "
                   f"{r.get('worst_mode') or r.get('reason')} | {r['wall_s']:.4g} | "
                   f"{r['cpu_s']:.4g} |")
-    md += ["", "![work-precision](work_precision.png)"]
-    write_text(out_dir / "report.md", "\n".join(md) + "\n")
-    write_json(out_dir / "bench.json", obj)
-    obj["report"] = str(out_dir / "report.md")
-    return obj
+    return write_outputs(out_dir, obj, md)

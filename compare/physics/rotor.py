@@ -47,14 +47,15 @@ def channels(p: dict, Rs: np.ndarray, omegas: np.ndarray, work: np.ndarray,
     U = ½k|γ|² − m r_c·g (the paper's spring −kγ), unless a solver's model variant passes its
     own spring potential. T = ½ ω·(R I_o Rᵀ)·ω."""
     c = constants(p)
-    body_w = (Rs.transpose(0, 2, 1) @ omegas[:, :, None])[:, :, 0]   # Rᵀω, body frame
-    kinetic = 0.5 * np.sum((body_w @ c["I_o"]) * body_w, axis=1)
-    tl = tilt(Rs)
-    u_spring = 0.5 * p["k"] * tl**2 if spring_potential is None else spring_potential
-    potential = u_spring - p["m"] * (Rs @ c["rc0"]) @ c["gravity"]
-    return {"omega_norm": np.linalg.norm(omegas, axis=1), "spin_rate": omegas[:, 2].copy(),
-            "tilt": tl, "work": np.array(work, float), "kinetic": kinetic,
-            "potential": potential, "energy_balance": kinetic + potential - work}
+    with np.errstate(over="ignore", invalid="ignore"):   # a blown-up run overflows; the adapter
+        body_w = (Rs.transpose(0, 2, 1) @ omegas[:, :, None])[:, :, 0]   # marks it diverged
+        kinetic = 0.5 * np.sum((body_w @ c["I_o"]) * body_w, axis=1)     # (Rᵀω, body frame)
+        tl = tilt(Rs)
+        u_spring = 0.5 * p["k"] * tl**2 if spring_potential is None else spring_potential
+        potential = u_spring - p["m"] * (Rs @ c["rc0"]) @ c["gravity"]
+        return {"omega_norm": np.linalg.norm(omegas, axis=1), "spin_rate": omegas[:, 2].copy(),
+                "tilt": tl, "work": np.array(work, float), "kinetic": kinetic,
+                "potential": potential, "energy_balance": kinetic + potential - work}
 
 
 def rotations_from_quaternions(q: np.ndarray) -> np.ndarray:

@@ -78,7 +78,9 @@ def series_derivative_transfer(EI, k, f0, f1, f2, s):
     return P
 
 
-@nb.njit(cache=True)
+# explicit signatures: called with the constants True/False, numba would also compile a
+# Literal[bool] version of these and of everything they call (~3 s more on a fresh clone)
+@nb.njit(nb.float64[:, ::1](nb.float64, nb.float64, nb.boolean), cache=True)
 def resultant_map(EI, T, flap):
     """C: state (disp, rot, moment, force) = C [y, y', y'', y''']."""
     C = np.zeros((4, 4))
@@ -110,7 +112,8 @@ def n_segments(EI, k, Tmax, length):
     return max(1, int(np.ceil(length * max(beta / 1.5, kt / 3.0))))
 
 
-@nb.njit(cache=True)
+@nb.njit(nb.float64[:, ::1](nb.float64, nb.float64, nb.float64, nb.float64, nb.float64,
+                            nb.float64, nb.float64, nb.float64, nb.boolean), cache=True)
 def bending_transfer(EI, m, omega, spin, hub_radius, L, x_a, x_b, flap):
     """4x4 transfer (disp, rot, moment, force) from x_a to x_b (either order) of a rotating
     blade in flap (k = m̄ω²) or lag (k = m̄(ω² + Ω²))."""

@@ -202,15 +202,26 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
     for s in chosen:
         leaf = s.leaf(sc.name)
         for label, rungs, start in _ladders(sc, s, overrides, params, dt_out, vary):
-            def run(i, s=s, leaf=leaf, label=label, rungs=rungs):
+            ran: set = set()
+
+            def run(i, s=s, leaf=leaf, label=label, rungs=rungs, ran=ran):
                 st, p = rungs[i]
                 try:
                     solvers.check_settings(leaf, st, sc.output_grid(p))
                     budget.check_steps(s.name, leaf, p, st, max_steps)
                 except (ValueError, BadInput):
                     return None
-                return _run_rung(sc, s, leaf, label, st, p, params, done, repeats, ref, key,
-                                 out_dir, f"{s.name}-{label}-{i}", vary, log)
+                row = _run_rung(sc, s, leaf, label, st, p, params, done, repeats, ref, key,
+                                out_dir, f"{s.name}-{label}-{i}", vary, log)
+                # a leaf that clamped the knob (an engine's step ≤ the output interval) to what
+                # an earlier rung ran: the walk goes no coarser instead of repeating it
+                clamped = any(k.endswith("_requested") for k in row["settings"])
+                used = repr(sorted((k, v) for k, v in row["settings"].items()
+                                   if not k.endswith("_requested"))) + repr(p)
+                if clamped and used in ran and vary is None:
+                    return None
+                ran.add(used)
+                return row
             rows += _walk(rungs, start, run, exhaustive=vary is not None)
 
     summary, lines = summarise(rows, [s.name for s in chosen], f"on final {key}")

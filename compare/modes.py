@@ -73,10 +73,11 @@ def track(results: list[Modes]) -> dict[str, np.ndarray]:
     return dict(zip(keys, lines))
 
 
-def _refine(gap, lo, hi, v0):
-    """The root of `gap` in [lo, hi] to 1e-10 relative. Every evaluation is a whole modes run
-    (~0.5 s on the helicopter), so the step is first cut at ±2 % around the lines' linear
-    estimate v0, and brentq runs on the piece holding the sign change; values are remembered
+def _refine(gap, lo, hi, v0, d):
+    """The root of `gap` in [lo, hi] to 1e-9 relative (the frequencies it compares are located
+    to 1e-10: a tighter bracket meets their noise). Every evaluation is a whole modes run
+    (~0.5 s on the helicopter), so the step is first cut at v0 ± d around an estimate, and
+    brentq runs on the piece holding the sign change; values are remembered
     (brentq evaluates its bracket's ends again). The step's ends are evaluated anew: the swept
     lines follow a mode by shape, `gap` by label, and near-degenerate pairs (the hovering
     fuselage's) swap labels between sweep points."""
@@ -86,20 +87,24 @@ def _refine(gap, lo, hi, v0):
         if v not in memo:
             memo[v] = gap(v)
         return memo[v]
-    d = 0.02 * (hi - lo)
-    cuts = sorted({lo, max(lo, v0 - d), min(hi, v0 + d), hi})
-    for x0, x1 in zip(cuts, cuts[1:]):
+    a, b = max(lo, v0 - d), min(hi, v0 + d)
+    for x0, x1 in ((a, b), (lo, a), (b, hi)):           # the estimate's piece first
+        if x1 <= x0:
+            continue
         if f(x0) == 0.0:
             return x0
         if f(x0) * f(x1) < 0:
-            return brentq(f, x0, x1, xtol=1e-10 * abs(x1), rtol=1e-14)
+            return brentq(f, x0, x1, xtol=1e-9 * abs(x1), rtol=1e-14)
     raise ValueError("no sign change of the gap in the step")
 
 
 def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: np.ndarray,
-                    lines: dict[str, np.ndarray]) -> dict[str, float]:
+                    lines: dict[str, np.ndarray], hint: dict | None = None) -> dict[str, float]:
     """Sweep values where a mode line crosses `order` × the excitation line, refined by root
-    finding on the solver itself (the mode followed by label, else by nearest frequency)."""
+    finding on the solver itself (the mode followed by label, else by nearest frequency).
+    The first estimate is the lines' linear interpolation (±2 % of the step), or another
+    solver's critical speed of the same name in `hint` (±1e-4 relative: solvers that agree
+    save half the modes runs; one that does not falls back to the whole step)."""
     cb = scene.campbell
     if cb.excitation_hz is None:
         return {}
@@ -112,25 +117,39 @@ def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: 
             for i in idx[:1]:                      # the first crossing of each line
                 def gap(v, key=key, f0=f[i], order=order):
                     m = solvers.modes(scene, solver, {**params, cb.parameter: float(v)})
-                    fr = (m.frequencies_hz[m.labels.index(key)] if key in m.labels
-                          else m.frequencies_hz[np.argmin(np.abs(m.frequencies_hz - f0))])
+                    if key in m.labels:
+                        fr = m.frequencies_hz[m.labels.index(key)]
+                    elif _unique(m.labels):     # the solver names its modes, none of them so
+                        raise ValueError(f"no mode {key!r} at {v}")
+                    else:
+                        fr = m.frequencies_hz[np.argmin(np.abs(m.frequencies_hz - f0))]
                     return fr - order * cb.excitation_hz(params, v)
                 name = key if order == 1 else f"{key} ({order}×)"
                 lo, hi = values[i], values[i + 1]
                 v0 = lo - g[i] * (hi - lo) / (g[i + 1] - g[i])     # linear, from the lines
+                near = (hint or {}).get(name)
                 try:
-                    v = _refine(gap, lo, hi, v0)
+                    v = (_refine(gap, lo, hi, near, 1e-4 * abs(near))
+                         if near is not None and lo < near < hi
+                         else _refine(gap, lo, hi, v0, 0.02 * (hi - lo)))
                 except (ValueError, IndexError):
                     # a body-frame linearisation can lose the mode exactly at the crossing
-                    # (its body-frame frequency is 0 there): parabola through points beside it
+                    # (its body-frame frequency is 0 there): parabola through points beside it,
+                    # its root taken only among them. Else the solver does not confirm the
+                    # crossing and none is reported: the lines can pass between different
+                    # modes over a step (the hovering helicopter's whole-aircraft modes have no
+                    # 'fuselage' label below ~10 rad/s), and a root extrapolated from points
+                    # near the lines' estimate (4.54 rad/s) to 4.98 was no critical speed.
                     x = v0 + 1e-3 * (hi - lo) * np.array([-3, -2, 2, 3.0])
                     try:
                         y = np.array([gap(v) for v in x])
                         roots = np.roots(np.polyfit(x - v0, y, 2)).real + v0
                         v = float(roots[np.argmin(np.abs(roots - v0))])
                     except (ValueError, IndexError):
-                        v = v0
-                out[name] = float(v) if lo <= v <= hi else float(v0)  # never outside its bracket
+                        continue
+                    if not x[0] <= v <= x[-1]:
+                        continue
+                out[name] = float(v)
     return out
 
 
@@ -235,7 +254,8 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
                 log(f"campbell {s.name}: a sweep point failed; no lines")
                 continue
             lines[s.name] = tracked
-            crit[s.name] = critical_speeds(sc, s, params, values, tracked)
+            crit[s.name] = critical_speeds(sc, s, params, values, tracked,
+                                           hint=next(iter(crit.values()), None))
         obj["critical_speeds"] = crit
         obj["campbell"] = {"parameter": sc.campbell.parameter, "values": list(values),
                            "lines_hz": {s: {k: list(v) for k, v in ln.items()}

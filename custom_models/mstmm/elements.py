@@ -215,10 +215,13 @@ def blade_subspace(omega, spin, L, hub_radius, EI_flap, EI_lag, GJ, EA, m, I_alp
 @nb.njit(cache=True)
 def coupled_fourth_order_transfer(K, s):
     """8x8 E(s): y(s) = E y(0), y = [W, W', W'', W'''] per component of W = [U, V] (order
-    U, U', U'', U''', V, …), for W'''' = K W (K 2x2 constant): the exponential series
-    Σ Kⁿ s^(4n+j−d)/(4n+j−d)! — exact, and short for segments with ‖K‖^¼ s ≤ 1.5."""
-    E = np.zeros((8, 8))
-    Kn = np.eye(2)
+    U, U', U'', U''', V, …), for W'''' = K W (K 2x2 constant, real, or complex for the spinning
+    shaft with e^{iωt}; E has K's dtype): the exponential series Σ Kⁿ s^(4n+j−d)/(4n+j−d)! —
+    exact, and short for segments with ‖K‖^¼ s ≤ 1.5."""
+    E = np.zeros((8, 8), dtype=K.dtype)
+    Kn = np.zeros((2, 2), dtype=K.dtype)
+    Kn[0, 0] = 1.0
+    Kn[1, 1] = 1.0
     fact = np.ones(120)
     for i in range(1, 120):
         fact[i] = fact[i - 1] * i
@@ -247,28 +250,6 @@ def shaft_coupling(EIx, EIy, m, omega, spin):
     return K
 
 
-@nb.njit(cache=True)
-def coupled_fourth_order_transfer_complex(K, s):
-    """coupled_fourth_order_transfer for a complex K (the spinning shaft with e^{iωt})."""
-    E = np.zeros((8, 8), dtype=np.complex128)
-    Kn = np.eye(2).astype(np.complex128)
-    fact = np.ones(120)
-    for i in range(1, 120):
-        fact[i] = fact[i - 1] * i
-    for n in range(25):
-        for d in range(4):
-            for j in range(4):
-                p = 4 * n + j - d
-                if p >= 0:
-                    c = s ** p / fact[p]
-                    E[d, j] += Kn[0, 0] * c
-                    E[d, 4 + j] += Kn[0, 1] * c
-                    E[4 + d, j] += Kn[1, 0] * c
-                    E[4 + d, 4 + j] += Kn[1, 1] * c
-        Kn = Kn @ K
-    return E
-
-
 def spinning_shaft(omega, spin, EI, m, EA, GJ, I_p, x_a, x_b):
     """12x12 complex transfer of the spinning shaft (local x = spin axis) from x_a to x_b,
     u ∝ e^{iωt}, rotating frame, physical gyroscopic coupling:
@@ -280,7 +261,7 @@ def spinning_shaft(omega, spin, EI, m, EA, GJ, I_p, x_a, x_b):
     s = x_b - x_a
     beta = (abs(a + c) / EI) ** 0.25
     n = max(1, int(np.ceil(abs(s) * beta / 1.5)))
-    E = np.linalg.matrix_power(coupled_fourth_order_transfer_complex(K, s / n), n)
+    E = np.linalg.matrix_power(coupled_fourth_order_transfer(K, s / n), n)
     Cv = resultant_map(EI, 0.0, False)
     Cw = resultant_map(EI, 0.0, True)
     C = np.zeros((8, 8))

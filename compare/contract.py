@@ -50,6 +50,22 @@ def merge_settings(settings: dict | None, defaults: dict, integrators: tuple,
     return s
 
 
+def require_positive(settings: dict, keys: tuple, auto_ok: bool = False) -> None:
+    """ValueError with one line unless every setting in `keys` is a number > 0 (with `auto_ok`,
+    None and "auto" pass too: the leaf picks the value)."""
+    for k in keys:
+        v = settings[k]
+        if auto_ok and v in (None, "auto"):
+            continue
+        try:
+            ok = float(v) > 0.0
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise ValueError(f"{k} must be > 0{' or ' + repr('auto') if auto_ok else ''}, "
+                             f"got {v!r}")
+
+
 @dataclass
 class LeafResult:
     """What `simulate(params, t_out, settings)` returns.

@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from compare.contract import LeafResult, merge_settings
+from compare.contract import LeafResult, merge_settings, require_positive
 from compare.physics import press as phys
 
 from .integrators import FAIL_REASONS, FIXED_TABLEAUS, LA_REASONS
@@ -59,9 +59,7 @@ def settings_of(defaults: dict, settings: dict | None) -> dict:
     s = merge_settings(settings, defaults, INTEGRATORS)
     if s["integrator"] == "wilson" and not float(s["theta"]) >= 1.0:
         raise ValueError(f"theta must be >= 1, got {s['theta']!r}")
-    for k in ("dphi_deg", "dpsi_deg"):
-        if k in s and not float(s[k]) > 0.0:
-            raise ValueError(f"{k} must be > 0, got {s[k]!r}")
+    require_positive(s, tuple(k for k in ("dphi_deg", "dpsi_deg") if k in s))
     if s["integrator"] not in ADAPTIVE and not (s["dt"] and float(s["dt"]) > 0.0):
         raise ValueError(f"dt must be > 0, got {s['dt']!r}")
     return s

@@ -79,7 +79,7 @@ import time
 
 import numpy as np
 
-from compare.contract import LeafResult, merge_settings
+from compare.contract import LeafResult, merge_settings, require_positive
 from compare.physics import sail as phys
 
 from .thread_spool_driver import FAIL_NONFINITE, FAIL_STRETCH, REASONS, run_imr, run_rk4
@@ -131,11 +131,8 @@ def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> di
     """The settings merged and checked before anything runs (ValueError with one line)."""
     s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
     variant_switches(s)
-    for k in ("stretch_limit", "newton_tol", "eps_fallback"):
-        if not float(s[k]) > 0.0:
-            raise ValueError(f"{k} must be > 0, got {s[k]!r}")
-    if s["dt"] not in (None, "auto") and not float(s["dt"]) > 0:
-        raise ValueError(f"dt must be > 0 or 'auto', got {s['dt']!r}")
+    require_positive(s, ("stretch_limit", "newton_tol", "eps_fallback"))
+    require_positive(s, ("dt",), auto_ok=True)
     return s
 
 

@@ -67,7 +67,7 @@ from exudyn.itemInterface import (
     SpringDamper,
 )
 
-from compare.contract import LeafResult, merge_settings
+from compare.contract import LeafResult, merge_settings, require_positive
 from compare.physics import sail as phys
 
 from ..sail_common import check_grid, stable_dt_explicit
@@ -292,11 +292,8 @@ def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> di
     s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
     if not 0.0 <= float(s["spectral_radius"]) <= 1.0:
         raise ValueError(f"spectral_radius must be in [0, 1], got {s['spectral_radius']!r}")
-    for k in ("newton_tol", "newton_abs_tol", "fine_dt", "fine_newton_tol"):
-        if not float(s[k]) > 0.0:
-            raise ValueError(f"{k} must be > 0, got {s[k]!r}")
-    if s["dt"] not in (None, "auto") and not float(s["dt"]) > 0:
-        raise ValueError(f"dt must be > 0 or 'auto', got {s['dt']!r}")
+    require_positive(s, ("newton_tol", "newton_abs_tol", "fine_dt", "fine_newton_tol"))
+    require_positive(s, ("dt",), auto_ok=True)
     return s
 
 

@@ -47,7 +47,7 @@ import time as _time
 import mujoco
 import numpy as np
 
-from compare.contract import LeafResult, merge_settings
+from compare.contract import LeafResult, merge_settings, require_positive
 from compare.physics import sail as phys
 
 from ..sail_common import check_grid, stable_dt_explicit
@@ -238,8 +238,7 @@ def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> di
     s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
     if s["stored"] not in STORED:
         raise ValueError(f"stored must be one of {STORED}, got {s['stored']!r}")
-    if s["dt"] not in (None, "auto") and not float(s["dt"]) > 0:
-        raise ValueError(f"dt must be > 0 or 'auto', got {s['dt']!r}")
+    require_positive(s, ("dt",), auto_ok=True)
     return s
 
 

@@ -249,7 +249,7 @@ def build_parser():
 
 
 def cmd_extremes(args):
-    from .extremes import run_extremes
+    from .workflows.extremes import run_extremes
     check_out(args.out)
     with stdout_to_stderr():
         obj = run_extremes(args.scene, args.solver, args.out, include_slow=args.all,
@@ -264,7 +264,7 @@ def cmd_extremes(args):
 
 
 def cmd_list(args):
-    from .citations import cite_short
+    from .output.citations import cite_short
     from .scenes import SCENES
     from .solvers import REGISTRY, solvers_for
     for sc in SCENES.values():
@@ -279,14 +279,14 @@ def cmd_show(args):
     from .scenes import get_scene
     sc = get_scene(args.scene)
     if args.json:
-        from .citations import papers_in
+        from .output.citations import papers_in
         emit_json({"scene": sc.name, "title": sc.title, "kind": sc.kind,
                    "sources": papers_in(sc.source) or [sc.source],
                    "channels": list(sc.channels), "tolerances": sc.tolerances,
                    "params": [{"name": p.name, "default": p.default, "unit": p.unit,
                                "range": p.describe_range(), "doc": p.doc} for p in sc.params]})
         return 0
-    from .citations import papers_in
+    from .output.citations import papers_in
     print(f"{sc.name}: {sc.title}")
     for ref in papers_in(sc.source) or [sc.source]:
         print(f"  source: {ref}")
@@ -299,8 +299,9 @@ def cmd_show(args):
 
 
 def cmd_run(args):
-    from . import budget, runner, solvers
+    from . import solvers
     from .scenes import get_scene
+    from .workflows import budget, runner
     sc = get_scene(args.scene)
     if sc.kind != "time":
         raise BadInput(f"scene {sc.name!r} is a frequency scene: use `xval modes {sc.name}`")
@@ -350,7 +351,7 @@ def _finish(args, obj, results, comparisons):
 
 
 def cmd_modes(args):
-    from .modes import run_modes
+    from .workflows.modes import run_modes
     check_out(args.out)
     with stdout_to_stderr():
         obj, results, comparisons = run_modes(args.scene, args.solver, parse_sets(args.set),
@@ -359,8 +360,8 @@ def cmd_modes(args):
 
 
 def cmd_campaign(args):
-    from .campaign import load_campaign, plan, run_campaign
-    from .progress import busy, progress_view
+    from .output.progress import busy, progress_view
+    from .workflows.campaign import load_campaign, plan, run_campaign
     check_out(args.out)
     if args.scheduler and args.executor != "dask":
         raise BadInput("--scheduler needs --executor dask")
@@ -369,7 +370,7 @@ def cmd_campaign(args):
         plan(load_campaign(args.file), args.file or "built-in campaign", args.timeout,
              args.max_output_gib, args.max_steps)
     if args.scheduler:                 # reachable before anything is written
-        from .campaign import connect
+        from .workflows.campaign import connect
         with busy(f"connecting to {args.scheduler} …"):
             connect(args.scheduler).close()
     make_out(args.out)
@@ -390,7 +391,7 @@ def cmd_campaign(args):
 
 
 def cmd_bench(args):
-    from .bench import run_bench
+    from .workflows.bench import run_bench
     check_out(args.out)
     with stdout_to_stderr():
         obj = run_bench(args.scene, args.solver, parse_sets(args.set), args.out,

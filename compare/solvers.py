@@ -23,10 +23,10 @@ from types import ModuleType
 
 import numpy as np
 
+from .analysis.trajectory import Modes, Trajectory
 from .contract import LeafResult, ModesResult, canonical_integrator, merge_settings
 from .errors import BadInput
 from .scenes import SCENES, Scene, get_scene
-from .trajectory import Modes, Trajectory
 
 
 @dataclass(frozen=True)

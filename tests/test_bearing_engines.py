@@ -124,7 +124,7 @@ def test_extra_arrays(default_runs, engine):
 
 
 def test_engines_agree_with_custom_quaternion_solver(default_runs):
-    from custom_models import bearing_rotor as custom
+    from custom_models.bearing import quaternion as custom
     params = SCENE.resolve({})
     t = SCENE.output_grid(params)
     ref = custom.simulate(params, t, {})
@@ -205,7 +205,7 @@ def test_mujoco_python_callback_matches_native():
 @pytest.mark.slow
 def test_long_run_energy_and_agreement():
     """30 s (≈ 330 revolutions, 271 J of motor work) at the default settings."""
-    from custom_models import bearing_rotor as custom
+    from custom_models.bearing import quaternion as custom
     params = SCENE.resolve({"t_end": 30, "output_dt": 0.001})
     t = SCENE.output_grid(params)
     ref = custom.simulate(params, t, {}).channels

@@ -13,7 +13,7 @@ from scipy.optimize import brentq
 from compare.errors import BadInput
 from compare.physics import bearing_rotor as phys
 from compare.scenes.bearing import BEARING_ROTOR as SCENE
-from custom_models import bearing_rotor as leaf
+from custom_models.bearing import quaternion as leaf
 
 
 def qmul(a, b):

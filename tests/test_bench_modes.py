@@ -6,8 +6,8 @@ from pathlib import Path
 import numpy as np
 from conftest import xval
 
-from compare import bench_modes
-from compare.bench import run_bench
+from compare.workflows import bench_modes
+from compare.workflows.bench import run_bench
 
 
 def test_frequency_bench_small_ladder(tmp_path, monkeypatch):

@@ -1,7 +1,8 @@
 """The benchmark's observed convergence order on synthetic ladders with a known law."""
 import pytest
 
-from compare.bench import ORDERS, _fixed_dt, convergence_orders
+from compare.workflows.bench import ORDERS, _fixed_dt
+from compare.workflows.work_precision import convergence_orders
 
 
 def ladder(law, steps=(8e-3, 4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1.25e-4, 6.25e-5)):

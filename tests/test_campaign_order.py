@@ -1,8 +1,8 @@
 """The campaign's dispatch order: every job once; the pool's two first picks never share a scene
 family (they would compile the same kernels twice on a fresh clone); within a family the
 frequency cases lead."""
-from compare import campaign
 from compare.scenes import get_scene
+from compare.workflows import campaign
 
 
 def test_dispatch_order_of_the_default_campaign():

@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 from conftest import xval
 
-from compare.recording import load_scalar_series
-from compare.trajectory import Trajectory
+from compare.analysis.trajectory import Trajectory
+from compare.output.recording import load_scalar_series
 
 SPIN = {"name": "spin", "scene": "rotor-spinup", "set": {"t_end": 0.5},
         "solvers": ["euler-vector", "quaternion"]}

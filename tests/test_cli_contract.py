@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from conftest import xval
 
-from compare.recording import load_scalar_series
+from compare.output.recording import load_scalar_series
 from compare.scenes import get_scene
 
 CHANNELS = get_scene("rotor-spinup").channels

@@ -6,9 +6,9 @@ import json
 import pytest
 
 from compare import cli
-from compare.extremes import run_case, run_extremes
 from compare.scenes import SCENES, get_scene
 from compare.solvers import solvers_for
+from compare.workflows.extremes import run_case, run_extremes
 
 TIME_SCENES = [n for n, sc in SCENES.items() if sc.kind == "time" and sc.extremes]
 

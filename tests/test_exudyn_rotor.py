@@ -203,7 +203,7 @@ def test_step_longer_than_the_output_step_is_interpolated():
     """dt = 2 × output_dt runs on its own step grid, channels interpolated linearly: against the
     independent quaternion solver (rtol 1e-12) the final value (a step end) is off by the RK67
     error 2.8e-6 rad/s and the in-between samples by 3.1e-5 (measured); windows 10×."""
-    from custom_models import rotor_quaternion
+    from custom_models.rotor import quaternion as rotor_quaternion
 
     p = SPINUP.resolve({"t_end": 2})
     t = grid(p)

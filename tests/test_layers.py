@@ -4,6 +4,8 @@
   and `compare.physics` — never the runner, CLI, recording, report, registry or scenes;
 - `compare.contract` and `compare.physics` import nothing else from the project except the
   rotation math of custom_models (they are what leaves may share);
+- inside compare/, each room imports only from its own layer or the ones below it (LAYERS),
+  and no module imports one that imports it back (no cycle, lazy imports in functions counted);
 - nothing in compare/ outside compare/scenes/ names a scene.
 """
 import ast
@@ -14,6 +16,14 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 LEAF_ALLOWED = ("compare.contract", "compare.physics")
+# compare/'s rooms, lowest first (ARCHITECTURE.md): a module may import its own layer and below
+LAYERS = (("shared", ("compare.contract", "compare.errors", "compare.atomic", "compare.physics")),
+          ("values", ("compare.analysis",)),
+          ("scenes and registry", ("compare.scenes", "compare.solvers")),
+          ("output", ("compare.output",)),
+          ("orchestration", ("compare.workflows",)),
+          ("front door", ("compare.cli", "compare.api", "compare.pytest_plugin",
+                          "compare.__main__", "xval")))
 
 
 def imports(path):
@@ -58,9 +68,9 @@ def test_shared_layer_imports_no_orchestration(path):
 
 def test_the_check_catches_a_leaf_importing_the_runner(tmp_path):
     leaf = ROOT / "custom_models" / "_layer_probe.py"
-    leaf.write_text("from compare.runner import run_scene\n")
+    leaf.write_text("from compare.workflows.runner import run_scene\n")
     try:
-        with pytest.raises(AssertionError, match="compare.runner"):
+        with pytest.raises(AssertionError, match="compare.workflows.runner"):
             test_leaves_import_only_the_contract_and_shared_physics(leaf)
     finally:
         leaf.unlink()
@@ -77,3 +87,67 @@ def test_no_scene_names_in_compare_outside_scenes():
             if re.search(rf"['\"]({names})['\"]", line):
                 hits.append(f"{path.relative_to(ROOT)}:{i}: {line.strip()}")
     assert not hits, "\n".join(hits)
+
+
+def module_name(path):
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def layer(mod):
+    for i, (_, prefixes) in enumerate(LAYERS):
+        if any(mod == p or mod.startswith(p + ".") for p in prefixes):
+            return i
+    return None
+
+
+COMPARE = {module_name(p): p for p in py_files("compare")}
+
+
+@pytest.mark.parametrize("mod", sorted(m for m in COMPARE if layer(m) is not None))
+def test_each_room_imports_only_its_layer_and_below(mod):
+    mine = layer(mod)
+    bad = [m for m in imports(COMPARE[mod]) if (layer(m) or 0) > mine]
+    assert not bad, f"{mod} ({LAYERS[mine][0]}) imports {bad} from a higher layer"
+
+
+def test_every_compare_module_is_in_a_layer():
+    assert [m for m in COMPARE if layer(m) is None and m != "compare"] == []
+
+
+def _graph():
+    """Module → the project modules it imports (a package import counts as its __init__; a
+    module's own parent packages are loaded before it, so `from . import x` is no edge back)."""
+    return {mod: {m for m in imports(path) if m in COMPARE and m != mod
+                  and not mod.startswith(m + ".")}
+            for mod, path in COMPARE.items()}
+
+
+def _cycle(graph):
+    """One import cycle as a list of modules, or None (depth-first search)."""
+    state, stack = {}, []
+
+    def visit(m):
+        state[m] = 1
+        stack.append(m)
+        for n in sorted(graph[m]):
+            if state.get(n) == 1:
+                return stack[stack.index(n):] + [n]
+            if n not in state and (found := visit(n)):
+                return found
+        stack.pop()
+        state[m] = 2
+        return None
+
+    for m in sorted(graph):
+        if m not in state and (found := visit(m)):
+            return found
+    return None
+
+
+def test_no_import_cycle_in_compare():
+    assert _cycle(_graph()) is None, " → ".join(_cycle(_graph()))
+
+
+def test_the_cycle_check_finds_one():
+    assert _cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from rerun.chunk import RrdReader
 
-from compare.mode_shapes import FRAMES, TIMELINE, mode_entity, panels
-from compare.modes import run_modes
-from compare.recording import load_rows
+from compare.output.mode_shapes import FRAMES, TIMELINE, mode_entity, panels
+from compare.output.recording import load_rows
 from compare.scenes.mstmm import HELICOPTER_HOVER, ROTATING_BEAM, SPINNING_SHAFT
+from compare.workflows.modes import run_modes
 from custom_models.fem import blade as fem_blade
 from custom_models.mstmm import blade as mstmm_blade
 from reference_models.mujoco import beam_modes as mujoco_blade

@@ -3,11 +3,12 @@ identification from time series (issue: natural frequencies from every solver)."
 import numpy as np
 import pytest
 
-from compare import metrics, solvers
-from compare.identify import fft_peak, matrix_pencil
-from compare.modes import critical_speeds, sweep, track
+from compare import solvers
+from compare.analysis import metrics
+from compare.analysis.identify import fft_peak, matrix_pencil
+from compare.analysis.trajectory import Modes
 from compare.scenes import get_scene
-from compare.trajectory import Modes
+from compare.workflows.modes import critical_speeds, sweep, track
 
 SCENE = get_scene("rotor-whirl")
 M, R, L, K, G = 5.0, 0.25, 0.5, 2000.0, 9.81
@@ -99,7 +100,7 @@ def test_identification_on_a_known_signal():
 
 @pytest.mark.parametrize("solver", ["exudyn", "mujoco"])
 def test_engines_free_response_gives_the_closed_form_frequency(solver):
-    from compare.modes import _run_time
+    from compare.workflows.modes import _run_time
     p = SCENE.resolve()
     rows, _ = SCENE.identify(p, _run_time, [solver])
     k_eff = K - M * G * L

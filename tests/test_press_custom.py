@@ -12,11 +12,13 @@ import pytest
 from compare.errors import BadInput
 from compare.physics import press as phys
 from compare.scenes.press import PRESS, PRESS_CYCLE
-from custom_models import press, press_exact, press_partial
-from custom_models import press_equations as eqs
-from custom_models import press_kinematics as kin
-from custom_models import press_model as model
 from custom_models.integrators import accel_from_mass_force, integrate_wilson, no_guard
+from custom_models.press import equations as eqs
+from custom_models.press import exact as press_exact
+from custom_models.press import kinematics as kin
+from custom_models.press import lagrange as press
+from custom_models.press import model as model
+from custom_models.press import partial as press_partial
 
 DEFAULT = PRESS.resolve({})
 RNG = np.random.default_rng(3)

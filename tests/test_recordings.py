@@ -4,9 +4,10 @@ series for every compared pair and channel, and the events at their times."""
 import numpy as np
 import pytest
 
-from compare import runner, solvers
-from compare.recording import load_rows, pair_entity
+from compare import solvers
+from compare.output.recording import load_rows, pair_entity
 from compare.scenes import get_scene
+from compare.workflows import runner
 
 # short runs of each scene: every solver, the recording written, no report
 CASES = {"rotor-spinup": {"t_end": "4.5", "output_dt": "0.01"},

@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from compare import metrics, solvers
-from compare.identify import matrix_pencil, transverse_components
+from compare import solvers
+from compare.analysis import metrics
+from compare.analysis.identify import matrix_pencil, transverse_components
 from compare.scenes import get_scene
 from custom_models import rotation
 

@@ -12,7 +12,7 @@ import reference_models.exudyn.sail as xs  # hard dependencies: a broken import 
 import reference_models.mujoco.sail as ms
 from compare.physics import sail as phys
 from compare.scenes.sail import SAIL
-from custom_models import thread_spool as ts
+from custom_models.sail import thread_spool as ts
 
 BASE = SAIL.resolve({})
 LEAVES = {"exudyn": xs, "mujoco": ms}
@@ -383,7 +383,7 @@ def test_report_and_recording_carry_formula18(tmp_path):
 
     from conftest import xval
 
-    from compare.recording import load_scalar_series
+    from compare.output.recording import load_scalar_series
     rc, so, se = xval("run", "sail-deploy", "--solver", "thread-spool-conservative", "--set",
                       "t_end=2", "--json", "--out", str(tmp_path))
     assert rc == 0, se

@@ -7,14 +7,15 @@ import types
 import numpy as np
 import pytest
 
-from compare import runner, solvers
+from compare import solvers
 from compare.scenes.rotor import SPINUP
+from compare.workflows import runner
 
 
 @pytest.fixture
 def k_slip_solver(monkeypatch):
     """A test double: the quaternion leaf given k·(1 + 1e-3) — a unit slip a reviewer must see."""
-    from custom_models import rotor_quaternion as q
+    from custom_models.rotor import quaternion as q
     leaf = types.ModuleType("k_slip_leaf")
     leaf.DEFAULT_SETTINGS, leaf.INTEGRATORS, leaf.ADAPTIVE = (q.DEFAULT_SETTINGS, q.INTEGRATORS,
                                                               q.ADAPTIVE)

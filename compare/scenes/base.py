@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import BadInput
-from ..params import Param
+from .params import Param
 
 
 @dataclass(frozen=True)

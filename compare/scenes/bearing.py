@@ -4,9 +4,9 @@ compare/physics/bearing_rotor.py."""
 import numpy as np
 
 from ..errors import BadInput
-from ..params import Param, positive
 from ..physics import bearing_rotor as physics
 from .base import Extreme, Finding, Scene
+from .params import Param, positive
 
 SOURCE = ("seed 001 (001_d37db2f6f0246403.txt): shaft in Rodrigues–Hamilton parameters in the "
           "fixed frame, journals a/b with state-dependent bearing forces, DC motor, defect at a")
@@ -113,7 +113,7 @@ BEARING_ROTOR = Scene(
     title="Two-bearing rotor with a bearing defect, spun up by a DC motor",
     source=SOURCE,
     kind="time",
-    leaves={"quaternion": "custom_models.bearing_rotor",
+    leaves={"quaternion": "custom_models.bearing.quaternion",
             "exudyn": "reference_models.exudyn.bearing_rotor",
             "mujoco": "reference_models.mujoco.bearing_rotor"},
     params=(

@@ -7,9 +7,9 @@ evidence is in custom_models/mstmm/helicopter.py and the spec.
 """
 import numpy as np
 
-from ..params import Param, positive
 from . import mstmm_shapes
 from .base import Campbell, PublishedTiming, Scene
+from .params import Param, positive
 
 SOURCE = ("seed 002: Yao Song, Rui Xiaoting, Wang Jinghong, 'Calculation of helicopter "
           "vibration in hovering state', Journal of Harbin Institute of Technology 53(6) "

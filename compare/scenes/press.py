@@ -4,9 +4,9 @@ import math
 import numpy as np
 
 from ..errors import BadInput
-from ..params import Param, positive
 from ..physics import press as phys
 from .base import Extreme, Finding, Scene
+from .params import Param, positive
 
 SOURCE = "seed 003 (clutchless crank press; Lagrange partial systems, linear-acceleration method)"
 
@@ -65,8 +65,8 @@ def _check(p):
                        f"{p['phi0']:g} deg, psi0 = {p['psi0']:g} deg (needs ≥ {gap:.4g} m)")
 
 
-PRESS_LEAVES = {"lagrange-partial": "custom_models.press_partial",
-                "lagrange-exact": "custom_models.press_exact",
+PRESS_LEAVES = {"lagrange-partial": "custom_models.press.partial",
+                "lagrange-exact": "custom_models.press.exact",
                 "exudyn": "reference_models.exudyn.press",
                 "mujoco": "reference_models.mujoco.press"}
 

@@ -1,11 +1,11 @@
 """Rotor on a spherical joint spun up through resonance (seed 000; spec scene-rotor.md)."""
 import numpy as np
 
-from ..identify import fft_peak, matrix_pencil, transverse_components
-from ..metrics import first_crossing
-from ..params import Param, positive
+from ..analysis.identify import fft_peak, matrix_pencil, transverse_components
+from ..analysis.metrics import first_crossing
 from ..physics.rotor import constants
 from .base import Campbell, Extreme, Finding, Scene
+from .params import Param, positive
 
 SOURCE = "seed 000 (Euler-vector rotor), seed 001 (quaternion formulation)"
 
@@ -150,8 +150,8 @@ SPINUP = Scene(
     title="Rotor on a spherical joint spun up through resonance",
     source=SOURCE,
     kind="time",
-    leaves={"euler-vector": "custom_models.rotor_euler",
-            "quaternion": "custom_models.rotor_quaternion",
+    leaves={"euler-vector": "custom_models.rotor.euler_vector",
+            "quaternion": "custom_models.rotor.quaternion",
             "exudyn": "reference_models.exudyn.rotor",
             "mujoco": "reference_models.mujoco.rotor"},
     params=ROTOR_PARAMS + (
@@ -228,8 +228,8 @@ WHIRL = Scene(
     title="Whirl frequencies of the rotor at constant spin (Campbell diagram)",
     source=SOURCE,
     kind="modes",
-    leaves={"closed-form": "custom_models.rotor_closed_form",
-            "euler-vector": "custom_models.rotor_whirl",
+    leaves={"closed-form": "custom_models.rotor.closed_form",
+            "euler-vector": "custom_models.rotor.whirl",
             "exudyn": "reference_models.exudyn.rotor",
             "mujoco": "reference_models.mujoco.rotor"},
     params=ROTOR_PARAMS[:4] + (

@@ -2,9 +2,9 @@
 spec scene-sail.md)."""
 import numpy as np
 
-from ..params import Param, positive
 from ..physics import sail as phys
 from .base import Extreme, Finding, Scene
+from .params import Param, positive
 
 SOURCE = "seed 004 (constant-dimension spring–mass thread unwinding from a spool)"
 
@@ -110,8 +110,8 @@ SAIL = Scene(
     name="sail-deploy",
     title="Two-blade heliogyro: threads unrolling from spools on a spinning hub",
     source=SOURCE, kind="time",
-    leaves={"thread-spool": "custom_models.thread_spool",
-            "thread-spool-conservative": "custom_models.thread_spool",
+    leaves={"thread-spool": "custom_models.sail.thread_spool",
+            "thread-spool-conservative": "custom_models.sail.thread_spool",
             "exudyn": "reference_models.exudyn.sail", "mujoco": "reference_models.mujoco.sail"},
     params=(
         positive("J_hub", 0.004, "kg·m²", "spacecraft inertia about the spin axis"),

@@ -8,22 +8,17 @@
 - `implicit`: building blocks for stiff systems (O(n) block-tridiagonal Newton solves for
   spring–mass chains, bordered by one extra unknown).
 """
-from .explicit import (
-                       ADAPTIVE_TABLEAUS,
-                       FAIL_REASONS,
-                       FIXED_TABLEAUS,
-                       no_guard,
-)
+from .explicit import ADAPTIVE_TABLEAUS, FAIL_REASONS, FIXED_TABLEAUS, no_guard
 from .implicit import block3_tridiag_factor, block3_tridiag_solve, bordered_block3_solve, inv3
 from .linear_acceleration import (
-                       LA_REASONS,
-                       MODE_FIXED_POINT,
-                       MODE_NEWTON,
-                       MODE_PC,
-                       accel_from_mass_force,
-                       as_first_order,
-                       integrate_wilson,
-                       wilson_step,
+    LA_REASONS,
+    MODE_FIXED_POINT,
+    MODE_NEWTON,
+    MODE_PC,
+    accel_from_mass_force,
+    as_first_order,
+    integrate_wilson,
+    wilson_step,
 )
 
 __all__ = ["FIXED_TABLEAUS", "ADAPTIVE_TABLEAUS", "FAIL_REASONS", "no_guard",

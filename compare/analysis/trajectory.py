@@ -1,0 +1,81 @@
+"""Results: `Trajectory` (time-domain run) and `Modes` (frequencies), with .npz round trip."""
+import json
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..atomic import atomic_path
+
+
+@dataclass
+class Trajectory:
+    scene: str
+    solver: str
+    t: np.ndarray
+    channels: dict                      # name -> array on t (SI)
+    status: str = "ok"                  # ok | diverged | timeout | error
+    t_fail: float | None = None
+    reason: str | None = None           # why it diverged / the error message
+    settings: dict = field(default_factory=dict)
+    stats: dict = field(default_factory=dict)
+    wall_s: float = 0.0
+    versions: dict = field(default_factory=dict)
+    invariants: dict = field(default_factory=dict)   # conserved quantity -> max relative drift
+    extra: dict = field(default_factory=dict)        # auxiliary arrays (e.g. orientation)
+    # the solver's own numerical error per channel on t (from a tighter rerun), where estimated
+    errors: dict = field(default_factory=dict)
+
+    def final(self):
+        return {k: float(v[-1]) for k, v in self.channels.items()}
+
+    def meta(self):
+        return {k: getattr(self, k) for k in ("scene", "solver", "status", "t_fail", "reason",
+                                              "settings", "stats", "wall_s", "versions",
+                                              "invariants")}
+
+    def save(self, path):
+        """NumPy .npz: `t`, one array per channel, `extra.<name>` and `error.<channel>` arrays,
+        `meta` (JSON)."""
+        arrays = {"t": self.t, **self.channels,
+                  **{f"extra.{k}": v for k, v in self.extra.items()},
+                  **{f"error.{k}": v for k, v in self.errors.items()},
+                  "meta": np.array(json.dumps(self.meta(), default=_py))}
+        with atomic_path(path) as tmp:
+            with open(tmp, "wb") as f:
+                np.savez(f, **arrays)
+        return path
+
+    @classmethod
+    def load(cls, path):
+        with np.load(path, allow_pickle=False) as z:
+            meta = json.loads(str(z["meta"]))
+            channels = {k: z[k] for k in z.files if k not in ("t", "meta")
+                        and not k.startswith(("extra.", "error."))}
+            extra = {k[6:]: z[k] for k in z.files if k.startswith("extra.")}
+            errors = {k[6:]: z[k] for k in z.files if k.startswith("error.")}
+            return cls(t=z["t"], channels=channels, extra=extra, errors=errors, **meta)
+
+
+@dataclass
+class Modes:
+    scene: str
+    solver: str
+    frequencies_hz: np.ndarray
+    labels: list
+    damping: np.ndarray | None = None
+    shapes: np.ndarray | None = None       # one row per mode (for MAC tracking across a sweep)
+    notes: list = field(default_factory=list)   # e.g. "approximate: …"
+    extra: dict = field(default_factory=dict)
+    status: str = "ok"
+    reason: str | None = None
+    settings: dict = field(default_factory=dict)
+    wall_s: float = 0.0
+    versions: dict = field(default_factory=dict)
+
+
+def _py(x):
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    raise TypeError(type(x).__name__)

@@ -1,0 +1,204 @@
+"""Markdown reports with PNG plots (matplotlib, Agg backend).
+
+Plots carry a unit on every axis (the scene's `channel_units` where it has them, else the
+table below), never offset notation (a flat channel such as a conserved energy is drawn as its
+deviation from the initial value, which the label states), and numbers in the text are printed
+to their meaningful digits (`fmt_value`: 1e-13, not 9.999999999999999e-14).
+"""
+from pathlib import Path
+
+import numpy as np
+
+from ..analysis import metrics
+from ..atomic import atomic_path, write_text
+from .citations import cite_short, papers_in
+
+# SI unit of each channel name the scenes use (a Scene hook `channel_units` would own this)
+CHANNEL_UNITS = {
+    "omega_norm": "rad/s", "spin_rate": "rad/s", "tilt": "rad", "work": "J", "kinetic": "J",
+    "potential": "J", "energy_balance": "J", "crank_angle": "rad", "crank_rate": "rad/s",
+    "rocker_angle": "rad", "rocker_rate": "rad/s", "slider_position": "m",
+    "slider_velocity": "m/s", "motor_work": "J", "hub_rate": "rad/s", "deployed_length": "m",
+    "tip_angle": "rad", "angular_momentum": "kg·m²/s",
+}
+
+
+def channel_unit(scene, ch):
+    return getattr(scene, "channel_units", {}).get(ch) or CHANNEL_UNITS.get(ch, "")
+
+
+def channel_label(scene, ch):
+    unit = channel_unit(scene, ch)
+    return f"{ch} [{unit}]" if unit else f"{ch} [–]"
+
+
+def fmt_value(x, digits=6):
+    """A parameter or setting as a reader wants it: 1e-13, 0.01, 3.2, 0,0,-9.81."""
+    if isinstance(x, (list, tuple, np.ndarray)):
+        return ",".join(fmt_value(v, digits) for v in np.asarray(x).ravel())
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.number)):
+        return str(x)
+    return format(float(x), f".{digits}g") if isinstance(x, (float, np.floating)) else str(x)
+
+
+def plot_style():
+    """pyplot with offset notation off and a readable default size."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    plt.rcParams.update({"axes.formatter.useoffset": False, "font.size": 9,
+                         "axes.formatter.limits": (-4, 5)})
+    return plt
+
+
+_plt = plot_style
+
+
+def save_figure(fig, path):
+    """Write the figure atomically; returns its file name (for the Markdown link)."""
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110, format="png")
+    _plt().close(fig)
+    return Path(path).name
+
+
+_savefig = save_figure
+
+
+def _flat(v):
+    """True when a channel varies by less than 1e-6 of its size: drawn as v − v(0)."""
+    f = v[np.isfinite(v)]
+    return len(f) > 1 and np.ptp(f) < 1e-6 * max(np.max(np.abs(f)), 1e-300) and np.ptp(f) > 0
+
+
+def analytic_curve(result, ch):
+    """(t, values, label) of the scene's closed form for `ch`, from the first trajectory that
+    carries it, or None."""
+    key = result.scene.analytic.get(ch)
+    for tr in result.trajectories if key else ():
+        v = tr.extra.get(key[0])
+        if v is not None and len(v) == len(tr.t):
+            return tr.t, np.asarray(v, float), key[1]
+    return None
+
+
+def plot_channels(result, path):
+    plt = _plt()
+    chs = result.scene.channels
+    ncol = 2
+    nrow = (len(chs) + ncol - 1) // ncol
+    fig, axes = plt.subplots(nrow, ncol, figsize=(11, 2.6 * nrow), sharex=True, squeeze=False)
+    for ax, ch in zip(axes.flat, chs):
+        flat = any(_flat(tr.channels[ch]) for tr in result.trajectories)
+        ref0 = next((tr.channels[ch][0] for tr in result.trajectories
+                     if np.isfinite(tr.channels[ch][0])), 0.0) if flat else 0.0
+        for tr in result.trajectories:
+            ax.plot(tr.t, tr.channels[ch] - ref0, lw=1, label=tr.solver)
+        curve = analytic_curve(result, ch)
+        if curve is not None:
+            ax.plot(curve[0], curve[1] - ref0, "k--", lw=1, label=curve[2])
+            ax.legend(fontsize=7)
+        unit = channel_unit(result.scene, ch) or "–"
+        ax.set_ylabel(f"{ch} − {ref0:.10g} [{unit}]" if flat else channel_label(result.scene,
+                                                                                 ch),
+                      fontsize=8)
+        ax.grid(alpha=0.3)
+    for ax in axes.flat[len(chs):]:
+        ax.axis("off")
+        above = axes.flat[list(axes.flat).index(ax) - ncol]      # its time axis is the last
+        above.xaxis.set_tick_params(labelbottom=True)
+        above.set_xlabel("t [s]")
+    axes.flat[0].legend(fontsize=8)
+    for ax in axes[-1]:
+        ax.set_xlabel("t [s]")
+    fig.suptitle(f"{result.scene.name}: channels per solver")
+    fig.tight_layout()
+    return _savefig(fig, path)
+
+
+def plot_deviation(result, path):
+    """|Δ| of the key channel per solver pair, and each solver's energy-balance drift."""
+    plt = _plt()
+    sc, trs = result.scene, [t for t in result.trajectories if t.status == "ok"]
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 3.6))
+    for i, a in enumerate(trs):
+        for b in trs[i + 1:]:
+            d = np.abs(a.channels[sc.key_channel] - b.channels[sc.key_channel])
+            a1.semilogy(a.t, np.maximum(d, 1e-17), lw=1, label=f"{a.solver} − {b.solver}")
+        if sc.energy_channel:
+            e = a.channels[sc.energy_channel]
+            a2.semilogy(a.t, np.maximum(np.abs(e - e[0]), 1e-17), lw=1, label=a.solver)
+    a1.set_title(f"|Δ {sc.key_channel}| between solvers")
+    a1.set_ylabel(f"|Δ {channel_label(sc, sc.key_channel)}|")
+    a2.set_title("drift of the energy balance")
+    a2.set_ylabel("|E(t) − E(0)| [J]")
+    for ax in (a1, a2):
+        ax.set_xlabel("t [s]")
+        ax.grid(alpha=0.3, which="both")
+        if ax.lines:
+            ax.legend(fontsize=7)
+    fig.tight_layout()
+    return _savefig(fig, path)
+
+
+def _fmt(x, spec=".4g"):
+    if x is None or (isinstance(x, float) and not np.isfinite(x)):
+        return "—"
+    return format(x, spec)
+
+
+def run_markdown(result, figures):
+    sc, trs = result.scene, result.trajectories
+    refs = papers_in(sc.source) or [sc.source]
+    out = [f"# {sc.name}: {sc.title}", "", "Source: " + "; ".join(refs) + ".", ""]
+    if sc.notes:
+        out += [cite_short(sc.notes), ""]
+    changed = ", ".join(f"{p.name} = {fmt_value(result.params[p.name])}"
+                        + (f" {p.unit}" if p.unit else "") for p in sc.params
+                        if not np.array_equal(np.asarray(result.params[p.name]),
+                                              np.asarray(p.default)))
+    out += [f"Parameters: defaults{'; ' + changed if changed else ''}.", "", "## Runs", "",
+            "| solver | status | wall [s] | compile [s] | steps | settings | "
+            f"final {sc.key_channel} | energy residual [J] | invariants |",
+            "|---|---|---|---|---|---|---|---|---|"]
+    for tr in trs:
+        st = tr.status + (f" at t = {tr.t_fail:.4g} s: {tr.reason}" if tr.status != "ok" and
+                          tr.t_fail is not None else (f": {tr.reason}" if tr.reason else ""))
+        settings = ", ".join(f"{k}={fmt_value(v)}" for k, v in tr.settings.items()
+                             if v is not None)
+        inv = ", ".join(f"{k} {v:.1e}" for k, v in tr.invariants.items())
+        er = metrics.energy_residual(tr, sc.energy_channel) if sc.energy_channel else None
+        out.append(f"| {tr.solver} | {st} | {tr.wall_s:.3g} | "
+                   f"{_fmt(tr.stats.get('compile_s'), '.3g')} | {tr.stats.get('steps', '—')} | "
+                   f"{settings} | {_fmt(tr.final()[sc.key_channel], '.10g')} | "
+                   f"{_fmt(er, '.2e')} | {inv} |")
+    if result.findings:
+        out += ["", "## Findings", ""] + [f"- {f.text}" for f in result.findings]
+    out += ["", "## Agreement", "",
+            "Verdict per pair and channel: max |Δ| relative to the channel's scale (max |value| "
+            "of the pair) against the scene's tolerance.", "",
+            "| a | b | channel | max abs | rms | max rel | tolerance | verdict |",
+            "|---|---|---|---|---|---|---|---|"]
+    out += [f"| {c.a} | {c.b} | {c.channel} | {_fmt(c.max_abs, '.3e')} | {_fmt(c.rms, '.3e')} | "
+            f"{_fmt(c.max_rel, '.2e')} | {c.tolerance:.0e} | **{c.verdict}** |"
+            for c in result.comparisons]
+    out += [""] + [f"![{f}]({f})" for f in figures]
+    return "\n".join(out) + "\n"
+
+
+def write_run_report(out_dir, result):
+    out_dir = Path(out_dir)
+    figures = [plot_channels(result, out_dir / "channels.png")]
+    if len([t for t in result.trajectories if t.status == "ok"]):
+        figures.append(plot_deviation(result, out_dir / "deviation.png"))
+    if result.scene.plots is not None:
+        import matplotlib.pyplot as plt
+        plot_style()
+        fig = plt.figure(figsize=(11, 4))
+        result.scene.plots(result.params, result.trajectories, fig)
+        fig.tight_layout()
+        figures.append(save_figure(fig, out_dir / "scene.png"))
+        plt.close(fig)
+    path = out_dir / "report.md"
+    write_text(path, run_markdown(result, figures))
+    return path

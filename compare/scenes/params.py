@@ -1,0 +1,67 @@
+"""Scene parameters as validated data: name, default, unit, meaning and the admissible range."""
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import BadInput
+
+
+@dataclass(frozen=True)
+class Param:
+    name: str
+    default: object
+    unit: str
+    doc: str
+    kind: str = "float"        # float | int | vector | choice
+    lo: float = -math.inf      # admissible range (closed unless open_lo/open_hi)
+    hi: float = math.inf
+    open_lo: bool = False      # e.g. a mass must be > 0, not >= 0
+    choices: tuple = ()
+    size: int = 3              # length of a vector
+
+    def parse(self, text):
+        """Value from a `--set` string (or a campaign file's value), validated."""
+        try:
+            if self.kind == "vector":
+                parts = text.split(",") if isinstance(text, str) else list(text)
+                value = np.array([float(x) for x in parts])
+            elif self.kind == "int":
+                value = int(text)
+            elif self.kind == "choice":
+                value = type(self.choices[0])(text)
+            else:
+                value = float(text)
+        except (TypeError, ValueError):
+            raise BadInput(f"{self.name}: cannot read {text!r} as {self.kind}"
+                           f"{f' ({self.unit})' if self.unit else ''}") from None
+        return self.check(value)
+
+    def check(self, value):
+        if self.kind == "choice":
+            if value not in self.choices:
+                raise BadInput(f"{self.name}: {value!r} is not one of "
+                               f"{', '.join(map(str, self.choices))}")
+            return value
+        values = np.atleast_1d(np.asarray(value, float))
+        if self.kind == "vector" and values.shape != (self.size,):
+            raise BadInput(f"{self.name}: needs {self.size} comma-separated numbers, "
+                           f"got {values.size}")
+        if not np.all(np.isfinite(values)):
+            raise BadInput(f"{self.name}: must be a finite number, got {value!r}")
+        for v in values:
+            low_bad = v <= self.lo if self.open_lo else v < self.lo
+            if low_bad or v > self.hi:
+                raise BadInput(f"{self.name}: {v:g} {self.unit} is outside the admissible range "
+                               f"{'(' if self.open_lo else '['}{self.lo:g}, {self.hi:g}]"
+                               .replace("  ", " "))
+        return value
+
+    def describe_range(self):
+        if self.kind == "choice":
+            return " | ".join(map(str, self.choices))
+        return f"{'(' if self.open_lo else '['}{self.lo:g}, {self.hi:g}]"
+
+
+def positive(name: str, default: float, unit: str, doc: str, hi: float = math.inf) -> Param:
+    return Param(name, default, unit, doc, lo=0.0, hi=hi, open_lo=True)

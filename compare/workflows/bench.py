@@ -1,0 +1,286 @@
+"""`xval bench`: the speed/accuracy trade (work-precision) of every solver of a scene.
+
+For each solver and integrator, a ladder of steps (fixed-step methods, factors of 2) or
+tolerances (error-controlled methods, factors of 10) walked from the default outwards: coarser
+until the error reaches ~1e-2 (or the run fails), finer until the method's floor (the error stops
+falling, reaches what the reference can resolve, or a rung gets too slow). The error of each run
+is the relative error of the key channel's final value against a reference (the tightest run of
+the first solver, confirmed by the second); the time is the median wall time over `repeats`
+runs (5 × as many for runs under 50 ms), compile time reported apart; the leaf's `rhs_evals`
+and integration time give the cost of one right-hand-side evaluation (ns). A step-size-bound
+explicit method whose step is picked from its stability limit ("auto") has one rung. Every
+run's trajectory is kept in the bench directory. The summary names, for the error levels 1e-3,
+1e-6 and 1e-9, the fastest solver and every other solver's time ratio to it — all measured in
+this one run — and each fixed-step method's observed convergence order (flagged where it falls
+short of the method's order).
+"""
+import numpy as np
+
+from .. import solvers
+from ..analysis import metrics
+from ..errors import BadInput
+from ..output.report import fmt_value
+from ..scenes import get_scene
+from . import budget
+from .bench_modes import run_bench_modes
+from .work_precision import (
+    FLOOR_ERR,
+    bench_dir,
+    convergence_orders,
+    order_lines,
+    plot,
+    repeat_timed,
+    summarise,
+    walk,
+    write_outputs,
+)
+
+RTOLS = tuple(10.0 ** -k for k in range(1, 14))     # 1e-1 … 1e-13, walked from START_RTOL
+START_RTOL = 1e-6
+MAX_DOUBLINGS = 7          # a fixed step goes at most 2^7 coarser or finer than the default
+# the order a fixed-step method should show (its observed order is flagged when lower)
+ORDERS = {"euler": 1, "explicit_euler": 1, "midpoint": 2, "linacc": 2, "rk4": 4, "rk44": 4,
+          "rk67": 6, "generalized_alpha": 2, "trapezoidal": 2, "imr": 2, "implicitfast": 1,
+          "implicit": 1}
+
+
+def _snap(dt, dt_out):
+    """Largest step ≤ dt that divides the output step into whole steps."""
+    return dt_out / max(1, int(np.ceil(dt_out / dt - 1e-9)))
+
+
+def _fixed_steps(dt0, dt_out, t_end):
+    """Candidate steps coarse → fine around dt0 (factors of ~2: up to the output step snapped
+    to its divisors, above it multiples 2^m of it that divide the horizon) and dt0's index."""
+    coarse = {dt_out}
+    for j in range(1, MAX_DOUBLINGS + 1):
+        c = dt0 * 2 ** j
+        if c <= dt_out * (1 + 1e-9):
+            coarse.add(_snap(c, dt_out))
+        else:
+            c = dt_out * 2 ** round(np.log2(c / dt_out))
+            if c <= t_end / 8 and abs(t_end / c - round(t_end / c)) < 1e-9:
+                coarse.add(c)
+    coarse = sorted((c for c in coarse if c > dt0 * (1 + 1e-9)), reverse=True)
+    fine = list(dict.fromkeys(_snap(dt0 / 2 ** j, dt_out) if dt0 <= dt_out else dt0 / 2 ** j
+                              for j in range(MAX_DOUBLINGS + 1)))
+    return coarse + fine, len(coarse)
+
+
+def ladder(leaf, dt_out, preset=None, t_end=None):
+    """Per integrator: (label, [settings coarse → fine], index of the starting rung)."""
+    base = {**leaf.DEFAULT_SETTINGS, **(preset or {})}
+    adaptive = tuple(getattr(leaf, "ADAPTIVE", ()))
+    t_end = t_end or 1e3 * dt_out
+    out = []
+    if base.get("integrator") in adaptive:
+        # the default error-controlled method, and dopri5 where offered (fewer stages: cheaper
+        # at loose tolerances)
+        for name in dict.fromkeys([base["integrator"]] + [a for a in adaptive if a == "dopri5"]):
+            out.append((name, [{**base, "integrator": name, "rtol": r} for r in RTOLS],
+                        RTOLS.index(START_RTOL)))
+        fixed = "rk4" if "rk4" in leaf.INTEGRATORS else None
+        dt0 = 1e-3
+    else:
+        fixed, dt0 = base.get("integrator"), base.get("dt") or 1e-3
+        if dt0 == "auto":      # a fixed number behind "auto" can be laddered; a stability-bound
+            dt0 = getattr(leaf, "AUTO_DT", {}).get(fixed, dt0)   # explicit step cannot
+    if fixed and not isinstance(dt0, (int, float)):     # e.g. "auto": the leaf picks its step
+        out.append((fixed, [base], 0))
+    elif fixed:
+        steps, start = _fixed_steps(dt0, dt_out, t_end)
+        out.append((fixed, [{**base, "integrator": fixed, "dt": dt} for dt in steps], start))
+    return out
+
+
+def _tightest(solver, scene_name, dt_out):
+    leaf = solver.leaf(scene_name)
+    base = {**leaf.DEFAULT_SETTINGS, **solver.preset}
+    if base.get("integrator") in getattr(leaf, "ADAPTIVE", ()):
+        return {**base, "rtol": 1e-13}
+    dt0 = base.get("dt")
+    if dt0 == "auto":
+        dt0 = getattr(leaf, "AUTO_DT", {}).get(base.get("integrator"), dt0)
+    return {**base, "dt": _snap(dt0 / 8, dt_out)} if isinstance(dt0, (int, float)) else base
+
+
+def _ladders(sc, solver, overrides, params, dt_out, vary):
+    """(label, [(settings, params) coarse → fine], start) per integrator: the accuracy-knob
+    ladders, or with `vary` = (NAME, values) one ladder of the solver's default settings at
+    each value of that model parameter (e.g. the paper's advice to lower the thread stiffness
+    for design runs), every value run."""
+    if vary is None:
+        return [(label, [(st, params) for st in sts], start) for label, sts, start in
+                ladder(solver.leaf(sc.name), dt_out, solver.preset, params["t_end"])]
+    name, values = vary
+    st = solvers.settings_for(solver, sc.name)
+    return [(f"{name}={v}", [(st, sc.resolve({**overrides, name: v}))], 0) for v in values]
+
+
+
+
+def parse_vary(text, sc):
+    """NAME=v1,v2,... → (NAME, [v1, v2, ...]), checked against the scene's parameters."""
+    name, sep, values = (text or "").partition("=")
+    vals = [v.strip() for v in values.split(",") if v.strip()]
+    if not sep or not vals:
+        raise BadInput(f"--vary {text!r}: expected NAME=V1,V2,...")
+    if name in ("t_end", "output_dt"):
+        raise BadInput(f"--vary {name}: the output grid must stay the reference's")
+    for v in vals:
+        sc.resolve({name.strip(): v})          # one-line error for an unknown name or bad value
+    return name.strip(), vals
+
+
+def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, vary=None,
+              max_output_gib=None, max_steps=None, make_out=None):
+    """Everything is checked (names, values, the size of the work) before the bench folder is
+    made; `make_out(out)` creates the output folder (the CLI's, which turns a refusal into one
+    line)."""
+    sc = get_scene(scene_name)
+    if not (isinstance(repeats, int) and repeats >= 1):
+        raise BadInput(f"--repeats must be at least 1, got {repeats!r}")
+    if sc.kind == "modes":
+        if vary is not None:
+            raise BadInput("--vary: frequency scenes are benched along the solvers' own "
+                           "accuracy knobs only")
+        return run_bench_modes(sc, solver_names, overrides, out, repeats, log, make_out)
+    chosen = solvers.pick(sc, solver_names)
+    budget.check_output(sc, overrides, len(chosen), max_output_gib)
+    params = sc.resolve(overrides)
+    vary = parse_vary(vary, sc) if vary is not None else None
+    for s in chosen:
+        for _, rungs, start in _ladders(sc, s, overrides, params, params["output_dt"], vary):
+            st, p = rungs[start]
+            budget.check_steps(s.name, s.leaf(sc.name), p, st, max_steps)
+    if make_out:
+        make_out(out)
+    dt_out = params["output_dt"]
+    key = sc.key_channel
+
+    # reference: the tightest run of the scene's reference solver (error-controlled at rtol
+    # 1e-13 where it has one, else an eighth of its default step), confirmed by the second the
+    # same way
+    refs = ([solvers.get_solver(n) for n in sc.reference_solvers]
+            or solvers.solvers_for(sc.name)[:2])
+    out_dir = bench_dir(out, sc.name)
+    ref_runs, done = [], {}
+    for s in refs:
+        st = _tightest(s, sc.name, dt_out)
+        tr = solvers.simulate(sc, s, params, st)
+        tr.save(out_dir / f"reference-{s.name}.npz")
+        ref_runs.append(tr)
+        done[(s.name, repr(sorted(st.items())))] = tr     # a ladder rung equal to it reuses it
+        log(f"reference {s.name}: {key}(end) = {tr.final()[key]:.15g} ({tr.status}, "
+            f"{tr.settings})")
+    ref = ref_runs[0].final()[key]
+    ref_check = (abs(ref_runs[1].final()[key] - ref) / abs(ref)) if len(ref_runs) > 1 else None
+
+    rows = []
+    for s in chosen:
+        leaf = s.leaf(sc.name)
+        for label, rungs, start in _ladders(sc, s, overrides, params, dt_out, vary):
+            ran: set = set()
+
+            def run(i, s=s, leaf=leaf, label=label, rungs=rungs, ran=ran):
+                st, p = rungs[i]
+                try:
+                    solvers.check_settings(leaf, st, sc.output_grid(p))
+                    budget.check_steps(s.name, leaf, p, st, max_steps)
+                except (ValueError, BadInput):
+                    return None
+                row = _run_rung(sc, s, leaf, label, st, p, params, done, repeats, ref, key,
+                                out_dir, f"{s.name}-{label}-{i}", vary, log)
+                # a leaf that clamped the knob (an engine's step ≤ the output interval) to what
+                # an earlier rung ran: the walk goes no coarser instead of repeating it
+                clamped = any(k.endswith("_requested") for k in row["settings"])
+                used = repr(sorted((k, v) for k, v in row["settings"].items()
+                                   if not k.endswith("_requested"))) + repr(p)
+                if clamped and used in ran and vary is None:
+                    return None
+                ran.add(used)
+                return row
+            rows += walk(rungs, start, run, exhaustive=vary is not None)
+
+    summary, lines = summarise(rows, [s.name for s in chosen], f"on final {key}")
+    orders = convergence_orders(rows, 100 * max(FLOOR_ERR, ref_check or 0.0), _fixed_dt,
+                                lambda r: ORDERS.get(r["method"]))
+    lines += order_lines(orders, "dt", " s")
+    plot(out_dir / "work_precision.png", rows, sc.name, f"relative error of final {key}",
+         summary)
+    obj = {"scene": sc.name, "params": params, "key_channel": key,
+           "vary": vary and {"name": vary[0], "values": vary[1]},
+           "reference": {"solvers": [s.name for s in refs], "value": ref,
+                         "cross_check_rel": ref_check},
+           "repeats": repeats, "rows": rows, "summary": summary, "orders": orders,
+           "summary_lines": lines}
+    md = [f"# Work-precision: {sc.name}", "",
+          f"Reference: {refs[0].name} ({_settings_text(ref_runs[0].settings)}), "
+          f"final {key} = {ref:.15g}"
+          + (f"; {refs[1].name} agrees to {ref_check:.1e} relative" if ref_check is not None
+             else ""), "", *[f"- {x}" for x in lines], "",
+          "| solver | method | setting | rel. error | energy residual [J] | median wall [s] | "
+          "compile [s] | steps | RHS evals | ns / RHS |", "|---" * 10 + "|"]
+    for r in rows:
+        knob = r["settings"].get("rtol") if "rtol" in r["settings"] and r["method"] in (
+            "dop853", "dopri5", "rk23", "ode23") else r["settings"].get("dt")
+        err, er = r["rel_error"], r["energy_residual"]
+        md.append(f"| {r['solver']} | {r['method']} | {fmt_value(knob)} | "
+                  f"{'—' if err is None else format(err, '.2e')} | "
+                  f"{'—' if er is None else format(er, '.2e')} | {r['wall_s']:.4g} | "
+                  f"{fmt_value(r['compile_s'], 3) if r['compile_s'] else '—'} | {r['steps']} | "
+                  f"{r['rhs_evals'] or '—'} | "
+                  f"{'—' if r['ns_per_rhs'] is None else format(r['ns_per_rhs'], '.0f')} |")
+    return write_outputs(out_dir, obj, md)
+
+
+
+
+def _run_rung(sc, solver, leaf, label, st, p, params, done, repeats, ref, key, out_dir, name,
+              vary, log):
+    """One rung: timed runs (a run slower than RUNG_WALL_S is not repeated; one faster than
+    SHORT_RUN_S is repeated SHORT_REPEATS × as often: one scheduler hiccup is its whole time),
+    its row."""
+    walls, tr = [], (done.get((solver.name, repr(sorted(st.items())))) if p == params else None)
+    if tr is not None:
+        walls.append(tr.wall_s)
+
+    tr = repeat_timed(walls, lambda: solvers.simulate(sc, solver, p, st), repeats) or tr
+    tr.save(out_dir / f"{name}.npz")                          # the trajectories stay
+    err = abs(tr.final()[key] - ref) / abs(ref) if tr.status == "ok" else None
+    evals, t_int = tr.stats.get("rhs_evals"), tr.stats.get("integrate_s")
+    row = {"solver": solver.name, "method": label, "settings": tr.settings,
+           "status": tr.status, "wall_s": float(np.median(walls)),
+           "compile_s": tr.stats.get("compile_s"), "rel_error": err,
+           "energy_residual": metrics.energy_residual(tr, sc.energy_channel)
+           if sc.energy_channel else None,
+           "steps": tr.stats.get("steps"), "rhs_evals": evals, "integrate_s": t_int,
+           "ns_per_rhs": 1e9 * t_int / evals if evals and t_int and evals > 0 and t_int > 0
+           else None,
+           **({"vary": {vary[0]: p[vary[0]]}} if vary else {})}
+    knob = st.get("rtol") if label in getattr(leaf, "ADAPTIVE", ()) else st.get("dt")
+    log(f"  {solver.name} {label} {knob}: err {err if err is None else f'{err:.2e}'} "
+        f"wall {row['wall_s']:.3g} s"
+        + (f", {row['ns_per_rhs']:.0f} ns/RHS" if row["ns_per_rhs"] else ""))
+    return row
+
+
+
+
+
+
+def _fixed_dt(row):
+    """A fixed-step row's step (None for an error-controlled one)."""
+    dt = row["settings"].get("dt")
+    return dt if isinstance(dt, (int, float)) and "rtol" not in row["settings"] else None
+
+
+
+
+
+
+
+
+def _settings_text(settings):
+    return ", ".join(f"{k}={fmt_value(v)}" for k, v in settings.items() if v is not None)
+

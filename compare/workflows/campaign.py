@@ -1,0 +1,600 @@
+"""Campaigns: many (scene, parameters, solver) jobs on a `concurrent.futures.Executor`.
+
+A campaign file (JSON, or TOML with comments) lists cases; a case may sweep parameters (the
+product of the listed values, one case per point, named `<case>/<NAME>=<value>,…`). Everything
+is validated before anything runs: the file's shape, scenes, solvers, parameters, values, the
+settings and the size of the work (see `budget`); a bad file exits 2 with one line naming the
+file and the key.
+
+**Job identity.** A job's result is stored under the digest of its inputs (scene, resolved
+parameters, solver(s), settings, package versions and the source code of the solver's model
+package, the shared physics and the adapter) in `<campaign>/jobs/`. A rerun reuses a stored
+result only when the digest matches — changed parameters run again, and going back to earlier
+parameters finds their result again. A result that hit its wall-clock limit is run again.
+The case folders hold links to the stored results plus the case report and recording; the
+campaign report says which results were reused.
+
+Results are written atomically (temporary name, then rename), so a kill at any moment leaves
+complete files or none; a case is compared, recorded and reported as soon as its jobs are in,
+and the case's `case.json` (its jobs' digests) is written last, so a case interrupted while
+reporting is reported again on resume.
+
+Executor: a local process pool by default (embedded, nothing to start); Dask distributed with
+`--executor dask [--scheduler ADDR]` (a LocalCluster when no address is given). Engine
+banners and warnings are captured into each job's log (`jobs/<digest>.log`), shown with
+`--verbose` and listed in the report.
+"""
+import ast
+import hashlib
+import itertools
+import json
+import multiprocessing
+import sys
+import time
+import tomllib
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import solvers
+from ..analysis.trajectory import Trajectory
+from ..atomic import publish, write_json
+from ..errors import BadInput
+from ..output.joblog import captured, distinct_lines
+from ..output.progress import PlainProgress
+from ..scenes import get_scene
+from . import budget, runner
+
+STORE_VERSION = 1          # bump when the stored result format changes: everything reruns
+TOP_KEYS = ("name", "cases", "max_output_gib", "max_steps")
+CASE_KEYS = ("name", "scene", "set", "sweep", "solvers", "dt", "rtol", "integrator",
+             "settings", "timeout_s")
+
+
+BUILT_IN = ("default", "long")
+
+
+def default_campaign(name: str = "default") -> dict:
+    """A built-in campaign from the scenes' own cases (`Scene.campaign_cases`): "default" (every
+    scene, every solver, minutes) or "long" (the cases a scene marks `"campaign": "long"`, e.g.
+    the engines' full sail deployment, tens of minutes)."""
+    from ..scenes import SCENES
+    return {"name": name,
+            "cases": [{"scene": sc.name, **{k: v for k, v in case.items() if k != "campaign"}}
+                      for sc in SCENES.values() for case in sc.campaign_cases
+                      if case.get("campaign", "default") == name]}
+
+
+# --- the file -------------------------------------------------------------------------------
+
+def load_campaign(path) -> dict:
+    """The campaign as a dict, its shape checked (names, types, known keys); BadInput with one
+    line `FILE: KEY: problem` otherwise."""
+    if path is None:
+        return default_campaign()
+    p = Path(path)
+    if str(path) in BUILT_IN and not p.exists():
+        return default_campaign(str(path))
+    try:
+        text = p.read_text()
+    except (OSError, UnicodeDecodeError) as e:
+        raise BadInput(f"campaign file {path}: cannot read it "
+                       f"({getattr(e, 'strerror', None) or e})") from None
+    if p.suffix.lower() == ".toml":
+        try:
+            camp = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as e:
+            raise BadInput(f"{path}: TOML syntax: {e}") from None
+    else:
+        try:
+            camp = json.loads(text)
+        except json.JSONDecodeError as e:
+            raise BadInput(f"{path}: JSON syntax at line {e.lineno}, column {e.colno}: "
+                           f"{e.msg}") from None
+    check_shape(camp, str(path))
+    return camp
+
+
+def _is_num(x):
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x)
+
+
+def check_shape(camp, src):
+    def bad(key, problem):
+        raise BadInput(f"{src}: {key}: {problem}")
+
+    if not isinstance(camp, dict):
+        bad("top level", "must be a table/object with `cases`")
+    for k in camp:
+        if k not in TOP_KEYS:
+            bad(k, f"unknown key (known: {', '.join(TOP_KEYS)})")
+    if "name" in camp and not _safe_name(camp["name"]):
+        bad("name", f"{camp['name']!r} must be a non-empty string without '/'")
+    for k in ("max_output_gib", "max_steps"):
+        if k in camp and not (_is_num(camp[k]) and camp[k] > 0):
+            bad(k, f"must be a positive number, got {camp[k]!r}")
+    cases = camp.get("cases")
+    if not isinstance(cases, list) or not cases:
+        bad("cases", "missing or empty: a list of cases ([[cases]] in TOML)")
+    for i, c in enumerate(cases):
+        at = f"cases[{i}]"
+        if not isinstance(c, dict):
+            bad(at, "must be a table/object")
+        for k in c:
+            if k not in CASE_KEYS:
+                bad(f"{at}.{k}", f"unknown key (known: {', '.join(CASE_KEYS)})")
+        if "scene" not in c:
+            bad(f"{at}.scene", "missing")
+        if not isinstance(c["scene"], str):
+            bad(f"{at}.scene", f"must be a scene name, got {c['scene']!r}")
+        if "name" in c and not _safe_name(c["name"]):
+            bad(f"{at}.name", f"{c['name']!r} must be a non-empty string without '/'")
+        for k in ("set", "sweep", "settings"):
+            if k in c and not isinstance(c[k], dict):
+                bad(f"{at}.{k}", "must be a table/object")
+        if "solvers" in c and not (isinstance(c["solvers"], list) and c["solvers"]
+                                   and all(isinstance(s, str) for s in c["solvers"])):
+            bad(f"{at}.solvers", "must be a non-empty list of solver names")
+        for k in ("dt", "rtol", "timeout_s"):
+            if k in c and not (_is_num(c[k]) and c[k] > 0):
+                bad(f"{at}.{k}", f"must be a positive number, got {c[k]!r}")
+        if "integrator" in c and not isinstance(c["integrator"], str):
+            bad(f"{at}.integrator", f"must be a name, got {c['integrator']!r}")
+        for name, values in c.get("sweep", {}).items():
+            sweep_values(values, f"{src}: {at}.sweep.{name}")
+        for name, st in c.get("settings", {}).items():
+            if not isinstance(st, dict):
+                bad(f"{at}.settings.{name}", "must be a table of settings for that solver")
+
+
+def _safe_name(x):
+    return isinstance(x, str) and x.strip() != "" and "/" not in x and not x.startswith(".")
+
+
+def sweep_values(spec, where):
+    """A sweep's values: a non-empty list, or {start, stop, num} (evenly spaced, both ends)."""
+    if isinstance(spec, list) and spec:
+        return spec
+    if isinstance(spec, dict) and set(spec) == {"start", "stop", "num"} \
+            and _is_num(spec["start"]) and _is_num(spec["stop"]) \
+            and isinstance(spec["num"], int) and spec["num"] >= 2:
+        return [float(v) for v in np.linspace(spec["start"], spec["stop"], spec["num"])]
+    raise BadInput(f"{where}: must be a non-empty list of values or "
+                   f"{{start, stop, num ≥ 2}}, got {spec!r}")
+
+
+def value_text(v):
+    """A parameter value as it appears in a sweep point's name: 1.5, 3, 0,0,-9.81."""
+    if isinstance(v, (list, tuple)):
+        return ",".join(value_text(x) for x in v)
+    if isinstance(v, float):
+        return f"{v:.12g}"
+    return str(v)
+
+
+# --- the plan -------------------------------------------------------------------------------
+
+@dataclass
+class Case:
+    name: str                       # `<case>` or `<case>/<NAME>=<value>,…` for a sweep point
+    scene: object
+    params: dict                    # resolved
+    solvers: list                   # Solver objects
+    sweep_parent: str | None = None
+    point: dict = field(default_factory=dict)        # swept name -> value
+
+
+@dataclass
+class Job:
+    case: str
+    scene: str
+    params: dict
+    overrides: dict
+    solver: str | None              # None: a frequency case, one job for all its solvers
+    solvers: tuple
+    settings: dict
+    timeout_s: float | None
+    digest: str
+
+    @property
+    def label(self):
+        return f"{self.case}/{self.solver or 'modes'}"
+
+    @property
+    def key(self):
+        return self.digest[:24]
+
+
+def _canon(x):
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    if isinstance(x, np.generic):
+        return x.item()
+    return str(x)
+
+
+PROJECT_PACKAGES = ("compare", "custom_models", "reference_models")
+
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _source(module_name):
+    """(file, is_package) of a project module, or (None, False)."""
+    base = ROOT.joinpath(*module_name.split("."))
+    if (base / "__init__.py").is_file():
+        return base / "__init__.py", True
+    if base.with_suffix(".py").is_file():
+        return base.with_suffix(".py"), False
+    return None, False
+
+
+def _imports(module_name):
+    """(source file, project modules it imports), read from the source (nothing imported)."""
+    path, is_pkg = _source(module_name)
+    if path is None:
+        return None, []
+    tree = ast.parse(path.read_text())
+    package = module_name if is_pkg else module_name.rpartition(".")[0]
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found += [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")
+                parts = parts[:len(parts) - node.level + 1]
+                base = ".".join(parts + ([base] if base else []))
+            found.append(base)
+            found += [f"{base}.{a.name}" for a in node.names]   # `from pkg import submodule`
+    return path, [m for m in found if m.split(".")[0] in PROJECT_PACKAGES]
+
+
+_CODE = {}
+
+
+def code_digest(module_names):
+    """sha256 over the source of the given modules and every project module they import,
+    transitively: a fix in a model reruns its jobs, an edit of an unrelated model does not.
+    Scene modules count only when named (the job's own scene), not through the registry the
+    adapter imports, so adding a scene leaves other results valid."""
+    key = tuple(sorted(module_names))
+    if key not in _CODE:
+        seen, todo, files = set(), list(key), {}
+        while todo:
+            name = todo.pop()
+            if name in seen or (name.startswith("compare.scenes") and name not in key):
+                continue
+            seen.add(name)
+            path, deps = _imports(name)
+            if path is not None:
+                files[name] = path.read_bytes()
+                todo += deps
+        h = hashlib.sha256()
+        for name in sorted(files):
+            h.update(name.encode() + b"\0" + files[name])
+        _CODE[key] = h.hexdigest()
+    return _CODE[key]
+
+
+def _scene_module(scene):
+    for name, mod in list(sys.modules.items()):
+        if name.startswith("compare.scenes.") and any(v is scene for v in vars(mod).values()):
+            return name
+    return "compare.scenes"
+
+
+def job_digest(scene, params, chosen, settings):
+    """Digest of everything a result depends on: scene, resolved parameters, solver names,
+    settings, package versions, and the source of the models, of everything of ours they
+    import and of the adapter."""
+    code = {"compare.solvers", "compare.analysis.trajectory", "compare.scenes.base",
+            _scene_module(scene)}
+    code |= {s.leaves[scene.name] for s in chosen}
+    blob = json.dumps({"store": STORE_VERSION, "scene": scene.name, "params": params,
+                       "solvers": [s.name for s in chosen], "settings": settings,
+                       "versions": {s.name: solvers.versions(s) for s in chosen},
+                       "code": code_digest(code)}, sort_keys=True, default=_canon)
+    return hashlib.sha256(blob.encode()).hexdigest()
+
+
+def _prefixed(where, fn, *args):
+    try:
+        return fn(*args)
+    except BadInput as e:
+        raise BadInput(f"{where}: {e}") from None
+
+
+def plan(camp, src="built-in campaign", timeout_s=None, max_output_gib=None, max_steps=None):
+    """Validate every case and sweep point up front (bad input stops the campaign before
+    anything runs) and list the jobs."""
+    max_output_gib = max_output_gib or camp.get("max_output_gib")
+    max_steps = max_steps or camp.get("max_steps")
+    cases, jobs, names = [], [], set()
+    for i, c in enumerate(camp["cases"]):
+        at = f"{src}: cases[{i}]"
+        sc = _prefixed(f"{at}.scene", get_scene, c["scene"])
+        name = c.get("name") or f"case{i}-{sc.name}"
+        if name in names:
+            raise BadInput(f"{at}.name: duplicate case name {name!r}")
+        names.add(name)
+        chosen = _prefixed(f"{at}.solvers", solvers.pick, sc, c.get("solvers"))
+        sweep = c.get("sweep", {})
+        for pname, spec in sweep.items():           # names and values, one by one
+            param = _prefixed(f"{at}.sweep", sc.param, pname)
+            for v in sweep_values(spec, f"{at}.sweep.{pname}"):
+                _prefixed(f"{at}.sweep.{pname}", param.parse, v)
+        for pname, v in c.get("set", {}).items():
+            param = _prefixed(f"{at}.set", sc.param, pname)
+            _prefixed(f"{at}.set.{pname}", param.parse, v)
+        grids = [sweep_values(sweep[k], "") for k in sweep]
+        for combo in itertools.product(*grids) if sweep else [()]:
+            point = dict(zip(sweep, combo))
+            pname = name + ("/" + ",".join(f"{k}={value_text(v)}" for k, v in point.items())
+                            if point else "")
+            where = f"{at}" + (f" sweep point {pname}" if point else "")
+            overrides = {**c.get("set", {}), **point}
+            _prefixed(where, budget.check_output, sc, overrides, len(chosen), max_output_gib)
+            params = _prefixed(where, sc.resolve, overrides)
+            case = Case(pname, sc, params, chosen, name if point else None, point)
+            cases.append(case)
+            limit = c.get("timeout_s", timeout_s)
+            if sc.kind != "time":
+                jobs.append(Job(pname, sc.name, params, overrides, None,
+                                tuple(s.name for s in chosen), {}, limit,
+                                job_digest(sc, params, chosen, {})))
+                continue
+            for s in chosen:
+                extra = c.get("settings", {}).get(s.name)
+                settings = _prefixed(f"{at}.settings.{s.name}", _settings, sc, s, c, extra, params)
+                _prefixed(where, budget.check_steps, s.name, s.leaf(sc.name), params, settings,
+                          max_steps)
+                jobs.append(Job(pname, sc.name, params, overrides, s.name, (s.name,), settings,
+                                limit, job_digest(sc, params, [s], settings)))
+    return cases, jobs
+
+
+def _settings(sc, s, c, extra, params):
+    leaf = s.leaf(sc.name)
+    unknown = sorted(set(extra or {}) - set(leaf.DEFAULT_SETTINGS))
+    if unknown:
+        raise BadInput(f"unknown settings {unknown} (known: {sorted(leaf.DEFAULT_SETTINGS)})")
+    return solvers.settings_for(s, sc.name, c.get("dt"), c.get("rtol"), c.get("integrator"),
+                                extra, t_out=sc.output_grid(params))
+
+
+# --- the jobs -------------------------------------------------------------------------------
+
+def run_job(job: Job, store: str):
+    """One job in a worker: simulate (or compute modes) and store the result under its digest;
+    engine output goes to the job's log. Returns (label, status, wall_s, log text)."""
+    store = Path(store)
+    t0 = time.perf_counter()
+    with captured(store / f"{job.key}.log") as text:
+        if job.solver is None:
+            from .modes import run_modes
+            d = store / job.key
+            obj, results, _ = run_modes(job.scene, list(job.solvers), job.overrides, None,
+                                        log=lambda m: None, out_dir=d)
+            obj["input_digest"] = job.digest
+            write_json(d / "modes.json", obj)          # written last: the job's done-marker
+            bad = [r.status for r in results if r.status != "ok"]
+            status = bad[0] if bad else "ok"
+        else:
+            sc = get_scene(job.scene)
+            tr = solvers.simulate(sc, solvers.get_solver(job.solver), job.params, job.settings,
+                                  job.timeout_s, estimate_error=sc.error_estimate)
+            tr.stats["input_digest"] = job.digest
+            tr.save(store / f"{job.key}.npz")
+            status = tr.status
+    return job.label, status, time.perf_counter() - t0, text[0]
+
+
+def _stored_meta(path):
+    with np.load(path, allow_pickle=False) as z:      # reads the `meta` member only
+        return json.loads(str(z["meta"]))
+
+
+def is_done(job, store):
+    """Stored with this digest and not stopped by its wall-clock limit."""
+    if job.solver is None:
+        f = store / job.key / "modes.json"
+        return f.exists() and json.loads(f.read_text()).get("input_digest") == job.digest
+    f = store / f"{job.key}.npz"
+    if not f.exists():
+        return False
+    meta = _stored_meta(f)
+    return meta["stats"].get("input_digest") == job.digest and meta["status"] != "timeout"
+
+
+def connect(scheduler, timeout_s=10):
+    """A Dask client of the scheduler at `scheduler`; BadInput (one line) when none answers."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise BadInput("--executor dask needs the optional extra: pip install "
+                       "'xval[dask]'") from None
+    try:
+        return Client(scheduler, timeout=f"{timeout_s}s")
+    except (OSError, TimeoutError, ValueError) as e:
+        raise BadInput(f"--scheduler {scheduler}: no Dask scheduler answers there "
+                       f"({type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''})"
+                       ) from None
+
+
+def make_executor(kind, scheduler, workers):
+    if kind == "dask":
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:
+            raise BadInput("--executor dask needs the optional extra: pip install "
+                           "'xval[dask]'") from None
+        if scheduler:
+            client = connect(scheduler)
+        else:
+            client = Client(LocalCluster(n_workers=workers or 2, threads_per_worker=1,
+                                         dashboard_address=None, silence_logs=50))
+        return client.get_executor(), client
+    # spawn: engines start threads; a forked child would inherit a half-initialised state.
+    # The children inherit one BLAS thread each (compare/__init__.py)
+    return ProcessPoolExecutor(max_workers=workers or 2,
+                               mp_context=multiprocessing.get_context("spawn")), None
+
+
+def run_campaign(path, out, executor="local", scheduler=None, workers=None, timeout_s=None,
+                 verbose=False, max_output_gib=None, max_steps=None, view=None):
+    """Plan (everything validated), run what is not stored yet, report each case as its jobs
+    come in, then the campaign report. Returns the summary (also in summary.json)."""
+    camp = load_campaign(path)
+    src = str(path) if path else "built-in campaign"
+    cases, jobs = plan(camp, src, timeout_s, max_output_gib, max_steps)
+    view = view or PlainProgress()
+    out_dir = Path(out) / "campaign" / camp.get("name", "campaign")
+    store = out_dir / "jobs"
+    reused = {j.label for j in jobs if is_done(j, store)}
+    todo = dispatch_order([j for j in jobs if j.label not in reused])
+    pending = {c.name: {j.label for j in todo if j.case == c.name} for c in cases}
+    outcome, crashed = {}, {}
+    t0 = time.perf_counter()
+    view.log(f"campaign {camp.get('name')}: {len(jobs)} jobs in {len(cases)} cases, "
+             f"{len(reused)} stored results reused (inputs unchanged)")
+    view.start(len(jobs), len(reused))
+    for c in cases:
+        if not pending[c.name]:
+            outcome[c.name] = _finish_safely(c, jobs, store, out_dir, crashed, reused, view)
+    if todo:
+        ex, client = make_executor(executor, scheduler, workers)
+        t_start = time.time()
+        try:
+            futures = {ex.submit(run_job, j, str(store)): j for j in todo}
+            left = set(futures)
+            while left:
+                done, left = wait(left, timeout=0.5, return_when=FIRST_COMPLETED)
+                view.running(_started([futures[f] for f in left], store, t_start))
+                for f in done:
+                    j = futures[f]
+                    try:
+                        _, status, wall, text = f.result()
+                    except Exception as e:           # a worker died: record it, keep the rest
+                        crashed[j.label] = f"{type(e).__name__}: {e}".splitlines()[0]
+                        status, wall, text = "crashed", None, crashed[j.label]
+                    view.finished(j.label, status, wall)
+                    if verbose and text:
+                        for line in distinct_lines(text):
+                            view.log(f"    {line}")
+                    pending[j.case].discard(j.label)
+                    if not pending[j.case]:
+                        case = next(c for c in cases if c.name == j.case)
+                        view.note(f"writing the report of {case.name}")
+                        outcome[case.name] = _finish_safely(case, jobs, store, out_dir,
+                                                            crashed, reused, view)
+        finally:
+            ex.shutdown(wait=True)
+            if client is not None:
+                client.close()
+    from ..output.campaign_report import write_campaign_report
+    return write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed,
+                                 time.perf_counter() - t0)
+
+
+def dispatch_order(jobs):
+    """Round robin over scene families (a scene module's scenes share their compiled kernels):
+    on a fresh clone each worker compiles what its job needs, and two workers starting the same
+    family at once compiled the same kernels twice (the sail, press and bearing solver pairs
+    each paid ~10 s twice). Each family leads with its frequency cases — one job for all their
+    solvers plus a Campbell sweep, the longest jobs (helicopter 26 s against ≤ 8 s for a time
+    job) — in reverse registry order, which lists the simplest first: so the pool does not end
+    on one worker alone."""
+    families: dict = {}
+    rank = {id(j): ((0, -i) if j.solver is None else (1, i)) for i, j in enumerate(jobs)}
+    for j in sorted(jobs, key=lambda j: rank[id(j)]):
+        families.setdefault(_scene_module(get_scene(j.scene)), []).append(j)
+    waves = itertools.zip_longest(*families.values())
+    return [j for wave in waves for j in wave if j is not None]
+
+
+def _started(jobs, store, since):
+    """Jobs a worker has begun: their log was (re)created after `since`. An executor's own
+    `running()` also counts jobs merely queued for a worker."""
+    out = []
+    for j in jobs:
+        try:
+            if (store / f"{j.key}.log").stat().st_mtime >= since - 1:
+                out.append(j.label)
+        except OSError:
+            pass
+    return out
+
+
+# --- one case's comparison, recording and report ------------------------------------------------
+
+def _finish_safely(case, jobs, store, out_dir, crashed, reused, view):
+    """A case whose comparison or report fails is recorded as such; the other cases stand."""
+    try:
+        return finish_case(case, jobs, store, out_dir, crashed, reused, view)
+    except Exception as e:
+        import traceback
+        msg = f"report failed: {type(e).__name__}: {e}".splitlines()[0]
+        (out_dir / case.name).mkdir(parents=True, exist_ok=True)
+        (out_dir / case.name / "report.log").write_text(traceback.format_exc())
+        view.log(f"{case.name}: {msg} (traceback in {out_dir / case.name / 'report.log'})")
+        for j in jobs:
+            if j.case == case.name:
+                crashed.setdefault(j.label, msg)
+        return {"scene": case.scene.name, "params": case.params, "runs": [],
+                "comparisons": [], "findings": [], "error": msg}
+
+def finish_case(case, jobs, store, out_dir, crashed, reused, view):
+    """Link the stored results into the case folder, compare, record and report them (unless
+    the same results were reported already). Returns the case's result dict."""
+    mine = [j for j in jobs if j.case == case.name]
+    case_dir = out_dir / case.name
+    key = hashlib.sha256(" ".join(j.digest for j in mine).encode()).hexdigest()
+    marker = case_dir / "case.json"
+    if mine[0].solver is None:
+        return _finish_modes(case, mine[0], store, case_dir, crashed)
+    done_before = marker.exists() and json.loads(marker.read_text()).get("jobs") == key \
+        and (case_dir / "result.json").exists() and not any(j.label in crashed for j in mine)
+    if done_before:
+        return json.loads((case_dir / "result.json").read_text())
+    trs, files = [], {}
+    for j in mine:
+        f = store / f"{j.key}.npz"
+        if f.exists() and j.label not in crashed:
+            trs.append(Trajectory.load(f))
+            files[j.solver] = publish(f, case_dir / f"{j.solver}.npz")
+        else:
+            t = case.scene.output_grid(case.params)
+            trs.append(Trajectory(case.scene.name, j.solver, t,
+                                  {c: np.full(len(t), np.nan) for c in case.scene.channels},
+                                  status="error",
+                                  reason=crashed.get(j.label, "no result file")))
+    with captured(case_dir / "report.log") as text:
+        res = runner.finish_run(case.scene, case.params, trs, files, case_dir)
+    if text[0]:
+        view.log(f"{case.name}: report phase said: {distinct_lines(text[0], 3)[0]} "
+                 f"(see {case_dir / 'report.log'})")
+    write_json(marker, {"jobs": key, "digests": {j.solver: j.digest for j in mine}})
+    return res.as_json()
+
+
+def _finish_modes(case, job, store, case_dir, crashed):
+    src = store / job.key
+    if job.label in crashed or not (src / "modes.json").exists():
+        return {"scene": case.scene.name, "params": case.params, "runs": [],
+                "comparisons": [], "findings": [],
+                "error": crashed.get(job.label, "no result file")}
+    for f in sorted(src.iterdir()):
+        if f.is_file() and not f.name.startswith("."):
+            publish(f, case_dir / f.name)
+    obj = json.loads((case_dir / "modes.json").read_text())
+    obj["report"] = str(case_dir / "report.md")
+    for key in ("recording", "mode_shapes_recording", "mode_shapes_figure"):
+        if obj.get(key):
+            obj[key] = str(case_dir / Path(obj[key]).name)
+    obj.setdefault("findings", [])
+    return obj
+

@@ -1,0 +1,153 @@
+"""`xval extremes SCENE`: every extreme case of the scene's spec, with every solver.
+
+Each case × solver ends in exactly one outcome:
+- `within tolerance` — status ok and the independent check passes (the energy balance closes,
+  a second solver at accurate settings agrees, or a closed form holds) to within the case's
+  bound plus the run's own error estimate (a tighter rerun: a fixed step that is merely coarse
+  for the regime is inaccurate by what it says, not garbage), with the number;
+- an honest status — `diverged` / `unstable` / `singular` / `timeout` with the time and reason
+  (the solver's own detection or the adapter's one energy rule);
+- `FAILED` — status ok but the independent check fails (silent garbage: the one forbidden
+  outcome), or an honest status where the case expects a passing run;
+- `error` — the leaf crashed.
+"""
+from __future__ import annotations
+
+import datetime
+from pathlib import Path
+
+import numpy as np
+
+from .. import solvers
+from ..analysis.trajectory import Trajectory
+from ..atomic import write_json, write_text
+from ..errors import BadInput
+from ..scenes import Extreme, Scene, get_scene
+
+HONEST = ("diverged", "unstable", "singular", "timeout")
+
+
+def _own_error(tr: Trajectory, channel: str) -> float:
+    e = tr.errors.get(channel)
+    return float(np.nanmax(e)) if e is not None and len(e) else 0.0
+
+
+def energy_check(sc: Scene, tr: Trajectory, bound: float) -> tuple[bool, float, str]:
+    e = tr.channels[sc.energy_channel]
+    scale = max(max(float(np.max(np.abs(tr.channels[c])))
+                    for c in (sc.energy_channel, *sc.energy_scale_channels)), 1e-300)
+    drift = float(np.max(np.abs(e - e[0]))) / scale
+    own = _own_error(tr, sc.energy_channel) / scale
+    return drift <= bound + own, drift, (f"energy balance drift {drift:.2e} of the energy "
+                                         f"scale ≤ bound {bound:.0e} + own error {own:.1e}"
+                                         if drift <= bound + own else
+                                         f"energy balance drift {drift:.2e} of the energy scale"
+                                         f" > bound {bound:.0e} + own error {own:.1e}")
+
+
+def reference_check(sc: Scene, tr: Trajectory, ref: Trajectory, bound: float):
+    if ref.status != "ok":
+        return False, float("nan"), f"reference {ref.solver} {ref.status}: {ref.reason}"
+    k = sc.key_channel
+    d = np.abs(tr.channels[k] - ref.channels[k])
+    scale = max(float(np.max(np.abs(ref.channels[k]))), 1e-300)
+    rel = float(np.max(d)) / scale
+    own = (_own_error(tr, k) + _own_error(ref, k)) / scale
+    ok = rel <= bound + own
+    return ok, rel, (f"{k} within {rel:.2e} of {ref.solver} (accurate settings) "
+                     f"{'≤' if ok else '>'} bound {bound:.0e} + own errors {own:.1e}")
+
+
+def _settings(solver, sc, case, params):
+    """The solver's accurate settings with the case's overrides where the solver has the key
+    (an integrator it does not offer is left out), checked against the output grid."""
+    leaf = solver.leaf(sc)
+    over = {k: v for k, v in case.settings.items() if k in leaf.DEFAULT_SETTINGS}
+    integrator = over.pop("integrator", None)
+    if integrator is not None and integrator not in leaf.INTEGRATORS:
+        integrator = None
+    base = solvers.settings_for(solver, sc.name)
+    dt = over.get("dt", base.get("dt"))
+    if isinstance(dt, float) and dt > params["output_dt"] and "dt" not in case.settings:
+        over["dt"] = params["output_dt"]      # a fine output grid: its default step must fit
+    return solvers.settings_for(solver, sc.name, integrator=integrator, extra=over,
+                                t_out=sc.output_grid(params))
+
+
+def run_case(sc: Scene, case: Extreme, chosen, timeout_s=None, log=print) -> list[dict]:
+    params = sc.resolve(case.set)
+    names = [s for s in chosen if not case.solvers or s.name in case.solvers]
+    ref = None
+    if case.check == "reference":
+        rs = solvers.get_solver(sc.reference_solvers[0])
+        ref = solvers.simulate(sc, rs, params, solvers.settings_for(rs, sc.name), timeout_s,
+                               estimate_error=True)
+    rows = []
+    for s in names:
+        try:
+            st = _settings(s, sc, case, params)
+        except BadInput as e:
+            rows.append({"case": case.name, "solver": s.name, "outcome": "not applicable",
+                         "value": None, "detail": str(e)})
+            log(f"{sc.name} {case.name} {s.name}: not applicable — {e}")
+            continue
+        tr = solvers.simulate(sc, s, params, st, timeout_s, estimate_error=True)
+        row = {"case": case.name, "solver": s.name, "status": tr.status, "t_fail": tr.t_fail,
+               "wall_s": tr.wall_s, "settings": {k: st.get(k) for k in case.settings}}
+        if tr.status == "ok":
+            if case.check == "energy":
+                passed, value, what = energy_check(sc, tr, case.bound)
+            elif case.check == "reference":
+                passed, value, what = reference_check(sc, tr, ref, case.bound)
+            else:
+                passed, value, what = case.check(params, tr)
+            if case.expect == "status":
+                passed, what = False, f"returned ok where the case must end with a status; {what}"
+            row.update(outcome="within tolerance" if passed else "FAILED", value=value,
+                       detail=what)
+        elif tr.status in HONEST:
+            bad = case.expect == "ok"
+            row.update(outcome=("FAILED: " if bad else "") + tr.status, value=tr.t_fail,
+                       detail=f"at t = {tr.t_fail:.6g} s: {tr.reason}")
+        else:
+            row.update(outcome="error", value=None, detail=tr.reason)
+        log(f"{sc.name} {case.name} {s.name}: {row['outcome']} — {row['detail']}")
+        rows.append(row)
+    return rows
+
+
+def _num(v):
+    return "" if v is None else f"{v:.3g}"
+
+
+def run_extremes(scene_name: str, solver_names, out, include_slow=False, timeout_s=None,
+                 log=print) -> dict:
+    sc = get_scene(scene_name)
+    if not sc.extremes:
+        raise BadInput(f"scene {sc.name!r} lists no extreme cases")
+    if sc.kind != "time":
+        raise BadInput(f"scene {sc.name!r}: its extremes run through `xval modes`")
+    chosen = solvers.pick(sc, solver_names)
+    cases = [c for c in sc.extremes if include_slow or not c.slow]
+    rows = [r for c in cases for r in run_case(sc, c, chosen, timeout_s, log)]
+    stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
+    out_dir = Path(out) / "extremes" / f"{sc.name}-{stamp}"
+    obj = {"scene": sc.name, "cases": [{"name": c.name, "set": c.set, "settings": c.settings,
+                                        "check": c.check if isinstance(c.check, str)
+                                        else "closed form", "bound": c.bound,
+                                        "expect": c.expect, "why": c.why} for c in cases],
+           "results": rows,
+           "skipped_slow": [c.name for c in sc.extremes if c.slow and not include_slow],
+           "n_failed": sum(r["outcome"].startswith("FAILED") for r in rows)}
+    md = [f"# Extremes: {sc.name}", "", "| case | solver | outcome | number | detail |",
+          "|---|---|---|---|---|"]
+    md += [f"| {r['case']} | {r['solver']} | **{r['outcome']}** | {_num(r.get('value'))} | "
+           f"{r['detail']} |" for r in rows]
+    md += ["", "Cases:", ""] + [f"- **{c.name}** ({', '.join(f'{k}={v}' for k, v in c.set.items())}"
+                                 f"{'; ' if c.settings else ''}"
+                                 f"{', '.join(f'{k}={v}' for k, v in c.settings.items())}): "
+                                 f"{c.why}" for c in cases]
+    write_text(out_dir / "report.md", "\n".join(md) + "\n")
+    obj["report"] = str(out_dir / "report.md")
+    write_json(out_dir / "result.json", obj)
+    return obj

@@ -1,0 +1,282 @@
+"""`xval modes`: natural frequencies from every solver that can linearise, matched mode by mode;
+for a scene that declares a Campbell sweep, each solver's mode lines over the sweep (tracked by
+mode-shape correlation where the leaves return shapes, else by label) with the critical speeds
+where a line crosses an excitation line, the mode shapes in 3D where the scene has a
+`mode_shape_3d` hook (compare/mode_shapes.py), and the scene's own identification hook
+(frequencies identified from free responses of its time-domain solvers). Nothing here names a
+scene.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import brentq, linear_sum_assignment
+
+from .. import solvers
+from ..analysis import metrics
+from ..analysis.trajectory import Modes
+from ..atomic import atomic_path, write_json, write_text
+from ..errors import BadInput
+from ..output import mode_shapes
+from ..scenes import Scene, get_scene
+from .runner import new_run_dir
+
+
+def sweep(scene: Scene, solver: solvers.Solver, params: dict, values: np.ndarray) -> list[Modes]:
+    """The solver's modes at each value of the scene's sweep parameter."""
+    name = scene.campbell.parameter
+    return [solvers.modes(scene, solver, {**params, name: float(v)}) for v in values]
+
+
+def mac(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Modal assurance criterion between the rows of a and b (complex shapes allowed)."""
+    a, b = np.atleast_2d(a), np.atleast_2d(b)
+    num = np.abs(np.conj(a) @ b.T) ** 2
+    den = np.outer(np.sum(np.abs(a) ** 2, 1), np.sum(np.abs(b) ** 2, 1))
+    return num / np.maximum(den, 1e-300)
+
+
+def _unique(labels) -> bool:
+    return all(labels) and len(set(labels)) == len(labels)
+
+
+def track(results: list[Modes]) -> dict[str, np.ndarray]:
+    """Mode lines over a sweep, never by sorting. From one point to the next a mode keeps its
+    label where both points label their modes uniquely and alike (the leaves classify modes
+    from their shapes: flap / lag / torsion, forward / backward whirl), so crossings are drawn
+    as crossings; elsewhere — repeated roots at rest ("whirl 1" twice), a leaf without
+    physical labels — by mode-shape correlation (MAC, optimal assignment), else by nearest
+    frequency. Each line is keyed by its label at the end of the sweep, made unique."""
+    ok = [r for r in results if r.status == "ok" and len(r.frequencies_hz)]
+    if len(ok) != len(results) or not ok:
+        return {}
+    n = min(len(r.frequencies_hz) for r in ok)
+    lines = np.full((n, len(ok)), np.nan)
+    order = np.arange(n)
+    lines[:, 0] = ok[0].frequencies_hz[:n]
+    for k in range(1, len(ok)):
+        prev, cur = ok[k - 1], ok[k]
+        before = [prev.labels[j] for j in order]
+        if _unique(prev.labels) and _unique(cur.labels) and set(before) <= set(cur.labels):
+            order = np.array([cur.labels.index(lb) for lb in before])
+        elif prev.shapes is not None and cur.shapes is not None:
+            rows, cols = linear_sum_assignment(-mac(prev.shapes[order], cur.shapes))
+            order = cols[np.argsort(rows)]
+        else:
+            cost = np.abs(prev.frequencies_hz[order][:, None] - cur.frequencies_hz[None, :])
+            rows, cols = linear_sum_assignment(cost)
+            order = cols[np.argsort(rows)]
+        lines[:, k] = cur.frequencies_hz[order]
+    keys = []
+    for i, j in enumerate(order):
+        key = ok[-1].labels[j] or f"mode {i + 1}"
+        keys.append(key if key not in keys else f"{key} #{keys.count(key) + 1}")
+    return dict(zip(keys, lines))
+
+
+def _refine(gap, lo, hi, v0, d):
+    """The root of `gap` in [lo, hi] to 1e-9 relative (the frequencies it compares are located
+    to 1e-10: a tighter bracket meets their noise). Every evaluation is a whole modes run
+    (~0.5 s on the helicopter), so the step is first cut at v0 ± d around an estimate, and
+    brentq runs on the piece holding the sign change; values are remembered
+    (brentq evaluates its bracket's ends again). The step's ends are evaluated anew: the swept
+    lines follow a mode by shape, `gap` by label, and near-degenerate pairs (the hovering
+    fuselage's) swap labels between sweep points."""
+    memo: dict = {}
+
+    def f(v):
+        if v not in memo:
+            memo[v] = gap(v)
+        return memo[v]
+    a, b = max(lo, v0 - d), min(hi, v0 + d)
+    for x0, x1 in ((a, b), (lo, a), (b, hi)):           # the estimate's piece first
+        if x1 <= x0:
+            continue
+        if f(x0) == 0.0:
+            return x0
+        if f(x0) * f(x1) < 0:
+            return brentq(f, x0, x1, xtol=1e-9 * abs(x1), rtol=1e-14)
+    raise ValueError("no sign change of the gap in the step")
+
+
+def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: np.ndarray,
+                    lines: dict[str, np.ndarray], hint: dict | None = None) -> dict[str, float]:
+    """Sweep values where a mode line crosses `order` × the excitation line, refined by root
+    finding on the solver itself (the mode followed by label, else by nearest frequency).
+    The first estimate is the lines' linear interpolation (±2 % of the step), or another
+    solver's critical speed of the same name in `hint` (±1e-4 relative: solvers that agree
+    save half the modes runs; one that does not falls back to the whole step)."""
+    cb = scene.campbell
+    if cb.excitation_hz is None:
+        return {}
+    out = {}
+    for order in cb.orders:
+        exc = np.array([order * cb.excitation_hz(params, v) for v in values])
+        for key, f in lines.items():
+            g = f - exc
+            idx = np.nonzero(np.sign(g[:-1]) * np.sign(g[1:]) < 0)[0]
+            for i in idx[:1]:                      # the first crossing of each line
+                def gap(v, key=key, f0=f[i], order=order):
+                    m = solvers.modes(scene, solver, {**params, cb.parameter: float(v)})
+                    if key in m.labels:
+                        fr = m.frequencies_hz[m.labels.index(key)]
+                    elif _unique(m.labels):     # the solver names its modes, none of them so
+                        raise ValueError(f"no mode {key!r} at {v}")
+                    else:
+                        fr = m.frequencies_hz[np.argmin(np.abs(m.frequencies_hz - f0))]
+                    return fr - order * cb.excitation_hz(params, v)
+                name = key if order == 1 else f"{key} ({order}×)"
+                lo, hi = values[i], values[i + 1]
+                v0 = lo - g[i] * (hi - lo) / (g[i + 1] - g[i])     # linear, from the lines
+                near = (hint or {}).get(name)
+                try:
+                    v = (_refine(gap, lo, hi, near, 1e-4 * abs(near))
+                         if near is not None and lo < near < hi
+                         else _refine(gap, lo, hi, v0, 0.02 * (hi - lo)))
+                except (ValueError, IndexError):
+                    # a body-frame linearisation can lose the mode exactly at the crossing
+                    # (its body-frame frequency is 0 there): parabola through points beside it,
+                    # its root taken only among them. Else the solver does not confirm the
+                    # crossing and none is reported: the lines can pass between different
+                    # modes over a step (the hovering helicopter's whole-aircraft modes have no
+                    # 'fuselage' label below ~10 rad/s), and a root extrapolated from points
+                    # near the lines' estimate (4.54 rad/s) to 4.98 was no critical speed.
+                    x = v0 + 1e-3 * (hi - lo) * np.array([-3, -2, 2, 3.0])
+                    try:
+                        y = np.array([gap(v) for v in x])
+                        roots = np.roots(np.polyfit(x - v0, y, 2)).real + v0
+                        v = float(roots[np.argmin(np.abs(roots - v0))])
+                    except (ValueError, IndexError):
+                        continue
+                    if not x[0] <= v <= x[-1]:
+                        continue
+                out[name] = float(v)
+    return out
+
+
+def _campbell_png(path, scene, values, lines_by_solver, crit, params):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    cb = scene.campbell
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    styles = ["-", "--", ":", "-."]
+    keys = list(dict.fromkeys(k for lines in lines_by_solver.values() for k in lines))
+    for k, lines in enumerate(lines_by_solver.values()):
+        for key, f in lines.items():           # one colour per mode, the same in every solver
+            j = keys.index(key)
+            ax.plot(values, f, lw=1, ls=styles[k % len(styles)], color=f"C{j % 10}",
+                    label=key if k == 0 else None)
+    if cb.excitation_hz is not None:
+        for order in cb.orders:
+            ax.plot(values, [order * cb.excitation_hz(params, v) for v in values], "k:", lw=1,
+                    label=f"{order}× excitation")
+    for c in crit.values():
+        for v in c.values():
+            ax.plot([v], [cb.excitation_hz(params, v)], "ko", ms=3)
+    ax.set_xlabel(f"{cb.parameter} [{cb.unit or '–'}]")
+    ax.set_ylabel("frequency [Hz]")
+    top = max(np.nanmax(f) for lines in lines_by_solver.values() for f in lines.values())
+    ax.set_ylim(0, 1.1 * top)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    legend = ", ".join(f"{s}: '{styles[k % len(styles)]}'" for k, s in enumerate(lines_by_solver))
+    ax.set_title(f"Campbell diagram (line style per solver — {legend})", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _campbell_rrd(path, scene, values, lines_by_solver):
+    import rerun as rr
+    with atomic_path(path) as tmp, \
+            rr.RecordingStream("xval", recording_id=f"campbell-{path.parent.name}") as rec:
+        rec.save(str(tmp))
+        idx = [rr.TimeColumn(scene.campbell.parameter, duration=values)]   # 1 s = 1 unit
+        for solver, lines in lines_by_solver.items():
+            for key, f in lines.items():
+                rec.send_columns(f"campbell/{rr.escape_entity_path_part(key)}/{solver}",
+                                 indexes=idx, columns=rr.Scalars.columns(scalars=f))
+    return path
+
+
+def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float):
+    """A time-domain run for an identification hook: the solver's accurate defaults, its fixed
+    step capped so that it fits the record's grid."""
+    s = solvers.get_solver(solver_name)
+    settings = solvers.settings_for(s, scene.name)
+    if isinstance(settings.get("dt"), float) and settings["dt"] > max_dt:
+        settings["dt"] = max_dt
+    return solvers.simulate(scene, s, params, settings)
+
+
+def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_sweep=True,
+              identify=True, out_dir=None):
+    """`out_dir` given: write there (a campaign case); else a new run folder under `out`."""
+    sc = get_scene(scene_name)
+    if sc.kind != "modes":
+        raise BadInput(f"scene {sc.name!r} is a time-domain scene: use `xval run {sc.name}`")
+    params = sc.resolve(overrides)
+    chosen = solvers.pick(sc, solver_names)
+    out_dir = Path(out_dir or new_run_dir(out, sc.name))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    results = []
+    for s in chosen:
+        log(f"{sc.name}: {s.name} …")
+        results.append(solvers.modes(sc, s, params))
+    comparisons = metrics.frequency_comparisons(results, sc.tolerances["frequency"],
+                                                sc.tolerances.get("frequency_by_solver"))
+    obj = {"scene": sc.name, "params": params,
+           "runs": [{"solver": r.solver, "status": r.status, "wall_s": round(r.wall_s, 6),
+                     "frequencies_hz": list(r.frequencies_hz), "labels": r.labels,
+                     **({"notes": r.notes} if r.notes else {}),
+                     **({k: list(np.ravel(v)) for k, v in r.extra.items()}),
+                     **({"reason": r.reason} if r.reason else {})} for r in results],
+           "comparisons": [c.as_dict() for c in comparisons]}
+    md = [f"# {sc.name}: {sc.title}", "", f"Source: {sc.source}", "",
+          "| solver | status | frequencies [Hz] | labels | notes |", "|---|---|---|---|---|"]
+    md += [f"| {r.solver} | {r.status} | {', '.join(f'{f:.8g}' for f in r.frequencies_hz)} | "
+           f"{', '.join(r.labels)} | {'; '.join(r.notes) or r.reason or ''} |" for r in results]
+    md += ["", "| a | b | mode | rel. difference | verdict |", "|---|---|---|---|---|"]
+    md += [f"| {c.a} | {c.b} | {c.channel} | {c.max_rel:.2e} | {c.verdict} |"
+           for c in comparisons]
+    if sc.mode_shape_3d:
+        drawn = mode_shapes.write(out_dir, sc, params, results)
+        if drawn:
+            obj["mode_shapes_recording"] = str(drawn["recording"])
+            obj["mode_shapes_figure"] = str(drawn["figure"])
+            md += ["", "## Mode shapes", "", drawn["text"], "", "![mode shapes](mode_shapes.png)"]
+    if sc.campbell and campbell_sweep:
+        values = sc.campbell.values(params)
+        lines, crit = {}, {}
+        for s in chosen:
+            tracked = track(sweep(sc, s, params, values))
+            if not tracked:
+                log(f"campbell {s.name}: a sweep point failed; no lines")
+                continue
+            lines[s.name] = tracked
+            crit[s.name] = critical_speeds(sc, s, params, values, tracked,
+                                           hint=next(iter(crit.values()), None))
+        obj["critical_speeds"] = crit
+        obj["campbell"] = {"parameter": sc.campbell.parameter, "values": list(values),
+                           "lines_hz": {s: {k: list(v) for k, v in ln.items()}
+                                        for s, ln in lines.items()}}
+        if lines:
+            _campbell_png(out_dir / "campbell.png", sc, values, lines, crit, params)
+            obj["recording"] = str(_campbell_rrd(out_dir / "campbell.rrd", sc, values, lines))
+        md += ["", "## Campbell diagram", "",
+               f"Critical {sc.campbell.parameter} [{sc.campbell.unit}] (a mode line crosses "
+               "the excitation line):", ""]
+        md += [f"- {n}: " + ", ".join(f"{k} {v:.6f}" for k, v in c.items())
+               for n, c in crit.items()]
+        md += ["", "![campbell](campbell.png)"]
+    if sc.identify and identify:
+        rows, lines_md = sc.identify(params, _run_time, solver_names or None)
+        if rows:
+            obj["identified_from_free_response"] = rows
+            md += [""] + lines_md
+    write_text(out_dir / "report.md", "\n".join(md) + "\n")
+    obj["report"] = str(out_dir / "report.md")
+    write_json(out_dir / "result.json", obj)
+    return obj, results, comparisons

@@ -1,0 +1,127 @@
+"""`euler-vector` solver: the paper's axial + transverse Euler-vector formulation (seed 000).
+
+State y = [K (3), γ (3), φ, A]: angular momentum about O in the fixed frame, the transverse
+Euler vector γ ⊥ e (e = e_z), the axial turn φ and the drive work A. The rotation is split as
+L = L(γ)·L(φ e); then
+    ω = I⁻¹K,  I = L I₀ Lᵀ
+    φ' = (e·Z⁻¹·ω)/(e·Z⁻¹·L(γ)·e),   γ' = Z⁻¹·(ω − φ' L(γ)·e)      (γ'·e = 0 by construction)
+    K' = −kγ + r_c × m g + M e,   A' = M ω·e.
+The denominator e·Z⁻¹·L(γ)·e equals (θ/2)·cot(θ/2), θ = |γ|: the split is singular at tilt π,
+which `rotor.tilt_guard_z` reports.
+"""
+import numba as nb
+import numpy as np
+
+from ..rotation import (
+    cross_t,
+    mat_tvec_t,
+    mat_vec_t,
+    rotation_t,
+    rotation_tensor,
+    rotation_z,
+    transverse_vector,
+    zhilin_inverse_t,
+)
+from . import model as rotor
+from .model import (  # noqa: F401  (re-exported: the leaf's settings)
+    ADAPTIVE,
+    DEFAULT_SETTINGS,
+    I0INV,
+    INTEGRATORS,
+    K_,
+    M_,
+    RC0,
+    TORQUE,
+    G,
+    check_settings,
+)
+
+E_Z = np.array([0.0, 0.0, 1.0])
+_I0INV, _RC0, _G = I0INV.start, RC0.start, G.start
+
+
+@nb.njit(cache=True)
+def rotation(y):
+    return rotation_tensor(y[3:6]) @ rotation_z(y[6])
+
+
+@nb.njit(cache=True)
+def rotations(Y):
+    """(n, 3, 3) rotations of the state rows; NaN rows give NaN."""
+    out = np.full((Y.shape[0], 3, 3), np.nan)
+    for i in range(Y.shape[0]):
+        if np.all(np.isfinite(Y[i])):
+            out[i] = rotation(Y[i])
+    return out
+
+
+@nb.njit(cache=True)
+def rhs_into(t, y, p, dy):
+    """Fused scalar form of the equations above (3×3 matrices as 9-tuples: no allocation)."""
+    g0, g1, g2 = y[3], y[4], y[5]
+    Lg = rotation_t(g0, g1, g2)
+    c, s = np.cos(y[6]), np.sin(y[6])
+    L = (c * Lg[0] + s * Lg[1], c * Lg[1] - s * Lg[0], Lg[2],        # L = L(γ)·L(φ e_z)
+         c * Lg[3] + s * Lg[4], c * Lg[4] - s * Lg[3], Lg[5],
+         c * Lg[6] + s * Lg[7], c * Lg[7] - s * Lg[6], Lg[8])
+    u = mat_tvec_t(L, y[0], y[1], y[2])                             # body-frame momentum
+    J = p[_I0INV:_I0INV + 9]
+    om = mat_vec_t(L, J[0] * u[0] + J[1] * u[1] + J[2] * u[2],
+                   J[3] * u[0] + J[4] * u[1] + J[5] * u[2],
+                   J[6] * u[0] + J[7] * u[1] + J[8] * u[2])           # ω = L I₀⁻¹ Lᵀ K
+    Zi = zhilin_inverse_t(g0, g1, g2)
+    a0, a1, a2 = Lg[2], Lg[5], Lg[8]                                # L(γ)·e, the spin axis
+    phi_dot = ((Zi[6] * om[0] + Zi[7] * om[1] + Zi[8] * om[2])
+               / (Zi[6] * a0 + Zi[7] * a1 + Zi[8] * a2))
+    dg = mat_vec_t(Zi, om[0] - phi_dot * a0, om[1] - phi_dot * a1, om[2] - phi_dot * a2)
+    rc = mat_vec_t(L, p[_RC0], p[_RC0 + 1], p[_RC0 + 2])
+    cg = cross_t(rc[0], rc[1], rc[2], p[_G], p[_G + 1], p[_G + 2])
+    k, m, torque = p[K_], p[M_], p[TORQUE]
+    dy[0] = -k * g0 + m * cg[0]
+    dy[1] = -k * g1 + m * cg[1]
+    dy[2] = -k * g2 + m * cg[2] + torque
+    dy[3], dy[4], dy[5] = dg[0], dg[1], dg[2]
+    dy[6] = phi_dot
+    dy[7] = torque * om[2]
+
+
+@nb.njit(cache=True)
+def rhs(t, y, p):
+    """The right-hand side as a new array (for the whirl linearisation and tests)."""
+    dy = np.empty(8)
+    rhs_into(t, y, p, dy)
+    return dy
+
+
+@nb.njit(cache=True)
+def guard(t, y, p):
+    # the tilt is |γ| (γ ⊥ e_z). Tested on |γ| itself, not on the axis' z component cos|γ|: a
+    # step free of the output grid can carry |γ| past π, where cos|γ| comes back up
+    th = np.sqrt(y[3] * y[3] + y[4] * y[4] + y[5] * y[5])
+    return rotor.FAIL_TILT if th > rotor.TILT_LIMIT else 0
+
+
+def motion(Y, p):
+    Rs = rotations(Y)
+    I0inv = p[I0INV].reshape(3, 3)
+    omegas = np.einsum("nij,jk,nlk,nl->ni", Rs, I0inv, Rs, Y[:, 0:3])
+    return Rs, omegas, Y[:, 7]
+
+
+def initial_state(params, p):
+    R0, omega0 = rotor.initial_motion(params, p)
+    gamma0 = transverse_vector(R0[:, 2])
+    # R0 = L(γ0)·L(φ0): the axial part is what is left after the transverse turn
+    Rphi = rotation_tensor(-gamma0) @ R0
+    phi0 = np.arctan2(Rphi[1, 0], Rphi[0, 0])
+    K0 = R0 @ p[rotor.I0].reshape(3, 3) @ R0.T @ omega0
+    return np.concatenate([K0, gamma0, [phi0, 0.0]])
+
+
+def simulate(params, t_out, settings):
+    p = rotor.pack(params)
+    Y, stats, t_fail, reason, used = rotor.integrate(rhs_into, guard, initial_state(params, p), p,
+                                                     t_out, settings)
+    gamma_axial = np.nanmax(np.abs(Y[:, 5]))
+    return rotor.result(params, t_out, Y, stats, t_fail, reason, used, motion, p,
+                        {"gamma_axial": float(gamma_axial)})

@@ -35,6 +35,10 @@ def atomic_path(path):
         yield Path(tmp)
         os.chmod(tmp, readable_mode())
         os.replace(tmp, path)
+    except OSError as e:                 # name the file the user asked for, not the temporary
+        if e.filename in (None, tmp, str(tmp)):
+            e.filename = str(path)
+        raise
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)

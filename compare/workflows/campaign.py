@@ -23,16 +23,24 @@ Executor: a local process pool by default (embedded, nothing to start); Dask dis
 `--executor dask [--scheduler ADDR]` (a LocalCluster when no address is given). Engine
 banners and warnings are captured into each job's log (`jobs/<digest>.log`), shown with
 `--verbose` and listed in the report.
+
+One campaign at a time per folder: `.lock` holds the owner's pid and host (guard.py); a second
+`xval campaign` on the same folder exits 2 naming the owner, a lock whose process is dead is
+taken over. Ctrl-C stops the workers (they ignore SIGINT; this process ends them), keeps every
+stored result and raises `Interrupted` (the CLI prints one line and exits 130).
 """
 import ast
 import hashlib
 import itertools
 import json
 import multiprocessing
+import signal
 import sys
+import threading
 import time
 import tomllib
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -45,7 +53,7 @@ from ..errors import BadInput
 from ..output.joblog import captured, distinct_lines
 from ..output.progress import PlainProgress
 from ..scenes import get_scene
-from . import budget, runner
+from . import budget, guard, runner
 
 STORE_VERSION = 1          # bump when the stored result format changes: everything reruns
 TOP_KEYS = ("name", "cases", "max_output_gib", "max_steps")
@@ -291,14 +299,20 @@ def job_digest(scene, params, chosen, settings):
     """Digest of everything a result depends on: scene, resolved parameters, solver names,
     settings, package versions, and the source of the models, of everything of ours they
     import and of the adapter."""
-    code = {"compare.solvers", "compare.analysis.trajectory", "compare.scenes.base",
-            _scene_module(scene)}
-    code |= {s.leaves[scene.name] for s in chosen}
     blob = json.dumps({"store": STORE_VERSION, "scene": scene.name, "params": params,
                        "solvers": [s.name for s in chosen], "settings": settings,
                        "versions": {s.name: solvers.versions(s) for s in chosen},
-                       "code": code_digest(code)}, sort_keys=True, default=_canon)
+                       "code": job_code(scene, chosen)}, sort_keys=True, default=_canon)
     return hashlib.sha256(blob.encode()).hexdigest()
+
+
+def job_code(scene, chosen):
+    """Digest of the code behind a job (its models, the adapter, the scene); stored with the
+    result so that `xval diff` can say the model code changed."""
+    code = {"compare.solvers", "compare.analysis.trajectory", "compare.scenes.base",
+            _scene_module(scene)}
+    code |= {s.leaves[scene.name] for s in chosen}
+    return code_digest(code)
 
 
 def _prefixed(where, fn, *args):
@@ -380,6 +394,8 @@ def run_job(job: Job, store: str):
             obj, results, _ = run_modes(job.scene, list(job.solvers), job.overrides, None,
                                         log=lambda m: None, out_dir=d)
             obj["input_digest"] = job.digest
+            obj["code_digest"] = job_code(get_scene(job.scene),
+                                          [solvers.get_solver(n) for n in job.solvers])
             write_json(d / "modes.json", obj)          # written last: the job's done-marker
             bad = [r.status for r in results if r.status != "ok"]
             status = bad[0] if bad else "ok"
@@ -388,6 +404,7 @@ def run_job(job: Job, store: str):
             tr = solvers.simulate(sc, solvers.get_solver(job.solver), job.params, job.settings,
                                   job.timeout_s, estimate_error=sc.error_estimate)
             tr.stats["input_digest"] = job.digest
+            tr.stats["code_digest"] = job_code(sc, [solvers.get_solver(job.solver)])
             tr.save(store / f"{job.key}.npz")
             status = tr.status
     return job.label, status, time.perf_counter() - t0, text[0]
@@ -440,8 +457,42 @@ def make_executor(kind, scheduler, workers):
         return client.get_executor(), client
     # spawn: engines start threads; a forked child would inherit a half-initialised state.
     # The children inherit one BLAS thread each (compare/__init__.py)
+    # workers ignore SIGINT: Ctrl-C reaches the whole process group, and only this process
+    # decides what happens (stop the workers, keep what is stored, say how to resume)
     return ProcessPoolExecutor(max_workers=workers or 2,
-                               mp_context=multiprocessing.get_context("spawn")), None
+                               mp_context=multiprocessing.get_context("spawn"),
+                               initializer=signal.signal,
+                               initargs=(signal.SIGINT, signal.SIG_IGN)), None
+
+
+@contextmanager
+def _sigint_ignored():
+    if threading.current_thread() is not threading.main_thread():
+        yield                              # only the main thread may set handlers
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+class Interrupted(Exception):
+    """Ctrl-C in a campaign: the workers were stopped; the message says what is kept."""
+
+
+def _stop_workers(ex, store):
+    """Cancel what is queued and end the running jobs now. Their results are written under a
+    temporary name and renamed when complete, so a stopped job leaves no result file; its
+    temporary file (a dot-name) is removed here, under the folder's lock."""
+    procs = list((getattr(ex, "_processes", None) or {}).values())   # shutdown forgets them
+    ex.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        p.terminate()
+    for p in procs:
+        p.join(10)
+    for f in store.glob(".*"):
+        f.unlink(missing_ok=True)
 
 
 def run_campaign(path, out, executor="local", scheduler=None, workers=None, timeout_s=None,
@@ -453,6 +504,18 @@ def run_campaign(path, out, executor="local", scheduler=None, workers=None, time
     cases, jobs = plan(camp, src, timeout_s, max_output_gib, max_steps)
     view = view or PlainProgress()
     out_dir = Path(out) / "campaign" / camp.get("name", "campaign")
+    with guard.folder_lock(out_dir, "xval campaign", view.log):
+        try:
+            return _run_locked(camp, cases, jobs, out_dir, view, executor, scheduler, workers,
+                               verbose)
+        except KeyboardInterrupt:
+            store = out_dir / "jobs"
+            n = sum(is_done(j, store) for j in jobs)
+            raise Interrupted(f"{n} of {len(jobs)} jobs are stored in {store} and will be "
+                              f"reused") from None
+
+
+def _run_locked(camp, cases, jobs, out_dir, view, executor, scheduler, workers, verbose):
     store = out_dir / "jobs"
     reused = {j.label for j in jobs if is_done(j, store)}
     todo = dispatch_order([j for j in jobs if j.label not in reused])
@@ -468,8 +531,10 @@ def run_campaign(path, out, executor="local", scheduler=None, workers=None, time
     if todo:
         ex, client = make_executor(executor, scheduler, workers)
         t_start = time.time()
+        stopped = False
         try:
-            futures = {ex.submit(run_job, j, str(store)): j for j in todo}
+            with _sigint_ignored():            # children spawn ignoring it
+                futures = {ex.submit(run_job, j, str(store)): j for j in todo}
             left = set(futures)
             while left:
                 done, left = wait(left, timeout=0.5, return_when=FIRST_COMPLETED)
@@ -491,8 +556,13 @@ def run_campaign(path, out, executor="local", scheduler=None, workers=None, time
                         view.note(f"writing the report of {case.name}")
                         outcome[case.name] = _finish_safely(case, jobs, store, out_dir,
                                                             crashed, reused, view)
+        except KeyboardInterrupt:
+            stopped = True
+            _stop_workers(ex, store)
+            raise
         finally:
-            ex.shutdown(wait=True)
+            if not stopped:
+                ex.shutdown(wait=True)
             if client is not None:
                 client.close()
     from ..output.campaign_report import write_campaign_report

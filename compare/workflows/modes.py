@@ -230,6 +230,7 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
     obj = {"scene": sc.name, "params": params,
            "runs": [{"solver": r.solver, "status": r.status, "wall_s": round(r.wall_s, 6),
                      "frequencies_hz": list(r.frequencies_hz), "labels": r.labels,
+                     "versions": r.versions,
                      **({"notes": r.notes} if r.notes else {}),
                      **({k: list(np.ravel(v)) for k, v in r.extra.items()}),
                      **({"reason": r.reason} if r.reason else {})} for r in results],

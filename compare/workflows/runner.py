@@ -17,6 +17,7 @@ from ..analysis.trajectory import Trajectory
 from ..atomic import write_json
 from ..scenes import Scene
 from ..solvers import Solver
+from . import guard
 
 
 @dataclass
@@ -68,7 +69,7 @@ def run_scene(scene: Scene, params: dict, chosen: list[Solver], settings_for: Ca
     `timeout_s` bounds each solver's wall time; `estimate_errors` reruns each solver tighter
     (where the scene allows) so the verdicts weigh its own error."""
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    marker = guard.mark_incomplete(out_dir)      # removed after result.json, the last file
     trajectories, files = [], {}
     for s in chosen:
         if log:
@@ -80,7 +81,9 @@ def run_scene(scene: Scene, params: dict, chosen: list[Solver], settings_for: Ca
             log(f"{scene.name}: {s.name} {tr.status} in {tr.wall_s:.3g} s"
                 + (f" ({tr.reason})" if tr.reason else ""))
         trajectories.append(tr)
-    return finish_run(scene, params, trajectories, files, out_dir, record, report)
+    result = finish_run(scene, params, trajectories, files, out_dir, record, report)
+    marker.unlink()
+    return result
 
 
 def finish_run(scene: Scene, params: dict, trajectories: list[Trajectory], files: dict,

@@ -1,0 +1,164 @@
+"""Records that survive faults: a disk that fills during `xval run`, two campaigns on one
+folder, Ctrl-C in a campaign. Each is provoked for real (a writer that raises ENOSPC after
+writing part of its file; two real processes; SIGINT to a real process group)."""
+import errno
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from compare.cli import main
+from compare.workflows import guard
+
+from conftest import xval
+
+# one job of euler-vector at dt 1e-5 over 20 s (RK4, error estimate at half the step) takes
+# ~3 s on this machine: long enough to interrupt or to overlap a second process
+SLOW = """name = "slow"
+[[cases]]
+name = "spin"
+scene = "rotor-spinup"
+solvers = ["euler-vector"]
+dt = 1e-5
+set = { t_end = 20 }
+sweep = { torque = { start = 1.0, stop = 2.0, num = %d } }
+"""
+
+
+def _popen(args, **kw):
+    return subprocess.Popen([sys.executable, "-m", "compare", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, **kw)
+
+
+def _wait_for(cond, timeout=120):
+    t0 = time.time()
+    while not cond():
+        assert time.time() - t0 < timeout, "timed out waiting"
+        time.sleep(0.1)
+
+
+def test_disk_full_during_run_one_line_no_partial_file_folder_marked(tmp_path, monkeypatch,
+                                                                     capfd):
+    real = np.savez
+    calls = []
+
+    def filling_savez(f, **arrays):          # the second file fills the disk half-way
+        calls.append(1)
+        if len(calls) == 2:
+            f.write(b"PK\x03\x04" + b"\0" * 1000)
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(f, **arrays)
+
+    monkeypatch.setattr(np, "savez", filling_savez)
+    out = tmp_path / "out"
+    rc = main(["run", "rotor-spinup", "--solver", "euler-vector", "--solver", "quaternion",
+               "--set", "t_end=0.2", "--no-record", "--out", str(out)])
+    err = capfd.readouterr().err
+    assert rc == 2                            # the contract's status for an output problem
+    lines = [ln for ln in err.splitlines() if ln.startswith("xval: error:")]
+    assert len(lines) == 1 and "Traceback" not in err
+    assert "quaternion.npz" in lines[0] and os.strerror(errno.ENOSPC) in lines[0]
+    (run,) = (out / "runs").iterdir()
+    names = sorted(p.name for p in run.iterdir())
+    assert names == ["INCOMPLETE", "euler-vector.npz"]     # no partial, no temporary file
+    assert guard.is_incomplete(run)
+    monkeypatch.setattr(np, "savez", real)
+    rc = main(["diff", str(run), str(run), "--out", str(tmp_path / "d")])
+    err = capfd.readouterr().err
+    assert rc == 2 and "incomplete run folder" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "d").exists()
+
+
+def test_second_campaign_on_the_same_folder_is_refused_naming_the_owner(tmp_path):
+    f = tmp_path / "slow.toml"
+    f.write_text(SLOW % 2)
+    out = tmp_path / "out"
+    first = _popen(["campaign", str(f), "--out", str(out)])
+    lock = out / "campaign" / "slow" / ".lock"
+    _wait_for(lambda: lock.exists() or first.poll() is not None)
+    assert first.poll() is None, first.communicate()
+    assert json.loads(lock.read_text())["pid"] == first.pid
+    rc, so, se = xval("campaign", str(f), "--out", str(out))
+    assert rc == 2 and len(se.strip().splitlines()) == 1
+    assert f"pid {first.pid}" in se and "in use" in se
+    so1, se1 = first.communicate(timeout=300)
+    assert first.returncode == 0, se1
+    assert "2 jobs (2 run, 0 reused)" in so1            # each job ran once, by the first
+    assert len(list((out / "campaign" / "slow" / "jobs").glob("*.npz"))) == 2
+    assert not lock.exists()
+
+
+def test_stale_lock_of_a_dead_process_is_taken_over_a_foreign_one_is_not(tmp_path):
+    f = tmp_path / "tiny.toml"
+    f.write_text('name = "tiny"\n[[cases]]\nscene = "rotor-spinup"\nsolvers = ["quaternion"]\n'
+                 'set = { t_end = 0.2 }\n')
+    folder = tmp_path / "out" / "campaign" / "tiny"
+    folder.mkdir(parents=True)
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    lock = folder / ".lock"
+    lock.write_text(json.dumps({"pid": dead.pid, "host": "elsewhere.example", "since": "x"}))
+    rc, so, se = xval("campaign", str(f), "--out", str(tmp_path / "out"))
+    assert rc == 2 and f"pid {dead.pid} on elsewhere.example" in se    # cannot know: refused
+    lock.write_text(json.dumps({"pid": dead.pid, "host": socket.gethostname(), "since": "x"}))
+    rc, so, se = xval("campaign", str(f), "--out", str(tmp_path / "out"))
+    assert rc == 0, se
+    assert "stale lock" in se and not lock.exists()
+
+
+def test_ctrl_c_stops_the_workers_keeps_finished_jobs_and_says_how_to_resume(tmp_path):
+    n = 8
+    f = tmp_path / "slow.toml"
+    f.write_text(SLOW % n)
+    out = tmp_path / "out"
+    store = out / "campaign" / "slow" / "jobs"
+    p = _popen(["campaign", str(f), "--out", str(out)], start_new_session=True)
+    _wait_for(lambda: len(list(store.glob("*.npz"))) >= 1 or p.poll() is not None)
+    assert p.poll() is None
+    workers = _children_of(p.pid)
+    assert workers
+    t0 = time.time()
+    os.killpg(p.pid, signal.SIGINT)           # what a terminal's Ctrl-C does: the whole group
+    so, se = p.communicate(timeout=60)
+    stopped_in = time.time() - t0
+    assert p.returncode == 130, se
+    assert "Traceback" not in se and "KeyboardInterrupt" not in se
+    lines = [ln for ln in se.splitlines() if "interrupted" in ln]
+    assert len(lines) == 1 and "resume with: xval campaign" in lines[0]
+    assert stopped_in < 15                    # the running jobs were ended, not waited for
+    kept = len(list(store.glob("*.npz")))
+    assert 1 <= kept < n and not list(store.glob(".*"))
+    assert not (store.parent / ".lock").exists()
+    time.sleep(1)
+    alive = [w for w in workers if _running(w)]
+    assert not alive, f"workers left running: {alive}"
+    rc, so, se = xval("campaign", str(f), "--out", str(out))
+    assert rc == 0, se
+    assert f"{n} jobs ({n - kept} run, {kept} reused)" in so
+
+
+def _running(pid):
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def _children_of(pid):
+    """Processes whose parent is `pid` (the pool's workers outlive a careless parent)."""
+    out = []
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                stat = (d / "stat").read_text()
+            except OSError:
+                continue
+            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+                out.append(int(d.name))
+    return out

@@ -13,6 +13,7 @@ import sys
 import numpy as np
 
 from .errors import BadInput
+from .workflows.inputs import check_out, make_out  # noqa: F401  (shared with the API)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -90,35 +91,6 @@ def _positive_int(name):
             raise argparse.ArgumentTypeError(f"{name} must be at least 1, got {text!r}")
         return v
     return conv
-
-
-def check_out(path):
-    """`--out` must name a folder or a place where one can be made; checked before anything
-    runs (BadInput, one line). Nothing is created here."""
-    p = os.path.abspath(path)
-    if os.path.exists(p) and not os.path.isdir(p):
-        raise BadInput(f"--out {path}: exists and is not a folder")
-    parent = p
-    while not os.path.exists(parent):
-        parent = os.path.dirname(parent)
-    if not os.path.isdir(parent):
-        raise BadInput(f"--out {path}: {parent} is not a folder")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise BadInput(f"--out {path}: no permission to write in {parent}")
-
-
-def make_out(path):
-    """Create the output folder after every other check passed; a system that refuses
-    (/proc, a read-only mount) is bad input, one line."""
-    check_out(path)
-    try:
-        os.makedirs(path, exist_ok=True)
-        probe = os.path.join(path, f".xval-write-test-{os.getpid()}")
-        with open(probe, "w"):
-            pass
-        os.unlink(probe)
-    except OSError as e:
-        raise BadInput(f"--out {path}: cannot write there ({e.strerror})") from None
 
 
 def _budget_options(sp):
@@ -249,18 +221,16 @@ def build_parser():
 
 
 def cmd_extremes(args):
-    from .workflows.extremes import run_extremes
+    from . import api
     check_out(args.out)
     with stdout_to_stderr():
-        obj = run_extremes(args.scene, args.solver, args.out, include_slow=args.all,
-                           timeout_s=args.timeout, log=_log)
+        r = api.extremes(args.scene, args.solver, include_slow=args.all, timeout=args.timeout,
+                         out=args.out, log=_log)
     if args.json:
-        emit_json(obj)
+        emit_json(r.as_json())
     else:
-        for r in obj["results"]:
-            print(f"{r['case']:32s} {r['solver']:26s} {r['outcome']:18s} {r['detail']}")
-        print(f"report: {obj['report']}")
-    return 1 if args.strict and obj["n_failed"] else 0
+        print(r)
+    return 1 if args.strict and r["n_failed"] else 0
 
 
 def cmd_list(args):
@@ -276,58 +246,23 @@ def cmd_list(args):
 
 
 def cmd_show(args):
-    from .scenes import get_scene
-    sc = get_scene(args.scene)
+    from . import api
+    info = api.show(args.scene)
     if args.json:
-        from .output.citations import papers_in
-        emit_json({"scene": sc.name, "title": sc.title, "kind": sc.kind,
-                   "sources": papers_in(sc.source) or [sc.source],
-                   "channels": list(sc.channels), "tolerances": sc.tolerances,
-                   "params": [{"name": p.name, "default": p.default, "unit": p.unit,
-                               "range": p.describe_range(), "doc": p.doc} for p in sc.params]})
-        return 0
-    from .output.citations import papers_in
-    print(f"{sc.name}: {sc.title}")
-    for ref in papers_in(sc.source) or [sc.source]:
-        print(f"  source: {ref}")
-    for p in sc.params:
-        d = ",".join(f"{x:g}" for x in p.default) if p.kind == "vector" else p.default
-        print(f"  {p.name:16s} = {str(d):14s} {p.unit:9s} {p.describe_range():18s} {p.doc}")
-    if sc.channels:
-        print(f"  channels: {', '.join(sc.channels)}")
+        emit_json(info.as_json())
+    else:
+        print(info)
     return 0
 
 
 def cmd_run(args):
-    from . import solvers
-    from .scenes import get_scene
-    from .workflows import budget, runner
-    sc = get_scene(args.scene)
-    if sc.kind != "time":
-        raise BadInput(f"scene {sc.name!r} is a frequency scene: use `xval modes {sc.name}`")
-    check_out(args.out)
-    overrides = parse_sets(args.set)
-    chosen = solvers.pick(sc, args.solver)
-    # the size of the work before the grid is built (resolve allocates it)
-    budget.check_output(sc, overrides, len(chosen), args.max_output_gib)
-    params = sc.resolve(overrides)
-    budget.check_dt(params, args.dt, args.max_steps)
-    # settings are resolved (and checked) for every solver before anything runs
-    settings = {s.name: solvers.settings_for(s, sc.name, args.dt, args.rtol, args.integrator,
-                                             t_out=sc.output_grid(params))
-                for s in chosen}
-    for s in chosen:
-        budget.check_steps(s.name, s.leaf(sc.name), params, settings[s.name], args.max_steps)
-    make_out(args.out)
-    if args.rtol is not None:
-        for s in chosen:
-            if not getattr(s.leaf(sc.name), "ADAPTIVE", ()):
-                _log(f"{s.name}: no error-controlled integrator, --rtol ignored (fixed step kept)")
-    out_dir = runner.new_run_dir(args.out, sc.name)
+    from . import api
     with stdout_to_stderr():
-        res = runner.run_scene(sc, params, chosen, lambda s: settings[s.name], out_dir,
-                               record=not args.no_record, log=_log, timeout_s=args.timeout)
-    return _finish(args, res.as_json(), res.trajectories, res.comparisons)
+        r = api.run(args.scene, args.solver, dt=args.dt, rtol=args.rtol,
+                    integrator=args.integrator, out=args.out, record=not args.no_record,
+                    timeout=args.timeout, max_output_gib=args.max_output_gib,
+                    max_steps=args.max_steps, params=parse_sets(args.set), log=_log)
+    return _finish(args, r.as_json(), r.result.trajectories, r.comparisons)
 
 
 def _finish(args, obj, results, comparisons):
@@ -351,12 +286,12 @@ def _finish(args, obj, results, comparisons):
 
 
 def cmd_modes(args):
-    from .workflows.modes import run_modes
+    from . import api
     check_out(args.out)
     with stdout_to_stderr():
-        obj, results, comparisons = run_modes(args.scene, args.solver, parse_sets(args.set),
-                                              args.out, log=_log)
-    return _finish(args, obj, results, comparisons)
+        r = api.modes(args.scene, args.solver, out=args.out, params=parse_sets(args.set),
+                      log=_log)
+    return _finish(args, r.as_json(), list(r.runs.values()), r.comparisons)
 
 
 def cmd_campaign(args):
@@ -391,19 +326,16 @@ def cmd_campaign(args):
 
 
 def cmd_bench(args):
-    from .workflows.bench import run_bench
+    from . import api
     check_out(args.out)
     with stdout_to_stderr():
-        obj = run_bench(args.scene, args.solver, parse_sets(args.set), args.out,
-                        repeats=args.repeats, log=_log, vary=args.vary,
-                        max_output_gib=args.max_output_gib, max_steps=args.max_steps,
-                        make_out=make_out)
+        r = api.bench(args.scene, args.solver, repeats=args.repeats, vary=args.vary,
+                      out=args.out, max_output_gib=args.max_output_gib,
+                      max_steps=args.max_steps, params=parse_sets(args.set), log=_log)
     if args.json:
-        emit_json(obj)
+        emit_json(r.as_json())
     else:
-        for line in obj["summary_lines"]:
-            print(line)
-        print(f"report: {obj['report']}")
+        print(r)
     return 0
 
 

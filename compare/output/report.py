@@ -83,11 +83,20 @@ def analytic_curve(result, ch):
 
 
 def plot_channels(result, path):
-    plt = _plt()
-    chs = result.scene.channels
-    ncol = 2
+    return _savefig(channels_figure(result), path)
+
+
+def channels_figure(result, channels=None):
+    """Each channel (default: every channel of the scene) per solver, the closed form dashed
+    where the scene has one. A bare matplotlib Figure (no pyplot state: a notebook shows the
+    returned figure once, the report saves it)."""
+    from matplotlib.figure import Figure
+    _plt()                                 # the report's style (rcParams)
+    chs = list(channels or result.scene.channels)
+    ncol = 2 if len(chs) > 1 else 1
     nrow = (len(chs) + ncol - 1) // ncol
-    fig, axes = plt.subplots(nrow, ncol, figsize=(11, 2.6 * nrow), sharex=True, squeeze=False)
+    fig = Figure(figsize=(11 if ncol == 2 else 7, 2.6 * nrow))
+    axes = fig.subplots(nrow, ncol, sharex=True, squeeze=False)
     for ax, ch in zip(axes.flat, chs):
         flat = any(_flat(tr.channels[ch]) for tr in result.trajectories)
         ref0 = next((tr.channels[ch][0] for tr in result.trajectories
@@ -113,7 +122,7 @@ def plot_channels(result, path):
         ax.set_xlabel("t [s]")
     fig.suptitle(f"{result.scene.name}: channels per solver")
     fig.tight_layout()
-    return _savefig(fig, path)
+    return fig
 
 
 def plot_deviation(result, path):

@@ -91,6 +91,13 @@ def finish_run(scene: Scene, params: dict, trajectories: list[Trajectory], files
     comparisons = metrics.pairwise(trajectories, scene.tolerances)
     findings = scene.findings(params, trajectories) if scene.findings else []
     result = RunResult(scene, params, trajectories, comparisons, findings, Path(out_dir), files)
+    return write_outputs(result, record, report)
+
+
+def write_outputs(result: RunResult, record: bool = True, report: bool = True) -> RunResult:
+    """The recording, the report and result.json into `result.out_dir` (the trajectories are
+    in `result.files` already); `xval run` and the API's `.save()` write the same files."""
+    out_dir, files = result.out_dir, result.files
     if record:
         from ..output.recording import write_run_recording
         files["recording"] = write_run_recording(out_dir / "run.rrd", result)

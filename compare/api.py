@@ -1,0 +1,273 @@
+"""The Python API (`import xval`): the same engine as the `xval` command, which is a thin layer
+over these functions. Results are objects (compare/workflows/results.py); bad arguments raise
+`BadInput` with the command's one-line message, before anything runs or is written.
+
+Files: with `out=FOLDER` a call writes what the command writes there (a run: the .npz per
+solver, run.rrd, report.md with plots, result.json, in FOLDER/runs/<scene>-<stamp>-<pid>/).
+Without `out` it works in a temporary folder that goes away with the result (a notebook leaves
+nothing under logs/); `result.save(path)` writes the files then.
+"""
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable
+from pathlib import Path
+
+from .errors import BadInput
+from .workflows.inputs import check_out, make_out, positive, positive_int
+from .workflows.results import (
+    ModesResult,
+    SceneInfo,
+    Summary,
+    TimeResult,
+    disagreement_message,
+    temporary_folder,
+)
+
+
+def _names(solvers) -> list[str]:
+    """None, one name or a list of names."""
+    if solvers is None:
+        return []
+    if isinstance(solvers, str):
+        return [solvers]
+    if not all(isinstance(s, str) for s in solvers):
+        raise BadInput(f"solvers: expected solver names, got {solvers!r}")
+    return list(solvers)
+
+
+def _overrides(params: dict | None, kw: dict) -> dict:
+    """Scene parameters from `params={...}` and keywords (either, not the same name twice);
+    values as the scene reads them from `--set` or a campaign file (numbers, strings, lists
+    for vectors)."""
+    twice = sorted(set(params or {}) & set(kw))
+    if twice:
+        raise BadInput(f"{twice[0]}: given twice (params= and a keyword)")
+    return {**(params or {}), **kw}
+
+
+def _quiet(msg):
+    pass
+
+
+def _out(out):
+    """(folder, temporary): `out` checked, or a fresh temporary folder."""
+    if out is None:
+        return temporary_folder(), True
+    check_out(str(out))
+    return str(out), False
+
+
+def per_solver_settings(settings: dict | None, chosen) -> dict:
+    """`settings` for every solver alike ({"dt": 1e-3}), or per solver keyed by solver name
+    ({"exudyn": {...}, "mujoco": {...}}, as campaign cases write them); a dict whose keys are
+    all solver names is read per solver."""
+    names = [s.name for s in chosen]
+    if not settings:
+        return {n: {} for n in names}
+    if not isinstance(settings, dict):
+        raise BadInput(f"settings: expected a dict, got {settings!r}")
+    from .solvers import REGISTRY
+    keyed = [k for k in settings if k in REGISTRY]
+    if keyed and len(keyed) < len(settings):
+        raise BadInput(f"settings: mixes solver names ({', '.join(keyed)}) with setting names "
+                       f"({', '.join(k for k in settings if k not in REGISTRY)}); give one "
+                       "dict for all solvers or one per solver")
+    if not keyed:
+        return {n: dict(settings) for n in names}
+    for k, v in settings.items():
+        if k not in names:
+            raise BadInput(f"settings: {k!r} is not among the solvers run "
+                           f"({', '.join(names)})")
+        if not isinstance(v, dict):
+            raise BadInput(f"settings: {k}: expected a dict of settings, got {v!r}")
+    return {n: dict(settings.get(n, {})) for n in names}
+
+
+def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol=None,
+        integrator: str | None = None, out=None, record: bool | None = None,
+        timeout=None, max_output_gib=None, max_steps=None, params: dict | None = None,
+        log: Callable | None = None, **kw) -> TimeResult:
+    """Simulate a time-domain scene with each solver (default: every solver of the scene),
+    compare them pairwise, and return a `TimeResult`.
+
+    Scene parameters as keywords (`torque=3.2, t_end=5`) or `params={...}`. `settings`: one
+    dict for every solver or one per solver name (see `per_solver_settings`); `dt` / `rtol` /
+    `integrator` as `--dt` / `--rtol` / `--integrator`. `out`: write the run's files there
+    (default: nothing kept); `record`: the rerun recording and the report (default: when `out`
+    is given). `timeout`: wall-clock limit per solver (s). `log`: a callable for progress
+    lines (default: silent)."""
+    from . import solvers as registry
+    from .scenes import get_scene
+    from .workflows import budget, runner
+    sc = get_scene(scene)
+    if sc.kind != "time":
+        raise BadInput(f"scene {sc.name!r} is a frequency scene: use `xval modes {sc.name}`")
+    if out is not None:
+        check_out(str(out))
+    if record and out is None:
+        raise BadInput("record=True needs out=FOLDER (or call .save(path) on the result)")
+    dt, rtol = positive("--dt", dt), positive("--rtol", rtol)
+    if dt is not None and rtol is not None:
+        raise BadInput("--dt and --rtol: give one, not both")
+    timeout = positive("--timeout", timeout)
+    max_output_gib, max_steps = (positive("--max-output-gib", max_output_gib),
+                                 positive("--max-steps", max_steps))
+    overrides = _overrides(params, kw)
+    chosen = registry.pick(sc, _names(solvers))
+    extra = per_solver_settings(settings, chosen)
+    # the size of the work before the grid is built (resolve allocates it)
+    budget.check_output(sc, overrides, len(chosen), max_output_gib)
+    values = sc.resolve(overrides)
+    budget.check_dt(values, dt, max_steps)
+    # settings are resolved (and checked) for every solver before anything runs
+    t_out = sc.output_grid(values)
+    chosen_settings = {s.name: registry.settings_for(s, sc.name, dt, rtol, integrator,
+                                                     extra=extra[s.name], t_out=t_out)
+                       for s in chosen}
+    for s in chosen:
+        budget.check_steps(s.name, s.leaf(sc.name), values, chosen_settings[s.name],
+                           max_steps)
+    log = log or _quiet
+    if out is None:
+        out_dir, temporary = temporary_folder(), True
+    else:
+        make_out(str(out))
+        out_dir, temporary = runner.new_run_dir(out, sc.name), False
+    if rtol is not None:
+        for s in chosen:
+            if not getattr(s.leaf(sc.name), "ADAPTIVE", ()):
+                log(f"{s.name}: no error-controlled integrator, --rtol ignored (fixed step kept)")
+    keep = out is not None if record is None else record
+    try:
+        res = runner.run_scene(sc, values, chosen, lambda s: chosen_settings[s.name], out_dir,
+                               record=keep, report=keep, log=log, timeout_s=timeout)
+    except OSError as e:                 # disk full / read-only: one line, folder stays marked
+        from .workflows.guard import write_failure
+        if write_failure(e) is None:
+            raise
+        raise BadInput(f"{write_failure(e)}; {out_dir} is left marked incomplete") from None
+    return TimeResult(res, temporary)
+
+
+def modes(scene: str, solvers=None, *, out=None, params: dict | None = None,
+          log: Callable | None = None, **kw) -> ModesResult:
+    """Natural frequencies from every solver that linearises (default: all of the scene's),
+    matched mode by mode; the Campbell diagram and critical speeds where the scene sweeps, the
+    mode shapes where it draws them. Returns a `ModesResult`."""
+    from .workflows.modes import run_modes
+    overrides = _overrides(params, kw)
+    names = _names(solvers)
+    out, temporary = _out(out)
+    obj, results, comparisons = run_modes(scene, names, overrides, out, log=log or _quiet)
+    return ModesResult(obj, results, comparisons, Path(obj["report"]).parent, temporary)
+
+
+def bench(scene: str, solvers=None, *, repeats: int = 3, vary=None, out=None,
+          max_output_gib=None, max_steps=None, params: dict | None = None,
+          log: Callable | None = None, **kw) -> Summary:
+    """Work-precision sweep (`xval bench`): each solver along its accuracy knob, error of the
+    key channel against a tight reference, median wall time of `repeats` runs. `vary`: trade a
+    model parameter instead, as `"stiffness=1e5,1e6"` or `{"stiffness": [1e5, 1e6]}`."""
+    from .workflows.bench import run_bench
+    positive_int("--repeats", repeats)
+    max_output_gib, max_steps = (positive("--max-output-gib", max_output_gib),
+                                 positive("--max-steps", max_steps))
+    if isinstance(vary, dict):
+        if len(vary) != 1:
+            raise BadInput(f"--vary: one parameter, got {len(vary)}")
+        (name, values), = vary.items()
+        vary = f"{name}={','.join(repr(v) for v in values)}"
+    overrides = _overrides(params, kw)
+    out, temporary = _out(out)
+    obj = run_bench(scene, _names(solvers), overrides, out, repeats=repeats,
+                    log=log or _quiet, vary=vary, max_output_gib=max_output_gib,
+                    max_steps=max_steps, make_out=make_out)
+    return Summary("bench", obj, Path(obj["report"]).parent, temporary)
+
+
+def extremes(scene: str, solvers=None, *, include_slow: bool = False, timeout=None, out=None,
+             log: Callable | None = None) -> Summary:
+    """Every extreme case of the scene's spec with every solver (`xval extremes`; the long
+    cases with `include_slow=True`, the command's `--all`)."""
+    from .workflows.extremes import run_extremes
+    timeout = positive("--timeout", timeout)
+    names = _names(solvers)
+    out, temporary = _out(out)
+    obj = run_extremes(scene, names, out, include_slow=include_slow, timeout_s=timeout,
+                       log=log or _quiet)
+    return Summary("extremes", obj, Path(obj["report"]).parent, temporary)
+
+
+def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | None = None,
+             workers: int | None = None, timeout=None, out=None, verbose: bool = False,
+             max_output_gib=None, max_steps=None, progress: Callable | None = None,
+             checking: Callable = contextlib.nullcontext) -> Summary:
+    """A campaign (`xval campaign`): a .json/.toml file, a built-in name ("default", "long";
+    None is the default campaign) or the campaign as a dict (the file's shape). Stored results
+    are reused only in a folder given as `out`. `progress()`: a context giving the progress
+    view, entered once the plan is checked (compare.output.progress.progress_view; default
+    plain lines on stderr); `checking(text)`: a context shown while the plan is checked (the
+    command's spinner)."""
+    from .workflows import campaign as camp
+    if executor not in ("local", "dask"):
+        raise BadInput(f"--executor: {executor!r} is not local or dask")
+    positive_int("--workers", workers)
+    timeout = positive("--timeout", timeout)
+    max_output_gib, max_steps = (positive("--max-output-gib", max_output_gib),
+                                 positive("--max-steps", max_steps))
+    if out is not None:
+        check_out(str(out))
+    if scheduler and executor != "dask":
+        raise BadInput("--scheduler needs --executor dask")
+    source = path_or_dict
+    if isinstance(path_or_dict, dict):
+        camp.check_shape(path_or_dict, "campaign")
+    # everything is validated before the output folder is made or anything runs
+    with checking("checking the campaign, loading the models, planning the jobs …"):
+        loaded = path_or_dict if isinstance(path_or_dict, dict) else \
+            camp.load_campaign(path_or_dict)
+        camp.plan(loaded, "campaign" if isinstance(path_or_dict, dict)
+                  else (path_or_dict or "built-in campaign"), timeout, max_output_gib,
+                  max_steps)
+    if scheduler:                      # reachable before anything is written
+        with checking(f"connecting to {scheduler} …"):
+            camp.connect(scheduler).close()
+    out, temporary = (temporary_folder(), True) if out is None else (out, False)
+    make_out(str(out))
+    if isinstance(path_or_dict, dict):     # the run reads a file: the dict, written beside
+        from .atomic import write_json
+        source = Path(out) / f"{path_or_dict.get('name', 'campaign')}.campaign.json"
+        write_json(source, path_or_dict)
+        source = str(source)
+    with (progress or contextlib.nullcontext)() as view:
+        summary = camp.run_campaign(source, out, executor=executor, scheduler=scheduler,
+                                    workers=workers, timeout_s=timeout, verbose=verbose,
+                                    max_output_gib=max_output_gib, max_steps=max_steps,
+                                    view=view)
+    return Summary("campaign", summary, Path(summary["report"]).parent, temporary)
+
+
+def scenes() -> dict[str, list[str]]:
+    """Every scene (as `xval list` shows them) with the names of its solvers."""
+    from .scenes import SCENES
+    from .solvers import solvers_for
+    return {name: [s.name for s in solvers_for(name)] for name in SCENES}
+
+
+def show(scene: str) -> SceneInfo:
+    """A scene's parameters (default, unit, admissible range, meaning), channels and sources;
+    `str()` is what `xval show` prints, `.as_json()` what `xval show --json` prints."""
+    from .scenes import get_scene
+    return SceneInfo(get_scene(scene))
+
+
+def assert_agree(result, channels=None):
+    """Assert that every comparison of `result` (a run or modes result) on `channels`
+    (default: all) agrees; the failure message is the verdict table of the pairs that do
+    not — deviation, both solvers' error estimates, the allowance, what decided."""
+    if isinstance(channels, str):
+        channels = [channels]
+    msg = disagreement_message(result, channels)
+    if msg:
+        raise AssertionError(msg)

@@ -147,3 +147,18 @@ def _clean(x):
     if isinstance(x, float) and not np.isfinite(x):
         return None
     return x
+
+
+def diff_table(obj):
+    """The changes as a plain-text table (for a failing test's message)."""
+    rows = [("case", "solver", "channel", "Δ at worst", "error bars", "Δ / bars", "t [s]")]
+    for c in obj["cases"]:
+        for r in c.get("runs", []):
+            for ch in r.get("channels", []):
+                if ch["state"] == "changed":
+                    rows.append((c["case"], r["solver"], ch["channel"], _g(ch.get("delta")),
+                                 _g(ch.get("bound"), ".2g"), _g(ch.get("ratio"), ".3g"),
+                                 _g(ch.get("t"), ".6g")))
+    widths = [max(len(str(row[i])) for row in rows) for i in range(len(rows[0]))]
+    text = ["  ".join(str(v).ljust(w) for v, w in zip(row, widths)) for row in rows]
+    return "\n".join(obj["lines"] + [""] + text)

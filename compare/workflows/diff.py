@@ -186,7 +186,9 @@ def compare_maps(mo, mn):
 
 # --- the diff ---------------------------------------------------------------------------------
 
-def _pair_cases(old: Side, new: Side):
+def pair_cases(old: Side, new: Side):
+    """Case names of `old` → those of `new`; BadInput when the same name holds different
+    scenes or nothing is in common."""
     common = [n for n in old.cases if n in new.cases]
     if not common and len(old.cases) == 1 and len(new.cases) == 1:
         (a, ca), (b, cb) = next(iter(old.cases.items())), next(iter(new.cases.items()))
@@ -215,7 +217,7 @@ def _unit(scene, ch):
 
 def diff(old: Side, new: Side, keep_plots=True):
     """The diff as a dict (the JSON document) and the plot data of changed channels."""
-    pairs = _pair_cases(old, new)
+    pairs = pair_cases(old, new)
     cases, plots = [], {}
     for name in old.cases:
         if name not in pairs:
@@ -340,10 +342,10 @@ def change_lines(obj):
 
 
 def run_diff(old_path, new_path, out=None, plots=True):
-    """Load both sides, diff them, write report.md / diff.json / plots under `out` (when
-    given). Returns the JSON document."""
+    """Load both sides (paths, or Sides loaded already), diff them, write report.md /
+    diff.json / plots under `out` (when given). Returns the JSON document."""
     t0 = time.perf_counter()
-    old, new = load_side(old_path), load_side(new_path)
+    old, new = (x if isinstance(x, Side) else load_side(x) for x in (old_path, new_path))
     obj, arrays = diff(old, new, keep_plots=plots and out is not None)
     obj["wall_s"] = round(time.perf_counter() - t0, 3)
     if out is not None:
@@ -355,3 +357,16 @@ def run_diff(old_path, new_path, out=None, plots=True):
 def new_diff_dir(out):
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
     return Path(out) / "diff" / f"{stamp}-{os.getpid()}"
+
+
+def check_baseline(folder, baseline):
+    """For tests: None when the run or campaign `folder` matches `baseline` within the error
+    bars; else the diff table (text). A missing baseline file is written from `folder` and
+    reported as such (the caller skips: review and commit it)."""
+    from ..output.diff_report import diff_table
+    from .sides import save_baseline
+    if not Path(baseline).exists():
+        save_baseline(folder, baseline)
+        return None, f"baseline written to {baseline}: review and commit it"
+    obj = run_diff(baseline, folder, out=None)
+    return (diff_table(obj) if obj["any_change"] else None), None

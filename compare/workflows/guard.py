@@ -57,18 +57,6 @@ def write_failure(e: OSError):
     return f"cannot write {e.filename or 'a file'}: {e.strerror or os.strerror(e.errno)}"
 
 
-def output_error(e: OSError):
-    """The exception to raise for a failed write: BadInput with the one line (exit 2, the
-    contract's status for an output location that cannot take the files — as for an --out
-    that is not writable) when the disk is full or read-only, else `e` itself."""
-    line = write_failure(e)
-    if line is None:
-        return e
-    where = Path(e.filename).parent if e.filename else None
-    return BadInput(line + (f"; {where} is left marked incomplete"
-                            if where is not None and is_incomplete(where) else ""))
-
-
 def _now():
     return datetime.datetime.now().astimezone().isoformat(timespec="seconds")
 

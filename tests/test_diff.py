@@ -1,0 +1,215 @@
+"""`xval diff` and baselines on a tiny campaign (2 cases × 2 rotor solvers, 0.5 s each) run
+three times: twice as is (A, B) and once with the drive torque of one case changed by 1e-6
+relative (C, from a copy of A: only that case's jobs run again)."""
+import json
+import shutil
+
+import numpy as np
+import pytest
+from conftest import xval
+
+from compare.scenes import get_scene
+from compare.workflows import diff as diff_mod
+from compare.workflows import sides
+
+TORQUE = 2.0
+TINY = """name = "tiny"
+[[cases]]
+name = "spin"
+scene = "rotor-spinup"
+solvers = ["euler-vector", "quaternion"]
+set = { t_end = 0.5 }
+[[cases]]
+name = "drive"
+scene = "rotor-spinup"
+solvers = ["euler-vector", "quaternion"]
+set = { t_end = 0.5, torque = %r }
+"""
+
+
+@pytest.fixture(scope="module")
+def folders(tmp_path_factory):
+    root = tmp_path_factory.mktemp("diff")
+    (root / "tiny.toml").write_text(TINY % TORQUE)
+    (root / "moved.toml").write_text(TINY % (TORQUE * (1 + 1e-6)))
+    for name in ("A", "B"):
+        rc, so, se = xval("campaign", str(root / "tiny.toml"), "--out", str(root / name))
+        assert rc == 0, se
+    shutil.copytree(root / "A", root / "C")
+    rc, so, se = xval("campaign", str(root / "moved.toml"), "--out", str(root / "C"))
+    assert rc == 0, se
+    assert "2 run, 2 reused" in so            # only the changed case ran again
+    return {k: root / k / "campaign" / "tiny" for k in "ABC"} | {"root": root}
+
+
+def _diff(old, new, out):
+    rc, so, se = xval("diff", str(old), str(new), "--json", "--out", str(out))
+    return rc, (json.loads(so) if so.strip() else None), se
+
+
+def _channels(obj, case, solver):
+    c = next(c for c in obj["cases"] if c["case"] == case)
+    return {ch["channel"]: ch for r in c["runs"] if r["solver"] == solver
+            for ch in r["channels"]}
+
+
+def test_same_campaign_twice_nothing_changed(folders, tmp_path):
+    rc, obj, se = _diff(folders["A"], folders["B"], tmp_path)
+    assert rc == 0, se
+    n_channels = len(get_scene("rotor-spinup").channels)
+    assert obj["summary"]["changed"] == 0 and obj["summary"]["unchanged"] == 4
+    assert obj["summary"]["channels_unchanged"] == 4 * n_channels
+    assert obj["lines"] == []
+
+
+def test_torque_moved_by_1e_6_only_that_case_changed(folders, tmp_path):
+    rc, obj, se = _diff(folders["A"], folders["C"], tmp_path)
+    assert rc == 1, se
+    states = {c["case"]: c["state"] for c in obj["cases"]}
+    assert states == {"spin": "unchanged", "drive": "changed"}
+    drive = next(c for c in obj["cases"] if c["case"] == "drive")
+    assert drive["inputs"] == [f"torque 2 → {TORQUE * (1 + 1e-6):.10g}"]
+    assert len(obj["lines"]) == 2 and all(ln.startswith("torque 2 → 2.000002: drive ")
+                                          for ln in obj["lines"])
+    # before resonance the spin obeys I_p dω_z/dt = τ: Δω_z(t_end) = Δτ t_end / (m R²/2)
+    sc = get_scene("rotor-spinup")
+    p = sc.resolve({"t_end": 0.5})
+    expect = TORQUE * 1e-6 * 0.5 / (p["m"] * p["R"] ** 2 / 2)
+    for solver in ("euler-vector", "quaternion"):
+        ch = _channels(obj, "drive", solver)
+        assert ch["spin_rate"]["state"] == "changed"
+        # 1.0e-3 below it measured: the 5 mm eccentricity tilts the disk, and the torque
+        # about the fixed z axis drives the spin about the tilted body axis a little less
+        assert ch["spin_rate"]["max_abs"] == pytest.approx(expect, rel=3e-3)
+        # the size and its error bars, recomputed here from the two stored trajectories
+        a = np.load(folders["A"] / "drive" / f"{solver}.npz")
+        c = np.load(folders["C"] / "drive" / f"{solver}.npz")
+        for name in ("spin_rate", "omega_norm"):
+            d = c[name] - a[name]
+            scale = max(np.abs(a[name]).max(), np.abs(c[name]).max())
+            bound = np.abs(a[f"error.{name}"]) + np.abs(c[f"error.{name}"]) + 1e-9 * scale
+            k = np.argmax(np.abs(d) / bound)
+            assert ch[name]["max_abs"] == pytest.approx(np.abs(d).max(), rel=1e-12)
+            assert ch[name]["bound"] == pytest.approx(bound[k], rel=1e-12)
+            assert ch[name]["t"] == pytest.approx(a["t"][k])
+    assert (tmp_path / "diff").exists()
+    (report,) = (tmp_path / "diff").glob("*/report.md")
+    text = report.read_text()
+    assert text.index("| runs (case × solver) | changed | unchanged | new | gone |") \
+        < text.index("## spin")
+    assert len(list(report.parent.glob("drive__*.png"))) == obj["summary"]["channels_changed"]
+
+
+def _rewrite(npz, edit):
+    """Rewrite a stored trajectory in place with `edit(arrays, meta)` applied."""
+    with np.load(npz) as z:
+        arrays = {k: z[k] for k in z.files}
+    meta = json.loads(str(arrays["meta"]))
+    edit(arrays, meta)
+    arrays["meta"] = np.array(json.dumps(meta))
+    npz.unlink()                              # a hard link into jobs/: break it
+    with open(npz, "wb") as f:
+        np.savez(f, **arrays)
+
+
+def test_a_faked_package_version_is_named_with_both_versions(folders, tmp_path):
+    d = tmp_path / "D"
+    shutil.copytree(folders["B"], d)
+    npz = d / "spin" / "quaternion.npz"
+    real = json.loads(str(np.load(npz)["meta"]))["versions"]["numpy"]
+    _rewrite(npz, lambda a, m: m["versions"].update(numpy="9.9.9"))
+    rc, obj, se = _diff(folders["B"], d, tmp_path / "o1")
+    assert rc == 0, se                        # the same numbers: nothing moved
+    assert obj["notes"] == [f"numpy {real} → 9.9.9: spin quaternion unchanged within its "
+                            f"error bars"]
+
+    def moved(a, m):                          # and now the numbers moved from mid-run on
+        half = len(a["t"]) // 2
+        a["omega_norm"][half:] *= 1 + 1e-6
+    _rewrite(npz, moved)
+    rc, obj, se = _diff(folders["B"], d, tmp_path / "o2")
+    assert rc == 1, se
+    (line,) = obj["lines"]
+    assert line.startswith(f"numpy {real} → 9.9.9: spin quaternion omega_norm moved")
+
+
+def test_baseline_is_compact_and_catches_a_1e_6_change_mid_trajectory(folders, tmp_path):
+    base = tmp_path / "base.npz"
+    rc, so, se = xval("baseline", "save", str(folders["A"]), str(base), "--json")
+    assert rc == 0, se
+    raw = sum(f.stat().st_size for f in folders["A"].glob("*/*.npz"))
+    assert base.stat().st_size < raw
+    rc, obj, se = _diff(base, folders["B"], tmp_path / "o1")
+    assert rc == 0 and obj["summary"]["changed"] == 0, se
+    rc, obj, se = _diff(base, folders["C"], tmp_path / "o2")
+    assert rc == 1 and {c["case"]: c["state"] for c in obj["cases"]} == \
+        {"spin": "unchanged", "drive": "changed"}
+    d = tmp_path / "D"
+    shutil.copytree(folders["A"], d)
+    t_mid = []
+
+    def bump(a, m):                           # tilt × (1 + 1e-6) over 10 samples mid-run
+        i = len(a["t"]) // 2 + 3
+        a["tilt"][i:i + 10] *= 1 + 1e-6
+        t_mid.append(a["t"][i])
+    _rewrite(d / "spin" / "euler-vector.npz", bump)
+    rc, obj, se = _diff(base, d, tmp_path / "o3")
+    assert rc == 1, se
+    ch = _channels(obj, "spin", "euler-vector")
+    assert [k for k, v in ch.items() if v["state"] == "changed"] == ["tilt"]
+    assert t_mid[0] <= ch["tilt"]["t"] <= t_mid[0] + 10 * 0.01
+
+
+def test_float32_would_not_do_for_a_baseline(folders):
+    """The reason baselines keep float64: float32's rounding (6e-8 relative) is larger than
+    the solvers' own error bars, so a float32 baseline would flag unchanged runs."""
+    side = sides.load_side(folders["A"])
+    worst = 0.0
+    for c in side.cases.values():
+        for r in c.runs.values():
+            for s in r.series().values():
+                rounded = s.x.astype(np.float32).astype(float)
+                scale = np.abs(s.x).max()
+                bound = 2 * np.abs(s.err) + diff_mod.FLOOR_REL * scale
+                worst = max(worst, float(np.max(np.abs(rounded - s.x) / bound)))
+    assert worst > 10
+
+
+def test_bad_input_one_line_exit_2(folders, tmp_path):
+    rc, _, se = _diff(tmp_path, folders["A"], tmp_path / "o")
+    assert rc == 2 and "not a campaign folder" in se and len(se.strip().splitlines()) == 1
+    d = tmp_path / "D"
+    shutil.copytree(folders["A"], d)
+    summary = json.loads((d / "summary.json").read_text())
+    summary["cases"][0]["scene"] = "press"
+    (d / "summary.json").write_text(json.dumps(summary))
+    rc, _, se = _diff(folders["A"], d, tmp_path / "o")
+    assert rc == 2 and "different scenes" in se and len(se.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
+    (d / "summary.json").unlink()
+    rc, _, se = _diff(folders["A"], d, tmp_path / "o")
+    assert rc == 2 and "incomplete campaign folder" in se
+
+
+def test_campaign_with_baseline_exits_1_when_results_moved(folders, tmp_path):
+    base = tmp_path / "base.npz"
+    sides.save_baseline(folders["A"], base)
+    shutil.copytree(folders["root"] / "C", tmp_path / "C")
+    rc, so, se = xval("campaign", str(folders["root"] / "moved.toml"), "--out",
+                      str(tmp_path / "C"), "--baseline", str(base))
+    assert rc == 1, se
+    assert "torque 2 → 2.000002: drive euler-vector" in so
+    assert (tmp_path / "C" / "campaign" / "tiny" / "diff" / "report.md").exists()
+
+
+def test_pytest_helper_fails_with_the_diff_table(folders, tmp_path):
+    plugin = pytest.importorskip("compare.pytest_plugin")
+    base = tmp_path / "base.npz"
+    with pytest.raises(pytest.skip.Exception, match="baseline written"):
+        plugin.assert_matches_baseline(folders["A"], base)      # first time: written
+    assert base.exists()
+    plugin.assert_matches_baseline(folders["B"], base)          # same numbers: passes
+    with pytest.raises(pytest.fail.Exception) as e:
+        plugin.assert_matches_baseline(folders["C"], base)
+    assert "torque 2 → 2.000002: drive euler-vector" in str(e.value)
+    assert "spin_rate" in str(e.value)

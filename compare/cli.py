@@ -180,6 +180,10 @@ def build_parser():
     sp.add_argument("--verbose", action="store_true",
                     help="show each job's engine messages (banners, warnings) as it finishes; "
                          "they are always in the job's log and the report")
+    sp.add_argument("--baseline", metavar="DIR",
+                    help="after the run, diff against this campaign folder or baseline file "
+                         "(report in <campaign>/diff/; exit 1 when results moved beyond "
+                         "their error bars)")
     _budget_options(sp)
 
     sp = sub.add_parser("bench", help="speed/accuracy (work-precision) sweep",
@@ -217,7 +221,70 @@ def build_parser():
     sp.add_argument("--out", default="logs", metavar="DIR", help=out_help)
     sp.add_argument("--json", action="store_true",
                     help="print one JSON object on standard output")
+    sp = sub.add_parser("diff", help="which results moved between two campaigns, runs or "
+                        "baselines, against their own error bars",
+                        description="Compare two campaign folders, run folders or baselines: "
+                                    "every case × solver × channel (modes, critical speeds, map "
+                                    "boundaries) against the runs' own error estimates, with "
+                                    "what differs in the inputs. Exit 0 nothing changed, 1 "
+                                    "changes found, 2 bad input.")
+    sp.add_argument("old", help="campaign folder, run folder or baseline file")
+    sp.add_argument("new", help="campaign folder, run folder or baseline file")
+    sp.add_argument("--out", default="logs", metavar="DIR",
+                    help="the report goes to DIR/diff/<time>-<pid>/ (default: logs)")
+    sp.add_argument("--json", action="store_true", help="print the diff as one JSON object")
+    sp = sub.add_parser("baseline", help="save a compact baseline of a campaign or run folder",
+                        description="`xval baseline save DIR OUT`: a compact, committable "
+                                    "baseline (.npz) of a campaign or run folder for `xval "
+                                    "diff`.")
+    bsub = sp.add_subparsers(dest="action", required=True, parser_class=_Parser,
+                             metavar="ACTION")
+    bp = bsub.add_parser("save", help="write the baseline of DIR to OUT")
+    bp.add_argument("folder", help="campaign folder or run folder")
+    bp.add_argument("target", help="baseline file to write (.npz)")
+    bp.add_argument("--json", action="store_true", help="print one JSON object")
     return p
+
+
+def cmd_diff(args):
+    from .workflows.diff import new_diff_dir, pair_cases, run_diff
+    from .workflows.sides import load_side
+    check_out(args.out)
+    old, new = load_side(args.old), load_side(args.new)
+    pair_cases(old, new)                             # bad input before anything is written
+    make_out(args.out)
+    obj = run_diff(old, new, new_diff_dir(args.out))
+    _print_diff(obj, args.json)
+    return 1 if obj["any_change"] else 0
+
+
+def _print_diff(obj, as_json):
+    if as_json:
+        emit_json(obj)
+        return
+    s = obj["summary"]
+    print(f"{s['changed']} changed, {s['unchanged']} unchanged, {s['new']} new, {s['gone']} "
+          f"gone (runs); {s['channels_changed']} channels changed")
+    for line in obj["lines"]:
+        print(line)
+    for line in obj["notes"][:20]:
+        print(f"note: {line}")
+    print(f"report: {obj['report']}")
+
+
+def cmd_baseline(args):
+    from .workflows.sides import save_baseline
+    target = os.path.abspath(args.target)
+    if os.path.isdir(target):
+        raise BadInput(f"{args.target}: is a folder; name the baseline file to write")
+    check_out(os.path.dirname(target))
+    obj = save_baseline(args.folder, target)
+    if args.json:
+        emit_json(obj)
+    else:
+        print(f"baseline {obj['baseline']}: {obj['bytes'] / 1e6:.2f} MB, {obj['cases']} cases, "
+              f"{obj['samples_kept']} of {obj['samples_full']} samples kept")
+    return 0
 
 
 def cmd_extremes(args):
@@ -322,7 +389,9 @@ def cmd_campaign(args):
               f"{summary['n_reused']} reused), {summary['n_failed']} cases with a failed "
               f"solver, {summary['n_crashed']} crashed jobs; {summary['wall_s']:.1f} s")
         print(f"report: {summary['report']}")
-    return 3 if summary["n_crashed"] else 0
+    if summary["n_crashed"]:
+        return 3
+    return 1 if summary.get("diff", {}).get("any_change") else 0
 
 
 def cmd_bench(args):
@@ -340,7 +409,8 @@ def cmd_bench(args):
 
 
 COMMANDS = {"list": cmd_list, "show": cmd_show, "run": cmd_run, "modes": cmd_modes,
-            "campaign": cmd_campaign, "bench": cmd_bench, "extremes": cmd_extremes}
+            "campaign": cmd_campaign, "bench": cmd_bench, "extremes": cmd_extremes,
+            "diff": cmd_diff, "baseline": cmd_baseline}
 
 
 def main(argv=None):

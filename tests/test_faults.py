@@ -12,11 +12,10 @@ import time
 from pathlib import Path
 
 import numpy as np
+from conftest import xval
 
 from compare.cli import main
 from compare.workflows import guard
-
-from conftest import xval
 
 # one job of euler-vector at dt 1e-5 over 20 s (RK4, error estimate at half the step) takes
 # ~3 s on this machine: long enough to interrupt or to overlap a second process

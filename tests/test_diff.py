@@ -213,3 +213,37 @@ def test_pytest_helper_fails_with_the_diff_table(folders, tmp_path):
         plugin.assert_matches_baseline(folders["C"], base)
     assert "torque 2 → 2.000002: drive euler-vector" in str(e.value)
     assert "spin_rate" in str(e.value)
+
+
+def test_frequencies_and_critical_speeds_against_the_relative_floor():
+    f = [1.0, 10.0, 100.0]
+    old = sides.RunRec("mstmm", frequencies=f, labels=["a", "b", "c"])
+    new = sides.RunRec("mstmm", frequencies=[1.0, 10.0 * (1 + 2e-8), 100.0 * (1 + 5e-9)],
+                       labels=["a", "b", "c"])
+    rows = diff_mod.compare_modes(old, new, {"fw": 40.0}, {"fw": 40.0 * (1 + 3e-8)})
+    assert [r["state"] for r in rows] == ["unchanged", "changed", "unchanged", "changed"]
+    assert rows[1]["max_abs"] == pytest.approx(2e-7, rel=1e-6)
+    fewer = sides.RunRec("mstmm", frequencies=f[:2], labels=["a", "b"])
+    assert diff_mod.compare_modes(old, fewer, {}, {})[0] == \
+        {"channel": "number of modes", "state": "changed", "old": 3, "new": 2,
+         "ratio": np.inf}
+
+
+def test_map_boundaries_move_only_beyond_their_brackets(folders, tmp_path):
+    def with_map(name, x):
+        d = tmp_path / name
+        shutil.copytree(folders["A"], d)
+        (d / "capture-map").mkdir()
+        (d / "capture-map" / "map.json").write_text(json.dumps(
+            {"scene": "rotor-spinup", "boundaries": {"quaternion": [
+                {"x": x, "y": None, "bracket": [x - 0.002, x + 0.002], "from": "capture",
+                 "to": "passage"}]}}))
+        return d
+    a = with_map("a", 3.05)
+    rc, obj, se = _diff(a, with_map("b", 3.0535), tmp_path / "o1")   # 3.5e-3 < 2e-3 + 2e-3
+    assert rc == 0, se
+    assert obj["maps"][0]["state"] == "unchanged"
+    rc, obj, se = _diff(a, with_map("c", 3.0545), tmp_path / "o2")   # 4.5e-3 > 4e-3
+    assert rc == 1, se
+    assert obj["lines"] == ["map capture-map quaternion crossing 1 capture→passage: 3.05 → "
+                            "3.0545 (moved 0.0045 against brackets 0.004)"]

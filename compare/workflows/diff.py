@@ -302,8 +302,8 @@ RULE = (f"changed when |new − old| exceeds, at some instant, the sum of both r
         f"against {FREQ_REL:g} relative; map crossings against their brackets")
 
 
-def _g(x):
-    return "—" if x is None else (f"{x:.2g}" if isinstance(x, float) else str(x))
+def _g(x, spec=".2g"):
+    return "—" if x is None else (format(x, spec) if isinstance(x, float) else str(x))
 
 
 def change_lines(obj):
@@ -327,7 +327,7 @@ def change_lines(obj):
                 what = (f"{w['channel']} moved {_g(w['delta'])}{unit} against error bars "
                         f"{_g(w['bound'])}")
             else:
-                what = f"{w['channel']} {_g(w.get('old'))} → {_g(w.get('new'))}" + (
+                what = f"{w['channel']} {_g(w.get('old'), '.8g')} → {_g(w.get('new'), '.8g')}" + (
                     f" ({w['note']})" if w.get("note") else "")
             more = f" (+{len(moved) - 1} more channels)" if len(moved) > 1 else ""
             lines.append(f"{why}: {c['case']} {r['solver']} {what}{more}")
@@ -335,9 +335,15 @@ def change_lines(obj):
             lines.append(f"{c['case']}: verdict {f['a']}–{f['b']} {f['channel']} "
                          f"{f['old']} → {f['new']}")
     for m in obj["maps"]:
-        if m["state"] != "unchanged":
-            lines.append(f"map {m['map']}" + (f" {m['solver']}" if m.get("solver") else "")
-                         + f": {m['state']}")
+        where = f"map {m['map']}" + (f" {m['solver']}" if m.get("solver") else "")
+        if m["state"] in ("new", "gone"):
+            lines.append(f"{where}: {m['state']}")
+        for ch in m.get("channels", []):
+            if ch["state"] == "changed":
+                lines.append(f"{where} {ch['channel']}: {_g(ch.get('old'), '.8g')} → "
+                             f"{_g(ch.get('new'), '.8g')}" + (f" (moved {_g(ch['delta'])} against "
+                                                       f"brackets {_g(ch['bound'])})"
+                                                       if "delta" in ch else ""))
     return lines
 
 

@@ -10,6 +10,7 @@ nothing under logs/); `result.save(path)` writes the files then.
 from __future__ import annotations
 
 import contextlib
+import shutil
 from collections.abc import Callable
 from pathlib import Path
 
@@ -50,12 +51,24 @@ def _quiet(msg):
     pass
 
 
+@contextlib.contextmanager
+def _removed_on_error(temporary):
+    """A temporary folder does not outlive a call that fails."""
+    try:
+        yield
+    except BaseException:
+        if temporary:
+            shutil.rmtree(temporary, ignore_errors=True)
+        raise
+
+
 def _out(out):
-    """(folder, temporary): `out` checked, or a fresh temporary folder."""
+    """(folder, temporary folder or None): `out` checked, or a fresh temporary folder."""
     if out is None:
-        return temporary_folder(), True
+        tmp = temporary_folder()
+        return tmp, tmp
     check_out(str(out))
-    return str(out), False
+    return str(out), None
 
 
 def per_solver_settings(settings: dict | None, chosen) -> dict:
@@ -86,17 +99,20 @@ def per_solver_settings(settings: dict | None, chosen) -> dict:
 
 def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol=None,
         integrator: str | None = None, out=None, record: bool | None = None,
-        timeout=None, max_output_gib=None, max_steps=None, params: dict | None = None,
-        log: Callable | None = None, **kw) -> TimeResult:
+        timeout=None, max_output_gib=None, max_steps=None, estimate_errors: bool = True,
+        params: dict | None = None, log: Callable | None = None, **kw) -> TimeResult:
     """Simulate a time-domain scene with each solver (default: every solver of the scene),
     compare them pairwise, and return a `TimeResult`.
 
     Scene parameters as keywords (`torque=3.2, t_end=5`) or `params={...}`. `settings`: one
-    dict for every solver or one per solver name (see `per_solver_settings`); `dt` / `rtol` /
-    `integrator` as `--dt` / `--rtol` / `--integrator`. `out`: write the run's files there
-    (default: nothing kept); `record`: the rerun recording and the report (default: when `out`
-    is given). `timeout`: wall-clock limit per solver (s). `log`: a callable for progress
-    lines (default: silent)."""
+    dict for every solver or one per solver name (see `per_solver_settings`), passed to the
+    leaves as they are; `dt` / `rtol` / `integrator` as `--dt` / `--rtol` / `--integrator`
+    (which also switch an adaptive default to a fixed-step method and back). `out`: write the
+    run's files there (default: nothing kept); `record`: the rerun recording (default: when
+    `out` is given; the report is written whenever `out` is). `timeout`: wall-clock limit per
+    solver (s). `estimate_errors=False` skips the tighter rerun that estimates each solver's
+    own error (half the time; the verdicts then weigh the deviation against the scene's
+    allowance alone). `log`: a callable for progress lines (default: silent)."""
     from . import solvers as registry
     from .scenes import get_scene
     from .workflows import budget, runner
@@ -130,18 +146,21 @@ def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol
                            max_steps)
     log = log or _quiet
     if out is None:
-        out_dir, temporary = temporary_folder(), True
+        out_dir = temporary = temporary_folder()
     else:
         make_out(str(out))
-        out_dir, temporary = runner.new_run_dir(out, sc.name), False
+        out_dir, temporary = runner.new_run_dir(out, sc.name), None
     if rtol is not None:
         for s in chosen:
             if not getattr(s.leaf(sc.name), "ADAPTIVE", ()):
                 log(f"{s.name}: no error-controlled integrator, --rtol ignored (fixed step kept)")
-    keep = out is not None if record is None else record
+    kept = out is not None                 # the report whenever files are kept, as `xval run`
     try:
-        res = runner.run_scene(sc, values, chosen, lambda s: chosen_settings[s.name], out_dir,
-                               record=keep, report=keep, log=log, timeout_s=timeout)
+        with _removed_on_error(temporary):
+            res = runner.run_scene(sc, values, chosen, lambda s: chosen_settings[s.name],
+                                   out_dir, record=kept if record is None else record,
+                                   report=kept, log=log,
+                                   timeout_s=timeout, estimate_errors=estimate_errors)
     except OSError as e:                 # disk full / read-only: one line, folder stays marked
         from .workflows.guard import write_failure
         if write_failure(e) is None:
@@ -159,7 +178,9 @@ def modes(scene: str, solvers=None, *, out=None, params: dict | None = None,
     overrides = _overrides(params, kw)
     names = _names(solvers)
     out, temporary = _out(out)
-    obj, results, comparisons = run_modes(scene, names, overrides, out, log=log or _quiet)
+    with _removed_on_error(temporary):
+        obj, results, comparisons = run_modes(scene, names, overrides, out,
+                                              log=log or _quiet)
     return ModesResult(obj, results, comparisons, Path(obj["report"]).parent, temporary)
 
 
@@ -180,9 +201,10 @@ def bench(scene: str, solvers=None, *, repeats: int = 3, vary=None, out=None,
         vary = f"{name}={','.join(repr(v) for v in values)}"
     overrides = _overrides(params, kw)
     out, temporary = _out(out)
-    obj = run_bench(scene, _names(solvers), overrides, out, repeats=repeats,
-                    log=log or _quiet, vary=vary, max_output_gib=max_output_gib,
-                    max_steps=max_steps, make_out=make_out)
+    with _removed_on_error(temporary):
+        obj = run_bench(scene, _names(solvers), overrides, out, repeats=repeats,
+                        log=log or _quiet, vary=vary, max_output_gib=max_output_gib,
+                        max_steps=max_steps, make_out=make_out)
     return Summary("bench", obj, Path(obj["report"]).parent, temporary)
 
 
@@ -194,8 +216,9 @@ def extremes(scene: str, solvers=None, *, include_slow: bool = False, timeout=No
     timeout = positive("--timeout", timeout)
     names = _names(solvers)
     out, temporary = _out(out)
-    obj = run_extremes(scene, names, out, include_slow=include_slow, timeout_s=timeout,
-                       log=log or _quiet)
+    with _removed_on_error(temporary):
+        obj = run_extremes(scene, names, out, include_slow=include_slow, timeout_s=timeout,
+                           log=log or _quiet)
     return Summary("extremes", obj, Path(obj["report"]).parent, temporary)
 
 
@@ -233,14 +256,14 @@ def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | Non
     if scheduler:                      # reachable before anything is written
         with checking(f"connecting to {scheduler} …"):
             camp.connect(scheduler).close()
-    out, temporary = (temporary_folder(), True) if out is None else (out, False)
+    out, temporary = _out(out)
     make_out(str(out))
     if isinstance(path_or_dict, dict):     # the run reads a file: the dict, written beside
         from .atomic import write_json
         source = Path(out) / f"{path_or_dict.get('name', 'campaign')}.campaign.json"
         write_json(source, path_or_dict)
         source = str(source)
-    with (progress or contextlib.nullcontext)() as view:
+    with _removed_on_error(temporary), (progress or contextlib.nullcontext)() as view:
         summary = camp.run_campaign(source, out, executor=executor, scheduler=scheduler,
                                     workers=workers, timeout_s=timeout, verbose=verbose,
                                     max_output_gib=max_output_gib, max_steps=max_steps,

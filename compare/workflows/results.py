@@ -81,11 +81,11 @@ class _Folder:
     """Where a result's files are. A run made without `out` works in a temporary folder that
     goes away with the result object (nothing is left under logs/); `.save(path)` keeps it."""
 
-    def __init__(self, out_dir, temporary: bool):
+    def __init__(self, out_dir, temporary=None):
         self.out_dir = Path(out_dir) if out_dir else None
-        self.temporary = temporary
-        if temporary and out_dir:
-            weakref.finalize(self, shutil.rmtree, str(out_dir), True)
+        self.temporary = temporary             # the temporary folder holding out_dir, if any
+        if temporary:
+            weakref.finalize(self, shutil.rmtree, str(temporary), True)
 
 
 def temporary_folder() -> Path:
@@ -134,7 +134,7 @@ class TimeResult:
     `.errors[...]` — the solver's own error estimate on the grid —, `.status`, `.wall_s`,
     `.settings`, `.stats`), the pairwise `comparisons` with their verdicts, the `findings`."""
 
-    def __init__(self, result: RunResult, temporary: bool = False):
+    def __init__(self, result: RunResult, temporary=None):
         self.result = result
         self.scene = result.scene.name
         self.params = result.params
@@ -250,7 +250,7 @@ class ModesResult:
     FREQ_HEADER = ["solver", "status", "wall [s]", "frequencies [Hz] (labels)"]
 
     def __init__(self, obj: dict, results: list, comparisons: list, out_dir,
-                 temporary: bool = False):
+                 temporary=None):
         self._obj = obj
         self.scene = obj["scene"]
         self.params = obj["params"]
@@ -357,7 +357,7 @@ class Summary:
     """`xval.bench/extremes/campaign(...)`: the dict `--json` prints (`s["..."]`, `.data`),
     the lines the command prints (`str(s)`), the report's path and `.save(path)`."""
 
-    def __init__(self, kind: str, data: dict, out_dir, temporary: bool = False):
+    def __init__(self, kind: str, data: dict, out_dir, temporary=None):
         self.kind, self.data = kind, data
         self._folder = _Folder(out_dir, temporary)
 
@@ -399,7 +399,7 @@ class Summary:
         """The folder the command writes (report, plots, result/summary JSON), copied to
         `path`; the paths in `data` follow."""
         dest, self.data = copy_folder(self._folder.out_dir, path, self.data)
-        self._folder = _Folder(dest, False)
+        self._folder = _Folder(dest)
         return dest
 
 

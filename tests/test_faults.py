@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pytest
 from conftest import xval
 
 from compare.cli import main
@@ -161,3 +162,26 @@ def _children_of(pid):
             if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
                 out.append(int(d.name))
     return out
+
+
+def test_disk_full_on_a_real_300k_tmpfs(tmp_path):
+    """The issue's reproduction: `xval run rotor-spinup` into a 300 KB tmpfs (root only)."""
+    small = tmp_path / "small"
+    small.mkdir()
+    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=300k", "tmpfs",
+                                            str(small)], capture_output=True).returncode:
+        pytest.skip("cannot mount a tmpfs here (needs root)")
+    try:
+        rc, so, se = xval("run", "rotor-spinup", "--out", str(small))
+        assert rc == 2
+        (line,) = [ln for ln in se.splitlines() if ln.startswith("xval: error:")]
+        assert os.strerror(errno.ENOSPC) in line and ".npz" in line and "Traceback" not in se
+        (run,) = (small / "runs").iterdir()
+        written = {p.name for p in run.iterdir()}
+        assert "INCOMPLETE" in written and "result.json" not in written
+        assert not [n for n in written if n.startswith(".")]     # no temporary left
+        for n in written - {"INCOMPLETE"}:                        # what is there is whole
+            with np.load(run / n) as z:
+                assert len(z["t"]) == len(z["omega_norm"])
+    finally:
+        subprocess.run(["umount", str(small)], check=True)

@@ -362,26 +362,34 @@ def cmd_modes(args):
 
 
 def cmd_campaign(args):
+    from . import api
     from .output.progress import busy, progress_view
-    from .workflows.campaign import load_campaign, plan, run_campaign
+    from .workflows.campaign import Interrupted
     check_out(args.out)
-    if args.scheduler and args.executor != "dask":
-        raise BadInput("--scheduler needs --executor dask")
-    # everything is validated before the output folder is made or anything runs
-    with busy("checking the campaign, loading the models, planning the jobs …"):
-        plan(load_campaign(args.file), args.file or "built-in campaign", args.timeout,
-             args.max_output_gib, args.max_steps)
-    if args.scheduler:                 # reachable before anything is written
-        from .workflows.campaign import connect
-        with busy(f"connecting to {args.scheduler} …"):
-            connect(args.scheduler).close()
-    make_out(args.out)
-    with stdout_to_stderr(), progress_view() as view:
-        summary = run_campaign(args.file, args.out, executor=args.executor,
-                               scheduler=args.scheduler, workers=args.workers,
-                               timeout_s=args.timeout, verbose=args.verbose,
-                               max_output_gib=args.max_output_gib, max_steps=args.max_steps,
-                               view=view)
+    if args.baseline:                  # bad input before anything is written
+        from .workflows.sides import load_side
+        load_side(args.baseline)
+    try:
+        with stdout_to_stderr():
+            summary = api.campaign(args.file, executor=args.executor, scheduler=args.scheduler,
+                                   workers=args.workers, timeout=args.timeout, out=args.out,
+                                   verbose=args.verbose, max_output_gib=args.max_output_gib,
+                                   max_steps=args.max_steps, progress=progress_view,
+                                   checking=busy).data
+    except Interrupted as e:             # Ctrl-C: workers stopped, finished jobs kept
+        again = " ".join(["xval campaign"] + ([args.file] if args.file else [])
+                         + ["--out", args.out])
+        print(f"xval: interrupted: {e}; resume with: {again}", file=sys.stderr)
+        return 130
+    if args.baseline:
+        from pathlib import Path
+
+        from .workflows.diff import run_diff
+        folder = Path(summary["report"]).parent
+        obj = run_diff(args.baseline, folder, folder / "diff")
+        if not args.json:
+            _print_diff(obj, False)
+        summary["diff"] = {k: obj[k] for k in ("summary", "lines", "report", "any_change")}
     if args.json:
         emit_json(summary)
     else:

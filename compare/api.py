@@ -271,6 +271,22 @@ def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | Non
     return Summary("campaign", summary, Path(summary["report"]).parent, temporary)
 
 
+def diff(old, new, *, out=None) -> Summary:
+    """`xval diff`: which results moved between two campaign folders, run folders or baselines
+    (paths; a result's `.save(path)` gives one), against their own error bars. With `out` the
+    report goes to out/diff/<time>-<pid>/; `s["any_change"]`, `s["lines"]`."""
+    from .workflows.diff import new_diff_dir, run_diff
+    from .workflows.sides import load_side
+    if out is not None:
+        check_out(str(out))
+    sides = load_side(old), load_side(new)            # bad input before anything is written
+    folder = None
+    if out is not None:
+        make_out(str(out))
+        folder = new_diff_dir(out)
+    return Summary("diff", run_diff(*sides, folder), folder)
+
+
 def scenes() -> dict[str, list[str]]:
     """Every scene (as `xval list` shows them) with the names of its solvers."""
     from .scenes import SCENES

@@ -192,3 +192,20 @@ def test_extremes_and_a_campaign_from_a_dict(tmp_path):
     assert c.report.parent == tmp_path / "camp" / "campaign" / "tiny" and c.report.exists()
     with pytest.raises(xval.BadInput, match="campaign: cases"):
         xval.campaign({"name": "empty", "cases": []})
+
+
+def test_diff_of_two_saved_runs(tmp_path):
+    """Identical inputs are bit-identical runs: nothing moved. A torque 0.1 % higher moves
+    |ω| by ΔM t / I_p ≈ 9.6e-3 rad/s at 1 s, far beyond the runs' error bars (~1e-9)."""
+    a = xval.run("rotor-spinup", "euler-vector", t_end=1).save(tmp_path / "a")
+    b = xval.run("rotor-spinup", "euler-vector", t_end=1).save(tmp_path / "b")
+    c = xval.run("rotor-spinup", "euler-vector", t_end=1, torque=1.5015).save(tmp_path / "c")
+    same = xval.diff(a, b)
+    assert not same["any_change"] and same.report is None
+    moved = xval.diff(a, c, out=tmp_path / "d")
+    assert moved["any_change"] and moved.report.exists()
+    assert moved["summary"]["changed"] == 1 and moved["summary"]["channels_changed"] == 6
+    assert moved["lines"][0].startswith("torque 1.5 → 1.5015: rotor-spinup euler-vector")
+    assert str(moved).splitlines()[0].startswith("1 changed, 0 unchanged")
+    with pytest.raises(xval.BadInput):
+        xval.diff(a, tmp_path / "nowhere")

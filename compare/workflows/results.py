@@ -362,7 +362,8 @@ class Summary:
         self._folder = _Folder(out_dir, temporary)
 
     out_dir = property(lambda self: None if self._folder.temporary else self._folder.out_dir)
-    report = property(lambda self: Path(self.data["report"]))
+    report = property(lambda self: Path(self.data["report"]) if self.data.get("report")
+                      else None)
 
     def __getitem__(self, key):
         return self.data[key]
@@ -382,22 +383,29 @@ class Summary:
         if self.kind == "extremes":
             return [f"{r['case']:32s} {r['solver']:26s} {r['outcome']:18s} {r['detail']}"
                     for r in d["results"]]
+        if self.kind == "diff":
+            s = d["summary"]
+            return ([f"{s['changed']} changed, {s['unchanged']} unchanged, {s['new']} new, "
+                     f"{s['gone']} gone (runs); {s['channels_changed']} channels changed"]
+                    + list(d["lines"]) + [f"note: {n}" for n in d["notes"][:20]])
         return [f"campaign {d['name']}: {d['n_jobs']} jobs ({d['n_run']} run, "
                 f"{d['n_reused']} reused), {d['n_failed']} cases with a failed solver, "
                 f"{d['n_crashed']} crashed jobs; {d['wall_s']:.1f} s"]
 
     def __str__(self):
-        return "\n".join(self.lines + [f"report: {self.data['report']}"])
+        return "\n".join(self.lines + ([f"report: {self.report}"] if self.report else []))
 
     __repr__ = __str__
 
     def _repr_markdown_(self):
-        return "```\n" + "\n".join(self.lines) + "\n```\n\nreport: `" + \
-            str(self.data["report"]) + "`"
+        return "```\n" + "\n".join(self.lines) + "\n```" + \
+            (f"\n\nreport: `{self.report}`" if self.report else "")
 
     def save(self, path) -> Path:
         """The folder the command writes (report, plots, result/summary JSON), copied to
         `path`; the paths in `data` follow."""
+        if self._folder.out_dir is None:
+            raise BadInput(f"nothing to save: this {self.kind} wrote no files (give out=FOLDER)")
         dest, self.data = copy_folder(self._folder.out_dir, path, self.data)
         self._folder = _Folder(dest)
         return dest

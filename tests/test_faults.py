@@ -87,6 +87,8 @@ def test_second_campaign_on_the_same_folder_is_refused_naming_the_owner(tmp_path
     rc, so, se = xval("campaign", str(f), "--out", str(out))
     assert rc == 2 and len(se.strip().splitlines()) == 1
     assert f"pid {first.pid}" in se and "in use" in se
+    rc, so, se = xval("diff", str(lock.parent), str(lock.parent), "--out", str(tmp_path / "d"))
+    assert rc == 2 and f"a campaign is writing this folder (pid {first.pid}" in se
     so1, se1 = first.communicate(timeout=300)
     assert first.returncode == 0, se1
     assert "2 jobs (2 run, 0 reused)" in so1            # each job ran once, by the first
@@ -135,6 +137,8 @@ def test_ctrl_c_stops_the_workers_keeps_finished_jobs_and_says_how_to_resume(tmp
     kept = len(list(store.glob("*.npz")))
     assert 1 <= kept < n and not list(store.glob(".*"))
     assert not (store.parent / ".lock").exists()
+    rc, so, se = xval("diff", str(store.parent), str(store.parent), "--out", str(tmp_path / "d"))
+    assert rc == 2 and "incomplete campaign folder" in se
     time.sleep(1)
     alive = [w for w in workers if _running(w)]
     assert not alive, f"workers left running: {alive}"

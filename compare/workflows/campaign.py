@@ -516,6 +516,9 @@ def run_campaign(path, out, executor="local", scheduler=None, workers=None, time
 
 
 def _run_locked(camp, cases, jobs, out_dir, view, executor, scheduler, workers, verbose):
+    # summary.json is the campaign's done-marker (written last): while the campaign runs, or
+    # after it was stopped, the folder has none and `xval diff` calls it incomplete
+    (out_dir / "summary.json").unlink(missing_ok=True)
     store = out_dir / "jobs"
     reused = {j.label for j in jobs if is_done(j, store)}
     todo = dispatch_order([j for j in jobs if j.label not in reused])

@@ -3,6 +3,9 @@ closed forms written out here, the paper's passage case; bad arguments give the 
 one-line messages."""
 import gc
 import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -209,3 +212,19 @@ def test_diff_of_two_saved_runs(tmp_path):
     assert str(moved).splitlines()[0].startswith("1 changed, 0 unchanged")
     with pytest.raises(xval.BadInput):
         xval.diff(a, tmp_path / "nowhere")
+
+
+def test_plots_and_reports_leave_the_callers_matplotlib_alone(tmp_path):
+    """A notebook's backend and rcParams stay as they were after .plot() and a report."""
+    code = ("import matplotlib, matplotlib.pyplot as plt, xval\n"
+            "size = plt.rcParams['font.size']\n"
+            "r = xval.run('rotor-spinup', 'euler-vector', t_end=0.5)\n"
+            "fig = r.plot()\n"
+            "assert matplotlib.rcParams['font.size'] == size, 'rcParams changed'\n"
+            "assert fig.axes[0].yaxis.label.get_fontsize() == 8\n"
+            f"xval.run('rotor-spinup', 'euler-vector', t_end=0.5, out={str(tmp_path)!r})\n"
+            "print(matplotlib.get_backend())\n")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=300, env={**os.environ, "MPLBACKEND": "svg"})
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.strip().lower() == "svg"

@@ -41,13 +41,19 @@ def fmt_value(x, digits=6):
     return format(float(x), f".{digits}g") if isinstance(x, (float, np.floating)) else str(x)
 
 
+STYLE = {"axes.formatter.useoffset": False, "font.size": 9, "axes.formatter.limits": (-4, 5)}
+
+
 def plot_style():
-    """pyplot with offset notation off and a readable default size."""
+    """pyplot with offset notation off and a readable default size. Files only: the Agg
+    backend, unless pyplot is in use already (a notebook's inline backend stays)."""
+    import sys
+
     import matplotlib
-    matplotlib.use("Agg")
+    if "matplotlib.pyplot" not in sys.modules:
+        matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    plt.rcParams.update({"axes.formatter.useoffset": False, "font.size": 9,
-                         "axes.formatter.limits": (-4, 5)})
+    plt.rcParams.update(STYLE)
     return plt
 
 
@@ -90,9 +96,13 @@ def channels_figure(result, channels=None):
     """Each channel (default: every channel of the scene) per solver, the closed form dashed
     where the scene has one. A bare matplotlib Figure (no pyplot state: a notebook shows the
     returned figure once, the report saves it)."""
+    import matplotlib
     from matplotlib.figure import Figure
-    _plt()                                 # the report's style (rcParams)
-    chs = list(channels or result.scene.channels)
+    with matplotlib.rc_context(STYLE):     # the report's style, the caller's rcParams kept
+        return _channels_figure(result, list(channels or result.scene.channels), Figure)
+
+
+def _channels_figure(result, chs, Figure):
     ncol = 2 if len(chs) > 1 else 1
     nrow = (len(chs) + ncol - 1) // ncol
     fig = Figure(figsize=(11 if ncol == 2 else 7, 2.6 * nrow))

@@ -16,6 +16,7 @@ import numpy as np
 from ..analysis.metrics import Comparison
 from ..atomic import write_json
 from ..errors import BadInput
+from .guard import mark_incomplete
 from .inputs import make_out
 from .runner import RunResult, write_outputs
 
@@ -231,11 +232,13 @@ class TimeResult:
         .npz per solver, run.rrd, report.md with its plots, result.json."""
         make_out(str(path))
         path = Path(path)
+        marker = mark_incomplete(path)              # as a run folder: until result.json
         files = {tr.solver: tr.save(path / f"{tr.solver}.npz")
                  for tr in self.result.trajectories}
         r = self.result
         write_outputs(RunResult(r.scene, r.params, r.trajectories, r.comparisons, r.findings,
                                 path, files))
+        marker.unlink()
         return path
 
 

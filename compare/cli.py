@@ -238,7 +238,7 @@ def build_parser():
                                     "baseline (.npz) of a campaign or run folder for `xval "
                                     "diff`.")
     bsub = sp.add_subparsers(dest="action", required=True, parser_class=_Parser,
-                             metavar="ACTION")
+                             metavar="ACTION", help="save (the only action)")
     bp = bsub.add_parser("save", help="write the baseline of DIR to OUT")
     bp.add_argument("folder", help="campaign folder or run folder")
     bp.add_argument("target", help="baseline file to write (.npz)")

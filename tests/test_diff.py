@@ -247,3 +247,35 @@ def test_map_boundaries_move_only_beyond_their_brackets(folders, tmp_path):
     assert rc == 1, se
     assert obj["lines"] == ["map capture-map quaternion crossing 1 capture→passage: 3.05 → "
                             "3.0545 (moved 0.0045 against brackets 0.004)"]
+
+
+def test_gone_cases_flipped_verdicts_and_statuses_count_as_changes(folders, tmp_path):
+    d = tmp_path / "D"
+    shutil.copytree(folders["A"], d)
+    summary = json.loads((d / "summary.json").read_text())
+    spin = next(c for c in summary["cases"] if c["case"] == "spin")
+    summary["cases"] = [spin]                                    # "drive" is gone
+    spin["comparisons"][0]["verdict"] = "disagree" if spin["comparisons"][0]["verdict"] \
+        == "agree" else "agree"
+    spin["runs"][1]["status"] = "diverged"
+    (d / "summary.json").write_text(json.dumps(summary))
+    rc, obj, se = _diff(folders["A"], d, tmp_path / "o")
+    assert rc == 1, se
+    assert obj["summary"]["cases_gone"] == 1
+    c0 = spin["comparisons"][0]
+    assert f"spin: verdict {c0['a']}–{c0['b']} {c0['channel']} " in "\n".join(obj["lines"])
+    solver = spin["runs"][1]["solver"]
+    assert f"same inputs digest: spin {solver} status ok → diverged" in obj["lines"]
+    assert "drive (rotor-spinup): case gone" in obj["lines"]
+
+
+def test_two_run_folders(tmp_path):
+    runs = []
+    for k in range(2):
+        rc, so, se = xval("run", "rotor-spinup", "--solver", "quaternion", "--set", "t_end=0.3",
+                          "--no-record", "--out", str(tmp_path / f"r{k}"), "--json")
+        assert rc == 0, se
+        runs.append(next((tmp_path / f"r{k}" / "runs").iterdir()))
+    rc, obj, se = _diff(runs[0], runs[1], tmp_path / "o")
+    assert rc == 0 and obj["summary"]["unchanged"] == 1, se
+    assert obj["old_kind"] == obj["new_kind"] == "run"

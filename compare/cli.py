@@ -432,6 +432,9 @@ def main(argv=None):
     except BadInput as e:
         print(f"xval: error: {e}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:          # Ctrl-C outside a campaign's jobs: one line, no traceback
+        print("xval: interrupted", file=sys.stderr)
+        return 130
 
 
 def entry():

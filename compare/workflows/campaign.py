@@ -486,7 +486,10 @@ def _stop_workers(ex, store):
     temporary name and renamed when complete, so a stopped job leaves no result file; its
     temporary file (a dot-name) is removed here, under the folder's lock."""
     procs = list((getattr(ex, "_processes", None) or {}).values())   # shutdown forgets them
-    ex.shutdown(wait=False, cancel_futures=True)
+    if isinstance(ex, ProcessPoolExecutor):
+        ex.shutdown(wait=False, cancel_futures=True)
+    else:                              # Dask's executor: wait=False cancels its futures
+        ex.shutdown(wait=False)
     for p in procs:
         p.terminate()
     for p in procs:

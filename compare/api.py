@@ -275,11 +275,12 @@ def diff(old, new, *, out=None) -> Summary:
     """`xval diff`: which results moved between two campaign folders, run folders or baselines
     (paths; a result's `.save(path)` gives one), against their own error bars. With `out` the
     report goes to out/diff/<time>-<pid>/; `s["any_change"]`, `s["lines"]`."""
-    from .workflows.diff import new_diff_dir, run_diff
+    from .workflows.diff import new_diff_dir, pair_cases, run_diff
     from .workflows.sides import load_side
     if out is not None:
         check_out(str(out))
-    sides = load_side(old), load_side(new)            # bad input before anything is written
+    sides = load_side(old), load_side(new)
+    pair_cases(*sides)                                # bad input before anything is written
     folder = None
     if out is not None:
         make_out(str(out))

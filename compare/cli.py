@@ -247,29 +247,18 @@ def build_parser():
 
 
 def cmd_diff(args):
-    from .workflows.diff import new_diff_dir, pair_cases, run_diff
-    from .workflows.sides import load_side
-    check_out(args.out)
-    old, new = load_side(args.old), load_side(args.new)
-    pair_cases(old, new)                             # bad input before anything is written
-    make_out(args.out)
-    obj = run_diff(old, new, new_diff_dir(args.out))
-    _print_diff(obj, args.json)
-    return 1 if obj["any_change"] else 0
+    from . import api
+    r = api.diff(args.old, args.new, out=args.out)
+    _print_diff(r.data, args.json)
+    return 1 if r["any_change"] else 0
 
 
 def _print_diff(obj, as_json):
+    from .workflows.results import Summary
     if as_json:
         emit_json(obj)
-        return
-    s = obj["summary"]
-    print(f"{s['changed']} changed, {s['unchanged']} unchanged, {s['new']} new, {s['gone']} "
-          f"gone (runs); {s['channels_changed']} channels changed")
-    for line in obj["lines"]:
-        print(line)
-    for line in obj["notes"][:20]:
-        print(f"note: {line}")
-    print(f"report: {obj['report']}")
+    else:
+        print(Summary("diff", obj, None))             # the counts, the changes, notes, report
 
 
 def cmd_baseline(args):
@@ -371,16 +360,16 @@ def cmd_campaign(args):
         load_side(args.baseline)
     try:
         with stdout_to_stderr():
-            summary = api.campaign(args.file, executor=args.executor, scheduler=args.scheduler,
-                                   workers=args.workers, timeout=args.timeout, out=args.out,
-                                   verbose=args.verbose, max_output_gib=args.max_output_gib,
-                                   max_steps=args.max_steps, progress=progress_view,
-                                   checking=busy).data
+            r = api.campaign(args.file, executor=args.executor, scheduler=args.scheduler,
+                             workers=args.workers, timeout=args.timeout, out=args.out,
+                             verbose=args.verbose, max_output_gib=args.max_output_gib,
+                             max_steps=args.max_steps, progress=progress_view, checking=busy)
     except Interrupted as e:             # Ctrl-C: workers stopped, finished jobs kept
         again = " ".join(["xval campaign"] + ([args.file] if args.file else [])
                          + ["--out", args.out])
         print(f"xval: interrupted: {e}; resume with: {again}", file=sys.stderr)
         return 130
+    summary = r.data
     if args.baseline:
         from pathlib import Path
 
@@ -393,10 +382,7 @@ def cmd_campaign(args):
     if args.json:
         emit_json(summary)
     else:
-        print(f"campaign {summary['name']}: {summary['n_jobs']} jobs ({summary['n_run']} run, "
-              f"{summary['n_reused']} reused), {summary['n_failed']} cases with a failed "
-              f"solver, {summary['n_crashed']} crashed jobs; {summary['wall_s']:.1f} s")
-        print(f"report: {summary['report']}")
+        print(r)                       # the one-line summary and the report's path
     if summary["n_crashed"]:
         return 3
     return 1 if summary.get("diff", {}).get("any_change") else 0

@@ -277,7 +277,8 @@ class ModesResult:
     def _freq_rows(self):
         return [[s, m.status, _num(m.wall_s),
                  ", ".join(f"{f:.6g}" + (f" ({lb})" if lb else "")
-                           for f, lb in zip(m.frequencies_hz, m.labels or [""] * 99))
+                           for f, lb in zip(m.frequencies_hz,
+                                            m.labels or [""] * len(m.frequencies_hz)))
                  or (m.reason or "")] for s, m in self.runs.items()]
 
     def _title(self):

@@ -85,6 +85,27 @@ def lock_owner(folder):
     return owner
 
 
+def _remove_stale(path, log):
+    """Move the stale lock aside (a rename: of two processes that found it stale only one
+    gets it) and check it was the stale one, not a lock just taken by another process."""
+    aside = path.with_name(f"{LOCK}.stale.{os.getpid()}")
+    try:
+        os.rename(path, aside)
+    except FileNotFoundError:
+        return                                 # another process moved it first
+    try:
+        owner = json.loads(aside.read_text())
+        stale = owner.get("host") == socket.gethostname() and not _alive(int(owner["pid"]))
+    except (OSError, ValueError, KeyError, TypeError):
+        stale = False
+    if not stale:                              # a live lock: put it back, then refuse
+        os.rename(aside, path)
+        return
+    aside.unlink()
+    if log:
+        log(f"{path}: stale lock of pid {owner['pid']} (no such process) taken over")
+
+
 @contextmanager
 def folder_lock(folder, command="xval campaign", log=None):
     folder = Path(folder)
@@ -92,7 +113,7 @@ def folder_lock(folder, command="xval campaign", log=None):
     path = folder / LOCK
     me = {"pid": os.getpid(), "host": socket.gethostname(), "since": _now(),
           "command": command}
-    for _ in range(2):
+    for _ in range(3):
         try:
             fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
         except FileExistsError:
@@ -102,9 +123,7 @@ def folder_lock(folder, command="xval campaign", log=None):
                                f"{owner.get('pid')} on {owner.get('host')} since "
                                f"{owner.get('since')}): wait for it to finish, or remove "
                                f"{path} if that process is gone") from None
-            if log:
-                log(f"{path}: stale lock of a process that is gone, taken over")
-            path.unlink(missing_ok=True)
+            _remove_stale(path, log)
             continue
         with os.fdopen(fd, "w") as f:
             json.dump(me, f)

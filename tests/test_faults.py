@@ -189,3 +189,15 @@ def test_disk_full_on_a_real_300k_tmpfs(tmp_path):
                 assert len(z["t"]) == len(z["omega_norm"])
     finally:
         subprocess.run(["umount", str(small)], check=True)
+
+
+def test_a_live_lock_found_stale_by_a_racing_process_is_put_back(tmp_path):
+    """Two processes found the same dead owner; the first took over — the second, moving the
+    lock aside, finds a live owner in it and puts it back instead of removing it."""
+    mine = json.dumps({"pid": os.getpid(), "host": socket.gethostname(), "since": "now"})
+    (tmp_path / ".lock").write_text(mine)
+    guard._remove_stale(tmp_path / ".lock", None)
+    assert (tmp_path / ".lock").read_text() == mine and len(list(tmp_path.iterdir())) == 1
+    with pytest.raises(guard.BadInput, match=f"pid {os.getpid()} on"):
+        with guard.folder_lock(tmp_path):
+            pass

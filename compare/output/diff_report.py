@@ -50,7 +50,7 @@ def write_diff_report(out_dir: Path, obj, arrays):
     md = ["# xval diff", "", f"- old: `{obj['old']}` ({obj['old_kind']})",
           f"- new: `{obj['new']}` ({obj['new_kind']})", "", f"Rule: {obj['rule']}.", "",
           "| runs (case × solver) | changed | unchanged | new | gone |", "|---|---|---|---|---|",
-          f"| | {s['changed']} | {s['unchanged']} | {s['new']} | {s['gone']} |", "",
+          f"| count | {s['changed']} | {s['unchanged']} | {s['new']} | {s['gone']} |", "",
           f"Channels: {s['channels_changed']} changed, {s['channels_unchanged']} unchanged; "
           f"cases new {s['cases_new']}, gone {s['cases_gone']}; verdicts flipped "
           f"{s['verdicts_flipped']}.", ""]

@@ -19,7 +19,9 @@ CHANNEL_UNITS = {
     "potential": "J", "energy_balance": "J", "crank_angle": "rad", "crank_rate": "rad/s",
     "rocker_angle": "rad", "rocker_rate": "rad/s", "slider_position": "m",
     "slider_velocity": "m/s", "motor_work": "J", "hub_rate": "rad/s", "deployed_length": "m",
-    "tip_angle": "rad", "angular_momentum": "kg·m²/s",
+    "tip_angle": "rad", "angular_momentum": "kg·m²/s", "spin_angle": "rad",
+    "journal_a_x": "m", "journal_a_y": "m", "journal_b_x": "m", "journal_b_y": "m",
+    "dissipated": "J", "crank_accel": "rad/s²", "slider_x": "m", "loop_violation": "m",
 }
 
 

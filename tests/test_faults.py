@@ -31,9 +31,22 @@ sweep = { torque = { start = 1.0, stop = 2.0, num = %d } }
 """
 
 
-def _popen(args, **kw):
-    return subprocess.Popen([sys.executable, "-m", "compare", *args], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, **kw)
+@pytest.fixture
+def popen():
+    """Start `xval ARGS` in the background; whatever still runs at the end is killed (with its
+    workers: each gets its own process group)."""
+    started = []
+
+    def start(args):
+        p = subprocess.Popen([sys.executable, "-m", "compare", *args], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True, start_new_session=True)
+        started.append(p)
+        return p
+    yield start
+    for p in started:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.communicate()
 
 
 def _wait_for(cond, timeout=120):
@@ -75,11 +88,11 @@ def test_disk_full_during_run_one_line_no_partial_file_folder_marked(tmp_path, m
     assert not (tmp_path / "d").exists()
 
 
-def test_second_campaign_on_the_same_folder_is_refused_naming_the_owner(tmp_path):
+def test_second_campaign_on_the_same_folder_is_refused_naming_the_owner(tmp_path, popen):
     f = tmp_path / "slow.toml"
     f.write_text(SLOW % 2)
     out = tmp_path / "out"
-    first = _popen(["campaign", str(f), "--out", str(out)])
+    first = popen(["campaign", str(f), "--out", str(out)])
     lock = out / "campaign" / "slow" / ".lock"
     _wait_for(lambda: lock.exists() or first.poll() is not None)
     assert first.poll() is None, first.communicate()
@@ -114,13 +127,13 @@ def test_stale_lock_of_a_dead_process_is_taken_over_a_foreign_one_is_not(tmp_pat
     assert "stale lock" in se and not lock.exists()
 
 
-def test_ctrl_c_stops_the_workers_keeps_finished_jobs_and_says_how_to_resume(tmp_path):
+def test_ctrl_c_stops_the_workers_keeps_finished_jobs_and_says_how_to_resume(tmp_path, popen):
     n = 8
     f = tmp_path / "slow.toml"
     f.write_text(SLOW % n)
     out = tmp_path / "out"
     store = out / "campaign" / "slow" / "jobs"
-    p = _popen(["campaign", str(f), "--out", str(out)], start_new_session=True)
+    p = popen(["campaign", str(f), "--out", str(out)])
     _wait_for(lambda: len(list(store.glob("*.npz"))) >= 1 or p.poll() is not None)
     assert p.poll() is None
     workers = _children_of(p.pid)

@@ -356,8 +356,14 @@ def cmd_campaign(args):
     from .workflows.campaign import Interrupted
     check_out(args.out)
     if args.baseline:                  # bad input before anything is written
+        from .workflows.campaign import load_campaign
         from .workflows.sides import load_side
         load_side(args.baseline)
+        own = os.path.join(args.out, "campaign", load_campaign(args.file).get("name", "campaign"))
+        if os.path.exists(own) and os.path.samefile(args.baseline, own):
+            raise BadInput(f"--baseline {args.baseline}: is the folder this campaign writes (it "
+                           f"would be diffed against itself): save it first with `xval "
+                           f"baseline save {args.baseline} base.npz` and pass base.npz")
     try:
         with stdout_to_stderr():
             r = api.campaign(args.file, executor=args.executor, scheduler=args.scheduler,

@@ -279,3 +279,10 @@ def test_two_run_folders(tmp_path):
     rc, obj, se = _diff(runs[0], runs[1], tmp_path / "o")
     assert rc == 0 and obj["summary"]["unchanged"] == 1, se
     assert obj["old_kind"] == obj["new_kind"] == "run"
+
+
+def test_baseline_must_not_be_the_folder_the_campaign_writes(folders):
+    rc, so, se = xval("campaign", str(folders["root"] / "tiny.toml"), "--out",
+                      str(folders["root"] / "A"), "--baseline", str(folders["A"]))
+    assert rc == 2 and "is the folder this campaign writes" in se
+    assert len(se.strip().splitlines()) == 1

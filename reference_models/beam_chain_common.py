@@ -111,10 +111,14 @@ def _arms(chain: dict) -> np.ndarray:
 
 
 def real_shape(v: np.ndarray) -> np.ndarray:
-    """A complex mode shape made comparable: phase turned so the largest entry is real
-    positive, unit max-abs; returns [Re, Im] (Im ≈ 0 for a standing mode)."""
-    k = int(np.argmax(np.abs(v)))
-    v = v * np.exp(-1j * np.angle(v[k])) / max(np.abs(v[k]), 1e-300)
+    """A complex mode shape made comparable: phase turned so the first entry of at least half
+    the largest magnitude is real positive, unit max-abs; returns [Re, Im] (Im ≈ 0 for a
+    standing mode). Not the largest entry itself: a circular whirl has |u| = |v| at the tip,
+    and which one wins by rounding would turn the phase by 90° from one speed to the next
+    (its [Re, Im] then no longer correlates with itself across a Campbell sweep)."""
+    a = np.abs(v)
+    k = int(np.argmax(a >= 0.5 * a.max()))
+    v = v * np.exp(-1j * np.angle(v[k])) / max(a.max(), 1e-300)
     return np.concatenate([v.real, v.imag])
 
 

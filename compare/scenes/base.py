@@ -15,7 +15,10 @@ class Campbell:
     """A frequency scene's sweep: `parameter` from `lo` to `hi` in `n` points (each a number or
     the name of a scene parameter that holds it). `excitation_hz(params, value)` gives the
     frequency [Hz] of the 1× excitation line at a sweep value (a rotor speed in rad/s gives
-    value/2π); critical speeds are where a mode line crosses `orders` × that line."""
+    value/2π); critical speeds are where a mode line crosses `orders` × that line, found on
+    these `n` points. The diagram adds at most `refine` points per solver, each halving a step
+    where lines come close, swap order or lose their shape, down to the step / 2**`depth`
+    (compare/analysis/campbell.py)."""
     parameter: str
     lo: float | str
     hi: float | str
@@ -23,6 +26,8 @@ class Campbell:
     excitation_hz: Callable | None = None
     orders: tuple = (1,)
     unit: str = "rad/s"
+    refine: int = 12
+    depth: int = 3
 
     def values(self, params):
         get = lambda v: params[v] if isinstance(v, str) else v     # noqa: E731

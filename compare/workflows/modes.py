@@ -14,7 +14,8 @@ import numpy as np
 from scipy.optimize import brentq, linear_sum_assignment
 
 from .. import solvers
-from ..analysis import metrics
+from ..analysis import campbell, metrics
+from ..analysis.campbell import mac
 from ..analysis.trajectory import Modes
 from ..atomic import atomic_path, write_json, write_text
 from ..errors import BadInput
@@ -29,23 +30,16 @@ def sweep(scene: Scene, solver: solvers.Solver, params: dict, values: np.ndarray
     return [solvers.modes(scene, solver, {**params, name: float(v)}) for v in values]
 
 
-def mac(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Modal assurance criterion between the rows of a and b (complex shapes allowed)."""
-    a, b = np.atleast_2d(a), np.atleast_2d(b)
-    num = np.abs(np.conj(a) @ b.T) ** 2
-    den = np.outer(np.sum(np.abs(a) ** 2, 1), np.sum(np.abs(b) ** 2, 1))
-    return num / np.maximum(den, 1e-300)
-
-
 def _unique(labels) -> bool:
     return all(labels) and len(set(labels)) == len(labels)
 
 
 def track(results: list[Modes]) -> dict[str, np.ndarray]:
-    """Mode lines over a sweep, never by sorting. From one point to the next a mode keeps its
-    label where both points label their modes uniquely and alike (the leaves classify modes
-    from their shapes: flap / lag / torsion, forward / backward whirl), so crossings are drawn
-    as crossings; elsewhere — repeated roots at rest ("whirl 1" twice), a leaf without
+    """The lines on which critical speeds are found, on the scene's grid (the diagram draws
+    compare/analysis/campbell.py's lines). Never by sorting: from one point to the next a
+    mode keeps its label where both points label their modes uniquely and alike (the leaves
+    classify modes from their shapes: flap / lag / torsion, forward / backward whirl);
+    elsewhere — repeated roots at rest ("whirl 1" twice), a leaf without
     physical labels — by mode-shape correlation (MAC, optimal assignment), else by nearest
     frequency. Each line is keyed by its label at the end of the sweep, made unique."""
     ok = [r for r in results if r.status == "ok" and len(r.frequencies_hz)]
@@ -155,7 +149,7 @@ def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: 
     return out
 
 
-def _campbell_png(path, scene, values, lines_by_solver, crit, params):
+def _campbell_png(path, scene, values, lines_by_solver, crit, params, events=None):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -166,8 +160,9 @@ def _campbell_png(path, scene, values, lines_by_solver, crit, params):
     for k, lines in enumerate(lines_by_solver.values()):
         for key, f in lines.items():           # one colour per mode, the same in every solver
             j = keys.index(key)
-            ax.plot(values, f, lw=1, ls=styles[k % len(styles)], color=f"C{j % 10}",
-                    label=key if k == 0 else None)
+            colour = f"C{j % 10}" if len(keys) <= 10 else plt.cm.tab20(j % 20)
+            ax.plot(values, f, lw=1, ls=styles[k % len(styles)], color=colour,
+                    marker=".", ms=2, label=key if k == 0 else None)   # dots: the samples
     if cb.excitation_hz is not None:
         for order in cb.orders:
             ax.plot(values, [order * cb.excitation_hz(params, v) for v in values], "k:", lw=1,
@@ -175,6 +170,11 @@ def _campbell_png(path, scene, values, lines_by_solver, crit, params):
     for c in crit.values():
         for v in c.values():
             ax.plot([v], [cb.excitation_hz(params, v)], "ko", ms=3)
+    veer = [(e.at, np.nanmean([lines[k][np.searchsorted(values, e.at)] for k in e.lines]))
+            for s, lines in lines_by_solver.items() for e in (events or {}).get(s, [])
+            if e.kind != "crossing"]
+    if veer:        # where two lines hand their shapes over without crossing
+        ax.plot(*zip(*veer), "o", mfc="none", mec="k", ms=7, label="veering (shapes exchanged)")
     ax.set_xlabel(f"{cb.parameter} [{cb.unit or '–'}]")
     ax.set_ylabel("frequency [Hz]")
     top = max(np.nanmax(f) for lines in lines_by_solver.values() for f in lines.values())
@@ -199,6 +199,61 @@ def _campbell_rrd(path, scene, values, lines_by_solver):
                 rec.send_columns(f"campbell/{rr.escape_entity_path_part(key)}/{solver}",
                                  indexes=idx, columns=rr.Scalars.columns(scalars=f))
     return path
+
+
+def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print):
+    """Critical speeds on the scene's grid (lines by label, refined on each solver's own mode:
+    unchanged by the diagram), then the diagram: the grid refined where any solver's lines are
+    uncertain, every solver on the same points, lines tracked by MAC with veerings and
+    crossings told apart (compare/analysis/campbell.py). Returns the JSON part, the critical
+    speeds and the report's lines."""
+    cb = sc.campbell
+    values = cb.values(params)
+    memo = {s.name: {} for s in chosen}
+
+    def at(s, v):
+        if v not in memo[s.name]:
+            memo[s.name][v] = solvers.modes(sc, s, {**params, cb.parameter: float(v)})
+        return memo[s.name][v]
+    crit, usable = {}, []
+    for s in chosen:
+        tracked = track([at(s, float(v)) for v in values])
+        if not tracked:
+            log(f"campbell {s.name}: a sweep point failed; no lines")
+            continue
+        usable.append(s)
+        crit[s.name] = critical_speeds(sc, s, params, values, tracked,
+                                       hint=next(iter(crit.values()), None))
+    step = (values[-1] - values[0]) / max(len(values) - 1, 1)
+    grid, per_point = campbell.sample(lambda v: [at(s, v) for s in usable], values,
+                                      cb.refine if usable else 0, step / 2 ** cb.depth)
+    diagrams = {s.name: campbell.track_lines(grid, [p[k] for p in per_point])
+                for k, s in enumerate(usable)}
+    lines = {s: d.lines for s, d in diagrams.items()}
+    events = {s: d.events for s, d in diagrams.items()}
+    none = lambda f: [None if not np.isfinite(x) else float(x) for x in f]   # noqa: E731
+    obj = {"parameter": cb.parameter, "values": list(grid), "grid_points": len(values),
+           "lines_hz": {s: {k: none(v) for k, v in ln.items()} for s, ln in lines.items()},
+           "line_mac": {s: {k: none(v) for k, v in d.mac.items()} for s, d in diagrams.items()},
+           "events": {s: [e.as_dict() for e in ev] for s, ev in events.items()},
+           "min_mac_unmarked": {s: d.min_mac_unmarked() for s, d in diagrams.items()}}
+    if lines:
+        _campbell_png(out_dir / "campbell.png", sc, grid, lines, crit, params, events)
+        obj["recording"] = str(_campbell_rrd(out_dir / "campbell.rrd", sc, grid, lines))
+    md = ["", "## Campbell diagram", "",
+          f"{len(grid)} values of {cb.parameter} ({len(values)} on the scene's grid, "
+          f"{len(grid) - len(values)} added where lines come close, swap or lose their shape).",
+          "Lines continue where consecutive mode shapes correlate (MAC ≥ "
+          f"{campbell.MAC_KEEP}); least MAC on a line outside a marked veering: "
+          + ", ".join(f"{s} {d.min_mac_unmarked():.3f}" for s, d in diagrams.items()) + ".", ""]
+    md += [f"- {s} {e.kind}: {' / '.join(e.lines)} at {cb.parameter} ≈ {e.at:.4g} "
+           f"({e.lo:.4g}–{e.hi:.4g}; least gap {e.gap_hz:.3g} Hz)"
+           for s, ev in events.items() for e in ev]
+    md += ["", f"Critical {cb.parameter} [{cb.unit}] (a mode line crosses the excitation "
+           "line):", ""]
+    md += [f"- {n}: " + ", ".join(f"{k} {v:.6f}" for k, v in c.items()) for n, c in crit.items()]
+    md += ["", "![campbell](campbell.png)"]
+    return obj, crit, md
 
 
 def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float):
@@ -249,29 +304,12 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
             obj["mode_shapes_figure"] = str(drawn["figure"])
             md += ["", "## Mode shapes", "", drawn["text"], "", "![mode shapes](mode_shapes.png)"]
     if sc.campbell and campbell_sweep:
-        values = sc.campbell.values(params)
-        lines, crit = {}, {}
-        for s in chosen:
-            tracked = track(sweep(sc, s, params, values))
-            if not tracked:
-                log(f"campbell {s.name}: a sweep point failed; no lines")
-                continue
-            lines[s.name] = tracked
-            crit[s.name] = critical_speeds(sc, s, params, values, tracked,
-                                           hint=next(iter(crit.values()), None))
+        obj_cb, crit, text = campbell_diagram(sc, chosen, params, out_dir, log)
         obj["critical_speeds"] = crit
-        obj["campbell"] = {"parameter": sc.campbell.parameter, "values": list(values),
-                           "lines_hz": {s: {k: list(v) for k, v in ln.items()}
-                                        for s, ln in lines.items()}}
-        if lines:
-            _campbell_png(out_dir / "campbell.png", sc, values, lines, crit, params)
-            obj["recording"] = str(_campbell_rrd(out_dir / "campbell.rrd", sc, values, lines))
-        md += ["", "## Campbell diagram", "",
-               f"Critical {sc.campbell.parameter} [{sc.campbell.unit}] (a mode line crosses "
-               "the excitation line):", ""]
-        md += [f"- {n}: " + ", ".join(f"{k} {v:.6f}" for k, v in c.items())
-               for n, c in crit.items()]
-        md += ["", "![campbell](campbell.png)"]
+        obj["campbell"] = obj_cb
+        if "recording" in obj_cb:
+            obj["recording"] = obj_cb.pop("recording")
+        md += text
     if sc.identify and identify:
         rows, lines_md = sc.identify(params, _run_time, solver_names or None)
         if rows:

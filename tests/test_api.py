@@ -157,6 +157,7 @@ def test_whirl_frequencies_and_critical_speeds_follow_the_closed_form():
     table = r.to_arrow()
     assert table.num_rows == 4 and set(table.column("solver").to_pylist()) == set(r.solvers)
     assert "| a | b | channel |" in r._repr_markdown_() and "<table>" in r._repr_html_()
+    assert len(r.plot().axes[0].lines) == 2 * 2          # Campbell: 2 solvers × 2 whirl lines
 
 
 def test_result_views_hold_the_same_numbers(xval_run):

@@ -286,3 +286,25 @@ def test_baseline_must_not_be_the_folder_the_campaign_writes(folders):
                       str(folders["root"] / "A"), "--baseline", str(folders["A"]))
     assert rc == 2 and "is the folder this campaign writes" in se
     assert len(se.strip().splitlines()) == 1
+
+
+def test_a_frequency_case_moved_by_1e_6_in_stiffness(tmp_path):
+    """rotor-whirl at rest: ω² = k_eff / I_t with k_eff = k − m g l, so k × (1 + 1e-6) moves
+    each whirl frequency by ½ · 1e-6 · k / k_eff relative — beyond the 1e-8 floor."""
+    outs = []
+    for k, stiff in enumerate((2000.0, 2000.0 * (1 + 1e-6))):
+        f = tmp_path / f"w{k}.toml"
+        f.write_text(f'name = "w"\n[[cases]]\nname = "whirl"\nscene = "rotor-whirl"\n'
+                     f'solvers = ["closed-form"]\nset = {{ k = {stiff!r} }}\n')
+        rc, so, se = xval("campaign", str(f), "--out", str(tmp_path / f"o{k}"))
+        assert rc == 0, se
+        outs.append(tmp_path / f"o{k}" / "campaign" / "w")
+    rc, obj, se = _diff(outs[0], outs[1], tmp_path / "d")
+    assert rc == 1, se
+    rows = _channels(obj, "whirl", "closed-form")
+    p = get_scene("rotor-whirl").resolve({})
+    k_eff = 2000.0 - p["m"] * abs(p["gravity"][2]) * p["l"]
+    for name, row in rows.items():
+        assert row["state"] == "changed", name
+        assert row["max_rel"] == pytest.approx(0.5e-6 * 2000.0 / k_eff, rel=1e-3), name
+    assert {n.split(" (")[0] for n in rows} >= {"mode 1", "mode 2"}

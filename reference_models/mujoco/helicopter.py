@@ -1,4 +1,4 @@
-"""MuJoCo model of the clamped helicopter (seed 002, Table 3) in multi-blade coordinates.
+"""MuJoCo model of the helicopter (seed 002, Tables 3 and 4) in multi-blade coordinates.
 NOT registered in the scene yet (issue 23, step 2 in progress): see `modes` for what exists.
 
 Route. The rotor spins relative to a fuselage and tail that are not axisymmetric about the
@@ -51,11 +51,11 @@ def _inertia(m_line, ell, axial, b1, b2, axis):
     return out
 
 
-def _chain(parent, start, axis, L, n, m_line, inertia, joints, tag, names):
-    """n-hinge chain from `start` (parent frame) along unit axis `axis`; returns the last body
-    and the position of its hinge relative to `start`."""
+def _chain(parent, start, axis, L, n, m_line, inertia, joints, tag, names, sign=1.0):
+    """n-hinge chain from `start` (parent frame) along unit axis `axis` (− with sign −1);
+    returns the last body and the position of its hinge relative to `start`."""
     lay = bc.layout(L, n)
-    e = np.eye(3)[axis]
+    e = sign * np.eye(3)[axis]
     body, prev = parent, None
     for i, x in enumerate(lay["hinges"]):
         pos = np.asarray(start) + x * e if prev is None else (x - prev) * e
@@ -71,8 +71,10 @@ def _chain(parent, start, axis, L, n, m_line, inertia, joints, tag, names):
     return body, prev * e
 
 
-def build(params: dict, n: int):
-    """The MjModel and, per degree of freedom, (part, joint family, hinge index)."""
+def build(params: dict, n: int, free: bool = False):
+    """The MjModel and, per degree of freedom, (part, joint family, hinge index). Clamped: the
+    tree grows from the tail's far end; free: from the fuselage, on a free joint, the tail
+    boom hanging from its rear face."""
     lay = helicopter_layout(params)
     spec = mujoco.MjSpec()
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
@@ -81,13 +83,22 @@ def build(params: dict, n: int):
     names: list = []
     t, f, s, b = lay["tail"], lay["fuselage"], lay["shaft"], lay["blade"]
     half = t["I_alpha"] / 2
-    last, tip = _chain(spec.worldbody, t["end"], 0, t["L"], n, t["m"],
-                       lambda ell: _inertia(t["m"], ell, t["I_alpha"], half, half, 0),
-                       (("torsion", 0, t["GJ"]), ("bend_y", 1, t["EI_flap"]),
-                        ("bend_z", 2, t["EI_lag"])), "tail", names)
-    fus = last.add_body(pos=[float(v) for v in f["rear"] - (t["end"] + tip)], mass=float(f["m"]),
-                        ipos=[float(v) for v in f["cm"] - f["rear"]],
-                        inertia=[float(v) for v in f["I"]], explicitinertial=True)
+
+    def tail_chain(parent, start, sign):
+        return _chain(parent, start, 0, t["L"], n, t["m"],
+                      lambda ell: _inertia(t["m"], ell, t["I_alpha"], half, half, 0),
+                      (("torsion", 0, t["GJ"]), ("bend_y", 1, t["EI_flap"]),
+                       ("bend_z", 2, t["EI_lag"])), "tail", names, sign)
+    fuselage = {"mass": float(f["m"]), "ipos": [float(v) for v in f["cm"] - f["rear"]],
+                "inertia": [float(v) for v in f["I"]], "explicitinertial": True}
+    if free:
+        fus = spec.worldbody.add_body(pos=[float(v) for v in f["rear"]], **fuselage)
+        fus.add_joint(type=mujoco.mjtJoint.mjJNT_FREE)
+        names += [("fuselage", "free", i) for i in range(6)]
+        tail_chain(fus, np.zeros(3), -1.0)
+    else:
+        last, tip = tail_chain(spec.worldbody, t["end"], 1.0)
+        fus = last.add_body(pos=[float(v) for v in f["rear"] - (t["end"] + tip)], **fuselage)
     drive = fus.add_body(pos=[float(v) for v in s["bottom"] - f["rear"]], mass=1e-9,
                          inertia=[1e-12] * 3, explicitinertial=True)
     drive.add_joint(type=_HINGE, axis=[0, 0, 1], armature=SPIN_ARMATURE, name="spin")
@@ -142,12 +153,12 @@ def mbc_transform(names: list, psi: float):
     return T, T1, T2
 
 
-def linearised(params: dict, n: int, psi: float = 0.0):
+def linearised(params: dict, n: int, psi: float = 0.0, free: bool = False):
     """A_q = ∂q̈/∂q and A_v = ∂q̈/∂q̇ about steady spin at rotor azimuth ψ (drive removed), in
     the model's own coordinates (blades rotating, shaft bending rotating, the rest fixed), the
     coordinate names and the seconds spent in mjd_transitionFD."""
     import time
-    model, names = build(params, n)
+    model, names = build(params, n, free)
     data = mujoco.MjData(model)
     spin = model.joint("spin")
     data.qpos[spin.qposadr[0]] = psi
@@ -164,9 +175,9 @@ def linearised(params: dict, n: int, psi: float = 0.0):
     return Aq, Av, [names[i] for i in keep], fd_s
 
 
-def mbc_matrices(params: dict, n: int, psi: float = 0.0):
+def mbc_matrices(params: dict, n: int, psi: float = 0.0, free: bool = False):
     """p̈ = K p + D ṗ in multi-blade coordinates (constant when the route is exact)."""
-    Aq, Av, names, fd_s = linearised(params, n, psi)
+    Aq, Av, names, fd_s = linearised(params, n, psi, free)
     om = params["speed"]
     T, T1, T2 = mbc_transform(names, psi)
     Ti = np.linalg.inv(T)
@@ -174,14 +185,15 @@ def mbc_matrices(params: dict, n: int, psi: float = 0.0):
             fd_s)
 
 
-def fixed_frame_modes(params: dict, n: int, psi: float = 0.0):
+def fixed_frame_modes(params: dict, n: int, psi: float = 0.0, free: bool = False):
     """Eigenvalues (Im > 0, ascending) and eigenvectors in multi-blade coordinates, the
-    coordinate names, and the seconds spent in mjd_transitionFD."""
-    K, D, names, fd_s = mbc_matrices(params, n, psi)
+    coordinate names, and the seconds spent in mjd_transitionFD. Free: rigid-body roots
+    (|s| < 1e-3 rad/s) dropped."""
+    K, D, names, fd_s = mbc_matrices(params, n, psi, free)
     m = len(names)
     lam, V = np.linalg.eig(np.block([[np.zeros((m, m)), np.eye(m)], [K, D]]))
     scale = np.max(np.abs(lam))
-    sel = lam.imag > 1e-9 * scale
+    sel = (lam.imag > 1e-9 * scale) & (np.abs(lam) > 1e-3)
     order = np.argsort(lam.imag[sel])
     return lam[sel][order], V[:m, sel][:, order], names, fd_s
 
@@ -213,17 +225,27 @@ def classify(v: np.ndarray, names: list, speed_hz: float, f_hz: float):
 
 
 def modes(params: dict, settings: dict | None = None) -> ModesResult:
-    """Fixed-frame frequencies (Hz) of the clamped helicopter at params['speed'], N segments per
+    """The clamped helicopter (Table 3): see `aircraft_modes`."""
+    return aircraft_modes(params, settings, free=False)
+
+
+def hover_modes(params: dict, settings: dict | None = None) -> ModesResult:
+    """The hovering (free) helicopter (Table 4), rigid-body roots dropped: see `aircraft_modes`."""
+    return aircraft_modes(params, settings, free=True)
+
+
+def aircraft_modes(params: dict, settings: dict | None, free: bool) -> ModesResult:
+    """Fixed-frame frequencies (Hz) of the helicopter at params['speed'], N segments per
     blade and tail (N/2 on the shaft), Richardson-extrapolated from N/2 (pairs by nearest
     frequency); extra: the rotating-frame frequency each mode shows on the blades, the
     extrapolation's change per mode (its error estimate), the transitionFD seconds."""
     s = merge_settings(settings, MODES_SETTINGS, ())
     n = bc.checked_segments(s)
-    lam, V, names, fd_s = fixed_frame_modes(params, n, s["psi"])
+    lam, V, names, fd_s = fixed_frame_modes(params, n, s["psi"], free)
     f = lam.imag / (2 * np.pi)
     change = np.zeros_like(f)
     if s["extrapolate"]:
-        lam2, _, _, fd2 = fixed_frame_modes(params, n // 2, s["psi"])
+        lam2, _, _, fd2 = fixed_frame_modes(params, n // 2, s["psi"], free)
         fd_s += fd2
         f2 = lam2.imag / (2 * np.pi)
         k = min(len(f), len(f2), 3 * params["n_modes"])

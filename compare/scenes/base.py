@@ -58,6 +58,22 @@ class Extreme:
 
 
 @dataclass(frozen=True)
+class MapSpec:
+    """One map of a scene (`xval map`, the default campaign's `[[maps]]`): axes as
+    "NAME=LO:HI", parameter overrides, solvers (default: the scene's), the bracket asked
+    (fraction of each axis' range) and the coarse grid (points along x, rows along y)."""
+    name: str
+    x: str
+    y: str | None = None
+    set: dict = field(default_factory=dict)
+    solvers: tuple = ()
+    resolution: float = 1e-3
+    coarse: tuple = (17, 9)
+    observable: str | None = None    # a map observable's name; None: the scene's regime
+    level: float | None = None
+
+
+@dataclass(frozen=True)
 class PublishedTiming:
     """A computing time the source reports for one of its tables: `seconds` (tool -> s) for
     the runs at `cases` (overrides of the scene's defaults, one run each; `xval bench` sums
@@ -120,6 +136,13 @@ class Scene:
     published_timings: tuple = ()
     # the channels the recording's first screen shows (default: key channel and energy)
     view_channels: tuple[str, ...] = ()
+    # maps (`xval map`): regime(params, trajectory) -> the label of one ok run, decided by the
+    # same function the findings use; map_observables: name -> (fn(params, trajectory) ->
+    # float or None, unit, doc), a scalar per run (None: the event did not happen); maps: the
+    # scene's default maps (MapSpec), run by the default campaign
+    regime: Callable | None = None
+    map_observables: dict = field(default_factory=dict)
+    maps: tuple = ()
     notes: str = ""
 
     def param(self, name):

@@ -200,10 +200,15 @@ def _extra_scalar(tr, *names):
     return None
 
 
+def lock_time(params, tr):
+    """The lock instant of one run [s], None when the rocker never locks."""
+    return _extra_scalar(tr, "t_lock")
+
+
 def cycle_findings(params, trajectories):
     """Lock instant and energy lost at the plastic lock, per solver, with their spread."""
     ok = [tr for tr in trajectories if tr.status == "ok"]
-    t_lock = {tr.solver: _extra_scalar(tr, "t_lock") for tr in ok}
+    t_lock = {tr.solver: lock_time(params, tr) for tr in ok}
     loss = {tr.solver: _extra_scalar(tr, "lock_energy_loss") for tr in ok}
     out = []
     found = {s: v for s, v in t_lock.items() if v is not None}

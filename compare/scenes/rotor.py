@@ -4,7 +4,7 @@ import numpy as np
 from ..analysis.identify import fft_peak, matrix_pencil, transverse_components
 from ..analysis.metrics import first_crossing
 from ..physics.rotor import constants
-from .base import Campbell, Extreme, Finding, Scene
+from .base import Campbell, Extreme, Finding, MapSpec, Scene
 from .params import Param, positive
 
 SOURCE = "seed 000 (Euler-vector rotor), seed 001 (quaternion formulation)"
@@ -22,6 +22,18 @@ ROTOR_PARAMS = (
           hi=np.pi - 1e-3),
     Param("spin0", 0.0, "rad/s", "initial spin rate about the initial body axis", lo=-1e4, hi=1e4),
 )
+
+
+def spinup_regime(p, tr):
+    """One run's regime, the findings' own decision: `not reached` (|ω| never reaches √(k/I_t)),
+    `passage` (|ω| over the last 10 % of the run stays above 1.1 × the forward critical speed),
+    else `capture`."""
+    c = constants(p)
+    w = tr.channels["omega_norm"]
+    if first_crossing(tr.t, w, c["omega_tilt"]) is None:
+        return "not reached"
+    passed = np.min(w[tr.t >= 0.9 * tr.t[-1]]) > 1.1 * c["forward_critical"]
+    return "passage" if passed else "capture"
 
 
 def spinup_findings(p, trajectories):
@@ -58,7 +70,7 @@ def spinup_findings(p, trajectories):
         mean = per_solver(lambda tr: float(np.mean(w[tr.solver][win])))
         lo = float(np.min(w[ref.solver][win]))
         hi = float(np.max(w[ref.solver][win]))
-        passed = bool(np.min(w[ref.solver][ref.t >= 0.9 * t_end]) > 1.1 * c["forward_critical"])
+        passed = spinup_regime(p, ref) == "passage"
         if passed:
             txt = ("passes through resonance: |ω| leaves the critical band and ends at "
                    + fmt(w_end, " rad/s", 6) + f" (> 1.1 × forward critical "
@@ -179,6 +191,11 @@ SPINUP = Scene(
     extremes=SPINUP_EXTREMES,
     campaign_cases=({"name": "rotor-spinup-1.5Nm"},
                     {"name": "rotor-spinup-3.2Nm", "set": {"torque": "3.2", "t_end": "5"}}),
+    regime=spinup_regime,
+    # the default map: the capture/passage boundary M*(e) at t_end = 10 s, bracketed to 1 % of
+    # the torque range on 5 eccentricity rows (the CLI's `xval map` brackets to 1e-3 by default)
+    maps=(MapSpec("capture-boundary", x="torque=1:5", y="eccentricity=0:0.02",
+                  set={"t_end": 10}, resolution=1e-2, coarse=(9, 5)),),
     notes="Spring −kγ exactly as the paper defines it (U = ½k|γ|², γ the transverse Euler "
           "vector); a Cardan spring ½k(α²+β²) is a different model.",
 )

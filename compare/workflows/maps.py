@@ -1,0 +1,527 @@
+"""`xval map`: a scene's regimes (or a scalar observable) over one or two parameters, the
+boundaries located by every solver on its own and compared with error bars.
+
+Regimes: a coarse grid, then bisection of every grid edge along x whose ends differ in regime
+until its bracket is at most `resolution` × the x range (all open brackets of a round are one
+batch of runs). A 2-D map bisects along x on each row of its y grid: one crossing per row where
+the regime changes. The custom solvers map the whole plane; an engine starts from the custom
+solvers' brackets (its own runs at their ends, widened outwards until they straddle its own
+crossing, then its own bisection) and runs elsewhere only with `engines="everywhere"`.
+A scalar observable is refined where it changes fastest (or bisected where it crosses `level`).
+
+Every crossing's bracketing runs are rerun at the solver's tighter settings (those of its own
+error estimate): where a regime flips there, the crossing is located again at the tighter
+settings and the shift is the crossing's error estimate. Two solvers' crossings agree when
+their distance is within the resolution plus both error estimates plus both half-brackets.
+"""
+from __future__ import annotations
+
+import datetime
+import hashlib
+import json
+import math
+import os
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import solvers
+from ..atomic import write_json
+from ..errors import BadInput
+from ..scenes import get_scene
+from . import budget
+
+NONE = "none"                     # an observable's label where its event did not happen
+MAX_JOBS = 100_000                # runs a map may plan before it is refused (--max-jobs)
+# seconds per run used for the estimate before anything runs, per solver engine, measured at
+# rotor-spinup's defaults over 10 s (numba: quaternion 3 ms, euler-vector 5 ms; MuJoCo 86 ms;
+# Exudyn 316 ms): scaled with t_end / 10 s
+COST_PER_10S = {"numba": 5e-3, "numpy": 1e-3, "scipy": 0.05, "mujoco": 0.09, "exudyn": 0.32}
+
+
+@dataclass(frozen=True)
+class Axis:
+    name: str
+    lo: float
+    hi: float
+    unit: str
+
+    @property
+    def span(self):
+        return self.hi - self.lo
+
+    def as_dict(self):
+        return {"name": self.name, "lo": self.lo, "hi": self.hi, "unit": self.unit}
+
+
+def parse_axis(text, sc, flag):
+    """NAME=LO:HI → Axis, the name a numeric scalar parameter of the scene, LO < HI inside its
+    admissible range."""
+    name, sep, rng = (text or "").partition("=")
+    lo_t, sep2, hi_t = rng.partition(":")
+    if not sep or not sep2:
+        raise BadInput(f"{flag} {text!r}: expected NAME=LO:HI")
+    p = sc.param(name.strip())
+    if p.kind not in ("float", "int"):
+        raise BadInput(f"{flag} {name}: not a numeric parameter of scene {sc.name}")
+    lo, hi = p.parse(lo_t), p.parse(hi_t)
+    if not lo < hi:
+        raise BadInput(f"{flag} {text!r}: LO must be below HI")
+    return Axis(p.name, float(lo), float(hi), p.unit)
+
+
+# --- running points ----------------------------------------------------------------------
+
+def _digest(point):
+    return hashlib.sha256(json.dumps(point, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def evaluate_chunk(scene_name, solver_name, base, points, settings, what):
+    """Runs in a worker: each point's label or value. `points` are {name: value} dicts laid
+    over the `base` overrides; `what` is None (the regime) or an observable's name."""
+    sc, s = get_scene(scene_name), solvers.get_solver(solver_name)
+    out = []
+    for pt in points:
+        params = sc.resolve({**base, **pt})
+        tr = solvers.simulate(sc, s, params, settings)
+        out.append(_classify(sc, params, tr, what))
+    return out
+
+
+def _classify(sc, params, tr, what):
+    row = {"status": tr.status, "wall_s": tr.wall_s}
+    if tr.status != "ok":
+        row.update(label=tr.status, value=None, reason=tr.reason)
+    elif what is None:
+        row.update(label=sc.regime(params, tr), value=None)
+    else:
+        v = sc.map_observables[what][0](params, tr)
+        row.update(label=NONE if v is None else "value", value=v)
+    return row
+
+
+class Runner:
+    """Runs batches of (solver, settings, point) through the executor, chunked per solver so
+    a worker reuses its loaded and compiled models; results are remembered by point (a point
+    asked again, or already stored by a campaign under `store`, is not run again)."""
+
+    def __init__(self, sc, base, what, executor=None, workers=2, store=None, log=None):
+        self.sc, self.base, self.what = sc, base, what
+        self.executor, self.workers = executor, workers
+        self.store = Path(store) if store else None
+        self.memo, self.log = {}, log or (lambda m: None)
+        self.runs, self.wall = {}, {}
+
+    def _key(self, solver, settings, pt):
+        return _digest({"scene": self.sc.name, "base": self.base, "solver": solver,
+                        "settings": settings, "point": pt, "what": self.what})
+
+    def run(self, tasks):
+        """tasks: [(solver, settings, point)] → the rows, in order."""
+        todo = {}
+        for solver, settings, pt in tasks:
+            k = self._key(solver, settings, pt)
+            if k in self.memo or k in todo:
+                continue
+            stored = self.store and self.store / f"{k}.json"
+            if stored and stored.exists():
+                self.memo[k] = {**json.loads(stored.read_text()), "reused": True}
+                continue
+            todo[k] = (solver, settings, pt)
+        groups = {}
+        for k, (solver, settings, pt) in todo.items():
+            groups.setdefault((solver, json.dumps(settings, sort_keys=True)), []).append((k, pt))
+        jobs = []
+        for (solver, settings_text), items in groups.items():
+            settings = json.loads(settings_text)
+            size = max(1, math.ceil(len(items) / (2 * self.workers)))
+            for i in range(0, len(items), size):
+                chunk = items[i:i + size]
+                args = (self.sc.name, solver, self.base, [p for _, p in chunk], settings,
+                        self.what)
+                jobs.append((solver, chunk, self.executor.submit(evaluate_chunk, *args)
+                             if self.executor else None, args))
+        for solver, chunk, fut, args in jobs:
+            rows = fut.result() if fut is not None else evaluate_chunk(*args)
+            # one core's time in the solver per point (compile time apart, as `simulate` has it)
+            self.wall[solver] = self.wall.get(solver, 0.0) + sum(r["wall_s"] for r in rows)
+            self.runs[solver] = self.runs.get(solver, 0) + len(rows)
+            for (k, _), row in zip(chunk, rows):
+                self.memo[k] = row
+                if self.store:
+                    write_json(self.store / f"{k}.json", row)
+        return [self.memo[self._key(s, st, pt)] for s, st, pt in tasks]
+
+
+# --- refinement ----------------------------------------------------------------------------
+
+def _line_crossings(xs, labels):
+    """Indices i where labels[i] != labels[i + 1] along a sorted line."""
+    return [i for i in range(len(xs) - 1) if labels[i] != labels[i + 1]]
+
+
+def bisect_lines(runner, solver, settings, lines, x_axis, width, y_name=None):
+    """Bisect every crossing on every line until its bracket is ≤ width. `lines`: {y: {x:
+    label}} (y None for a 1-D map), changed in place. Every open bracket of a round is one
+    batch."""
+    while True:
+        mids = []
+        for y, pts in lines.items():
+            xs = sorted(pts)
+            for i in _line_crossings(xs, [pts[x] for x in xs]):
+                if xs[i + 1] - xs[i] > width * (1 + 1e-9):
+                    mids.append((y, 0.5 * (xs[i] + xs[i + 1])))
+        if not mids:
+            return
+        rows = runner.run([(solver, settings, _pt(x_axis.name, x, y_name, y))
+                           for y, x in mids])
+        for (y, x), row in zip(mids, rows):
+            lines[y][x] = row["label"]
+
+
+def _pt(x_name, x, y_name, y):
+    pt = {x_name: float(x)}
+    if y_name is not None:
+        pt[y_name] = float(y)
+    return pt
+
+
+def crossings(lines, x_axis, y_axis):
+    """Every crossing of every line as {"x", "y", "bracket", "from", "to"}."""
+    out = []
+    for y, pts in sorted(lines.items(), key=lambda kv: (kv[0] is not None, kv[0])):
+        xs = sorted(pts)
+        for i in _line_crossings(xs, [pts[x] for x in xs]):
+            out.append({"x": 0.5 * (xs[i] + xs[i + 1]), "y": y, "bracket": [xs[i], xs[i + 1]],
+                        "from": pts[xs[i]], "to": pts[xs[i + 1]]})
+    return out
+
+
+def refine_engine(runner, solver, settings, ref_crossings, x_axis, width, coarse_step,
+                  y_name):
+    """An engine's own crossings, started from the custom solvers' brackets: its runs at the
+    bracket's ends; while both ends read the same regime the bracket is widened outwards
+    (doubling, up to a coarse step each side); then its own bisection. Returns its lines."""
+    lines = {}
+    for c in ref_crossings:
+        lo, hi = c["bracket"]
+        y = c["y"]
+        pts = lines.setdefault(y, {})
+        grow = hi - lo
+        while True:
+            lo, hi = max(x_axis.lo, lo), min(x_axis.hi, hi)
+            a, b = runner.run([(solver, settings, _pt(x_axis.name, x, y_name, y))
+                               for x in (lo, hi)])
+            pts[lo], pts[hi] = a["label"], b["label"]
+            if a["label"] != b["label"] or grow > coarse_step \
+                    or (lo <= x_axis.lo and hi >= x_axis.hi):
+                break
+            lo, hi, grow = lo - grow, hi + grow, 2 * grow
+    bisect_lines(runner, solver, settings, lines, x_axis, width, y_name)
+    return lines
+
+
+def refine_observable(runner, solver, settings, lines, x_axis, width, level, y_name,
+                      max_rounds=12):
+    """A scalar observable on each line: bisect where it crosses `level` (or where the event
+    starts or stops happening); without a level, where it changes fastest — intervals whose
+    change exceeds 1/8 of the line's range — until they are ≤ width."""
+    for _ in range(max_rounds):
+        mids = []
+        for y, pts in lines.items():
+            xs = sorted(pts)
+            vals = [pts[x] for x in xs]
+            fin = [v for v in vals if v is not None]
+            rng = (max(fin) - min(fin)) if fin else 0.0
+            for i in range(len(xs) - 1):
+                if xs[i + 1] - xs[i] <= width * (1 + 1e-9):
+                    continue
+                a, b = vals[i], vals[i + 1]
+                if (a is None) != (b is None):
+                    split = True
+                elif a is None:
+                    split = False
+                elif level is not None:
+                    split = (a - level) * (b - level) < 0
+                else:
+                    split = rng > 0 and abs(b - a) > rng / 8
+                if split:
+                    mids.append((y, 0.5 * (xs[i] + xs[i + 1])))
+        if not mids:
+            return
+        rows = runner.run([(solver, settings, _pt(x_axis.name, x, y_name, y))
+                           for y, x in mids])
+        for (y, x), row in zip(mids, rows):
+            lines[y][x] = row["value"]
+
+
+def level_crossings(lines, level):
+    """Where a scalar line crosses `level` or its event appears / disappears."""
+    out = []
+    for y, pts in sorted(lines.items(), key=lambda kv: (kv[0] is not None, kv[0])):
+        xs = sorted(pts)
+        for i in range(len(xs) - 1):
+            a, b = pts[xs[i]], pts[xs[i + 1]]
+            la = NONE if a is None else ("above" if level is not None and a >= level else
+                                         ("below" if level is not None else "value"))
+            lb = NONE if b is None else ("above" if level is not None and b >= level else
+                                         ("below" if level is not None else "value"))
+            if la != lb:
+                out.append({"x": 0.5 * (xs[i] + xs[i + 1]), "y": y,
+                            "bracket": [xs[i], xs[i + 1]], "from": la, "to": lb})
+    return out
+
+
+# --- error estimates and verdicts -------------------------------------------------------------
+
+def crossing_errors(runner, solver, settings, tight, lines, found, x_axis, width, y_name):
+    """Rerun each crossing's two bracketing points at the tighter settings; where a regime
+    flips, locate the crossing again at those settings: its shift is the error estimate."""
+    if tight is None:
+        for c in found:
+            c.update(error=None, holds=None, error_by="no tighter setting")
+        return
+    rows = runner.run([(solver, tight, _pt(x_axis.name, x, y_name, c["y"]))
+                       for c in found for x in c["bracket"]])
+    for i, c in enumerate(found):
+        a, b = rows[2 * i]["label"], rows[2 * i + 1]["label"]
+        c["holds"] = a == c["from"] and b == c["to"]
+        c["error_by"] = f"bracket rerun at {_settings_text(tight)}"
+        if c["holds"]:
+            c["error"] = 0.0
+            continue
+        # locate it again at the tighter settings from a bracket a coarse step wide
+        line = {c["y"]: {}}
+        lo, hi = c["bracket"]
+        span = max(hi - lo, width) * 4
+        xs = np.linspace(max(x_axis.lo, c["x"] - span), min(x_axis.hi, c["x"] + span), 5)
+        for x, r in zip(xs, runner.run([(solver, tight, _pt(x_axis.name, x, y_name, c["y"]))
+                                        for x in xs])):
+            line[c["y"]][float(x)] = r["label"]
+        bisect_lines(runner, solver, tight, line, x_axis, width, y_name)
+        again = [d for d in crossings(line, x_axis, None)
+                 if d["from"] == c["from"] and d["to"] == c["to"]]
+        c["error"] = (min(abs(d["x"] - c["x"]) for d in again) if again
+                      else float(2 * span))
+
+
+def _settings_text(st):
+    return ", ".join(f"{k}={v}" for k, v in st.items() if k in ("rtol", "dt", "integrator"))
+
+
+def compare_boundaries(boundaries, width):
+    """Per solver pair: each crossing of the first matched to the nearest of the second on the
+    same row with the same regimes; `agree` when every matched distance is within
+    width + both error estimates + both half-brackets, and neither has unmatched crossings
+    inside the region the other mapped."""
+    names = list(boundaries)
+    out = []
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            rows_b = {c["y"] for c in boundaries[b]}
+            pairs, lines = [], []
+            for ca in boundaries[a]:
+                if ca["y"] not in rows_b:
+                    continue
+                cands = [cb for cb in boundaries[b] if cb["y"] == ca["y"]
+                         and cb["from"] == ca["from"] and cb["to"] == ca["to"]]
+                if not cands:
+                    pairs.append(False)
+                    lines.append(f"{a}'s crossing {ca['from']}→{ca['to']} at x = "
+                                 f"{ca['x']:.6g}{_row(ca)} has no counterpart in {b}")
+                    continue
+                cb = min(cands, key=lambda c: abs(c["x"] - ca["x"]))
+                d = abs(cb["x"] - ca["x"])
+                bound = (width + (ca.get("error") or 0) + (cb.get("error") or 0)
+                         + 0.5 * (np.ptp(ca["bracket"]) + np.ptp(cb["bracket"])))
+                ok = d <= bound * (1 + 1e-9)
+                pairs.append(ok)
+                if not ok:
+                    lines.append(f"{ca['from']}→{ca['to']}{_row(ca)}: {a} at {ca['x']:.6g} "
+                                 f"{_bracket(ca)}, {b} at {cb['x']:.6g} {_bracket(cb)}: "
+                                 f"{d:.3g} apart > {bound:.3g} (resolution + error "
+                                 f"estimates + half-brackets)")
+            verdict = "agree" if pairs and all(pairs) else ("disagree" if pairs else "no data")
+            out.append({"a": a, "b": b, "verdict": verdict, "matched": len(pairs),
+                        "why": lines or ([f"all {len(pairs)} crossings within resolution + "
+                                          f"error estimates + half-brackets"] if pairs
+                                         else ["no crossing on a common row"])})
+    return out
+
+
+def _row(c):
+    return "" if c["y"] is None else f" (row {c['y']:.6g})"
+
+
+def _bracket(c):
+    e = c.get("error")
+    return f"[{c['bracket'][0]:.6g}, {c['bracket'][1]:.6g}]" + (f" ± {e:.2g}" if e else "")
+
+
+# --- the map -------------------------------------------------------------------------------
+
+def estimate(sc, x_axis, y_axis, chosen, resolution, coarse, engines, params):
+    """(runs, seconds) before anything runs: the coarse grid, ~log2 bisection rounds per row
+    for a few crossings, the engines' share, each run at its engine's measured cost."""
+    nx, ny = coarse
+    rows = ny if y_axis else 1
+    rounds = max(1, math.ceil(math.log2(max(2.0, 1.0 / (resolution * (nx - 1))))))
+    per_custom = nx * rows + 2 * rows * rounds + 4 * rows
+    per_engine = (nx * rows + 2 * rows * rounds) if engines == "everywhere" else 8 * rows
+    horizon = params.get("t_end", 10.0) / 10.0
+    runs, secs = 0, 0.0
+    for s in chosen:
+        n = per_engine if s.name in ("exudyn", "mujoco") else per_custom
+        runs += n
+        secs += n * COST_PER_10S.get(s.engine, 0.1) * horizon
+    return runs, secs
+
+
+def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolution=1e-3,
+             coarse=None, observable=None, level=None, engines="boundary", max_jobs=None):
+    """Everything checked before a run (one line, BadInput): scene, axes, parameters,
+    solvers, the work against the budget."""
+    sc = get_scene(scene_name)
+    if sc.kind != "time":
+        raise BadInput(f"scene {sc.name!r} is a frequency scene: maps are of time scenes")
+    if observable is None and sc.regime is None and sc.map_observables:
+        observable = next(iter(sc.map_observables))
+    if observable is None and sc.regime is None:
+        raise BadInput(f"scene {sc.name!r} declares no regime or map observable")
+    if observable is not None and observable not in sc.map_observables:
+        raise BadInput(f"--observable {observable}: not a map observable of {sc.name} "
+                       f"(known: {', '.join(sc.map_observables) or 'none'})")
+    if not (isinstance(resolution, (int, float)) and 0 < resolution < 0.5):
+        raise BadInput(f"--resolution must be in (0, 0.5), got {resolution!r}")
+    if engines not in ("boundary", "everywhere"):
+        raise BadInput(f"--engines must be boundary or everywhere, got {engines!r}")
+    x_axis = parse_axis(x, sc, "--x")
+    y_axis = parse_axis(y, sc, "--y") if y else None
+    if y_axis and y_axis.name == x_axis.name:
+        raise BadInput("--y names the same parameter as --x")
+    overrides = dict(overrides or {})
+    for a in (x_axis, y_axis):
+        if a and a.name in overrides:
+            raise BadInput(f"--set {a.name}: it is an axis of the map")
+    chosen = solvers.pick(sc, solver_names)
+    coarse = tuple(coarse or ((17, 9) if y_axis else (17, 1)))
+    if coarse[0] < 2 or (y_axis and coarse[1] < 2):
+        raise BadInput("coarse grid: at least 2 points along each axis")
+    budget.check_output(sc, overrides, 1)
+    params = sc.resolve({**overrides, x_axis.name: x_axis.lo,
+                         **({y_axis.name: y_axis.lo} if y_axis else {})})
+    for corner in (x_axis.hi,):
+        sc.resolve({**overrides, x_axis.name: corner})
+    runs, secs = estimate(sc, x_axis, y_axis, chosen, resolution, coarse, engines, params)
+    limit = MAX_JOBS if max_jobs is None else max_jobs
+    if runs > limit:
+        raise BadInput(f"map of {sc.name}: ~{runs} runs (~{secs:.3g} s on one core) exceed the "
+                       f"budget of {limit} runs: lower the resolution or the coarse grid, or "
+                       f"pass --max-jobs")
+    return {"scene": sc, "x": x_axis, "y": y_axis, "overrides": overrides, "chosen": chosen,
+            "resolution": resolution, "coarse": coarse, "observable": observable,
+            "level": level, "engines": engines, "estimate": {"runs": runs, "seconds": secs}}
+
+
+def is_engine(s):
+    return s.engine in ("exudyn", "mujoco")
+
+
+def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=None):
+    """The map of a `plan_map` plan: points, each solver's crossings with error estimates,
+    the pairwise verdicts, the work done. `settings_for(solver)` gives each solver's settings
+    (default: its accurate defaults)."""
+    log = log or (lambda m: None)
+    sc, xa, ya = plan["scene"], plan["x"], plan["y"]
+    what, level = plan["observable"], plan["level"]
+    y_name = ya.name if ya else None
+    nx, ny = plan["coarse"]
+    width = plan["resolution"] * xa.span
+    xs = np.linspace(xa.lo, xa.hi, nx)
+    ys = np.linspace(ya.lo, ya.hi, ny) if ya else [None]
+    coarse_step = xs[1] - xs[0]
+    runner = Runner(sc, plan["overrides"], what, executor, workers, store, log)
+    t_out = sc.output_grid(sc.resolve(plan["overrides"]))
+    settings = {s.name: (settings_for(s) if settings_for
+                         else solvers.settings_for(s, sc.name, t_out=t_out))
+                for s in plan["chosen"]}
+    customs = [s for s in plan["chosen"] if not is_engine(s)]
+    engines = [s for s in plan["chosen"] if is_engine(s)]
+    everywhere = customs + (engines if plan["engines"] == "everywhere" else [])
+    t0 = time.perf_counter()
+    lines, found = {}, {}
+    for s in everywhere:
+        log(f"map {sc.name}: {s.name} on the {nx} × {len(ys)} coarse grid …")
+        grid = [(float(x), y) for y in ys for x in xs]
+        rows = runner.run([(s.name, settings[s.name], _pt(xa.name, x, y_name, y))
+                           for x, y in grid])
+        lines[s.name] = {}
+        for (x, y), r in zip(grid, rows):
+            lines[s.name].setdefault(None if y is None else float(y), {})[x] = (
+                r["label"] if what is None else r["value"])
+        log(f"map {sc.name}: {s.name} refining …")
+        if what is None:
+            bisect_lines(runner, s.name, settings[s.name], lines[s.name], xa, width, y_name)
+        else:
+            refine_observable(runner, s.name, settings[s.name], lines[s.name], xa, width,
+                              level, y_name)
+    ref = next(iter(customs), None)
+    for s in engines:
+        if s in everywhere:
+            continue
+        if ref is None:
+            raise BadInput("--engines boundary needs a custom solver to find the boundary "
+                           "first (or pass --engines everywhere)")
+        log(f"map {sc.name}: {s.name} from {ref.name}'s brackets …")
+        ref_found = (crossings(lines[ref.name], xa, ya) if what is None
+                     else level_crossings(lines[ref.name], level))
+        if what is None:
+            lines[s.name] = refine_engine(runner, s.name, settings[s.name], ref_found, xa,
+                                          width, coarse_step, y_name)
+        else:
+            lines[s.name] = _observable_at(runner, s.name, settings[s.name], ref_found, xa,
+                                           y_name)
+    for s in plan["chosen"]:
+        found[s.name] = (crossings(lines[s.name], xa, ya) if what is None
+                         else level_crossings(lines[s.name], level))
+        if what is None and found[s.name]:
+            tight, _, _ = solvers.tighter_settings(s.leaf(sc), settings[s.name])
+            crossing_errors(runner, s.name, settings[s.name], tight, lines[s.name],
+                            found[s.name], xa, width, y_name)
+    wall = time.perf_counter() - t0
+    uniform = (int(round(1 / plan["resolution"])) + 1) * len(ys)
+    points = [{"solver": s, "params": _pt(xa.name, x, y_name, y),
+               ("regime" if what is None else "value"): v}
+              for s, ls in lines.items() for y, pts in ls.items() for x, v in sorted(pts.items())]
+    return {"scene": sc.name, "x": xa.as_dict(), "y": ya.as_dict() if ya else None,
+            "set": plan["overrides"], "observable": what, "level": level,
+            "resolution": plan["resolution"], "bracket_width": width,
+            "coarse": list(plan["coarse"]), "engines": plan["engines"],
+            "settings": settings, "estimate": plan["estimate"],
+            "points": points, "boundaries": found,
+            "verdicts": compare_boundaries(found, width) if what is None or level is not None
+            else [],
+            "runs": dict(runner.runs), "uniform_grid_runs": uniform,
+            "run_wall_s": dict(runner.wall), "wall_s": wall,
+            "points_per_core_second": {s: runner.runs[s] / runner.wall[s]
+                                       for s in runner.runs if runner.wall.get(s)},
+            "points_per_second": sum(runner.runs.values()) / wall if wall > 0 else None,
+            "reused": sum(1 for r in runner.memo.values() if r.get("reused"))}
+
+
+def _observable_at(runner, solver, settings, ref_found, xa, y_name):
+    """An engine's observable at the reference's level-crossing brackets."""
+    lines = {}
+    for c in ref_found:
+        rows = runner.run([(solver, settings, _pt(xa.name, x, y_name, c["y"]))
+                           for x in c["bracket"]])
+        for x, r in zip(c["bracket"], rows):
+            lines.setdefault(c["y"], {})[x] = r["value"]
+    return lines
+
+
+def map_dir(out, scene_name):
+    stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
+    return Path(out) / "maps" / f"{scene_name}-{stamp}-{os.getpid()}"

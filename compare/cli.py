@@ -203,6 +203,37 @@ def build_parser():
     sp.add_argument("--out", default="logs", metavar="DIR", help=out_help)
     _budget_options(sp)
 
+    sp = sub.add_parser("map", help="regimes or an observable over one or two parameters",
+                        description="Map a scene's regimes (or a scalar observable) over a "
+                                    "parameter line or plane: a coarse grid, then bisection "
+                                    "where neighbours differ, every solver's boundary located "
+                                    "on its own and compared with error bars.")
+    common(sp)
+    sp.add_argument("--x", required=True, metavar="NAME=LO:HI", help="the x axis")
+    sp.add_argument("--y", metavar="NAME=LO:HI", help="the y axis (a 2-D map)")
+    sp.add_argument("--resolution", type=_positive("--resolution"), default=1e-3,
+                    help="bracket of every crossing as a fraction of the x range "
+                         "(default 1e-3)")
+    sp.add_argument("--coarse", metavar="NX[,NY]",
+                    help="the coarse grid: points along x and rows along y (default 17,9)")
+    sp.add_argument("--observable", metavar="NAME",
+                    help="map a scalar observable of the scene instead of its regime")
+    sp.add_argument("--level", type=float, metavar="V",
+                    help="with --observable: locate where it crosses V")
+    sp.add_argument("--engines", choices=("boundary", "everywhere"), default="boundary",
+                    help="engines refine the custom solvers' boundary (default) or map the "
+                         "whole plane")
+    sp.add_argument("--executor", choices=("local", "dask"), default="local",
+                    help="local process pool (default) or Dask distributed")
+    sp.add_argument("--scheduler", metavar="ADDR", help="a running Dask scheduler's address")
+    sp.add_argument("--workers", type=_positive_int("--workers"), default=None, metavar="N",
+                    help="parallel workers (default 2)")
+    sp.add_argument("--max-jobs", type=_positive_int("--max-jobs"), default=None,
+                    metavar="N", help="refuse to start a map estimated above N runs "
+                                      "(default 100000)")
+    sp.add_argument("--no-record", action="store_true", help="skip the .rrd recording")
+    sp.add_argument("--out", default="logs", metavar="DIR", help=out_help)
+
     sp = sub.add_parser("extremes", help="numerical stability at the extremes of a scene",
                         description="Run every extreme case of the scene's spec with every "
                                     "solver: each ends within tolerance of an independent check "
@@ -408,9 +439,51 @@ def cmd_bench(args):
     return 0
 
 
+def _coarse(text):
+    try:
+        vals = tuple(int(v) for v in text.split(","))
+    except ValueError:
+        raise BadInput(f"--coarse {text!r}: expected NX or NX,NY (whole numbers)") from None
+    if len(vals) not in (1, 2):
+        raise BadInput(f"--coarse {text!r}: expected NX or NX,NY")
+    return vals if len(vals) == 2 else (vals[0], 9)
+
+
+def cmd_map(args):
+    from .workflows.maps import map_to_folder, plan_map
+    check_out(args.out)
+    if args.scheduler and args.executor != "dask":
+        raise BadInput("--scheduler needs --executor dask")
+    coarse = _coarse(args.coarse) if args.coarse else None
+    if coarse and not args.y:
+        coarse = (coarse[0], 1)
+    plan = plan_map(args.scene, args.x, args.y, parse_sets(args.set), args.solver,
+                    args.resolution, coarse, args.observable, args.level, args.engines,
+                    args.max_jobs)
+    est = plan["estimate"]
+    _log(f"map {plan['scene'].name}: ~{est['runs']} runs planned (~{est['seconds']:.3g} s "
+         f"of solver time)")
+    make_out(args.out)
+    with stdout_to_stderr():
+        obj = map_to_folder(plan, args.out, executor=args.executor, scheduler=args.scheduler,
+                            workers=args.workers, record=not args.no_record, log=_log)
+    if args.json:
+        emit_json(obj)
+    else:
+        for s, cs in obj["boundaries"].items():
+            for c in cs:
+                row = "" if c["y"] is None else f" at {obj['y']['name']} = {c['y']:.6g}"
+                print(f"{s:14s} {c['from']} → {c['to']}{row}: {obj['x']['name']} in "
+                      f"[{c['bracket'][0]:.6g}, {c['bracket'][1]:.6g}]")
+        for v in obj["verdicts"]:
+            print(f"{v['a']} vs {v['b']}: {v['verdict']} — {'; '.join(v['why'])}")
+        print(f"report: {obj['files']['report']}")
+    return 0
+
+
 COMMANDS = {"list": cmd_list, "show": cmd_show, "run": cmd_run, "modes": cmd_modes,
-            "campaign": cmd_campaign, "bench": cmd_bench, "extremes": cmd_extremes,
-            "diff": cmd_diff, "baseline": cmd_baseline}
+            "campaign": cmd_campaign, "map": cmd_map, "bench": cmd_bench,
+            "extremes": cmd_extremes, "diff": cmd_diff, "baseline": cmd_baseline}
 
 
 def main(argv=None):

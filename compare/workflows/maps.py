@@ -525,3 +525,25 @@ def _observable_at(runner, solver, settings, ref_found, xa, y_name):
 def map_dir(out, scene_name):
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
     return Path(out) / "maps" / f"{scene_name}-{stamp}-{os.getpid()}"
+
+
+def map_to_folder(plan, out, settings_for=None, executor="local", scheduler=None, workers=None,
+                  store=None, record=True, log=None, out_dir=None):
+    """Run a planned map with the campaign's executors (process pool or Dask) into
+    OUT/maps/<scene>-<stamp>-<pid>/ (or `out_dir`): map.json, map.png, report.md, map.rrd."""
+    from ..output.map_plot import write_map_outputs
+    from .campaign import make_executor
+    out_dir = Path(out_dir) if out_dir else map_dir(out, plan["scene"].name)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    workers = workers or 2
+    pool, client = make_executor(executor, scheduler, workers)
+    try:
+        result = run_map(plan, settings_for, pool, workers, store, log)
+    finally:
+        pool.shutdown(wait=True)
+        if client is not None:
+            client.close()
+    result["files"] = write_map_outputs(out_dir, result, record)
+    result["folder"] = str(out_dir)
+    write_json(out_dir / "map.json", result)
+    return result

@@ -1,0 +1,136 @@
+"""A map's files: map.png (regions by regime or observable, each solver's boundary in the
+plots' colours, the runs as dots), the Markdown section, and map.rrd (points per solver, each
+boundary as line strips)."""
+import numpy as np
+
+from ..atomic import atomic_path, write_text
+from .recording import APPLICATION_ID, PALETTE
+from .report import plot_style, save_figure
+
+REGIME_COLOURS = ("#d9d9d9", "#a6cee3", "#fdbf6f", "#b2df8a", "#fb9a99", "#cab2d6")
+
+
+def _labels(result):
+    key = "regime" if result["observable"] is None else "value"
+    return key, sorted({str(p[key]) for p in result["points"]})
+
+
+def _colour(i):
+    return PALETTE[i % len(PALETTE)]
+
+
+def _hex(c):
+    return c if isinstance(c, str) else "#" + "".join(f"{int(v):02x}" for v in c[:3])
+
+
+def plot_map(path, result):
+    plt = plot_style()
+    x, y = result["x"], result["y"]
+    solvers = list(result["runs"]) or list(result["boundaries"])
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    key, labels = _labels(result)
+    first = solvers[0] if solvers else None
+    pts = [p for p in result["points"] if p["solver"] == first]
+    px = np.array([p["params"][x["name"]] for p in pts])
+    py = (np.array([p["params"][y["name"]] for p in pts]) if y
+          else np.zeros(len(pts)))
+    if key == "regime":              # regions: each run of the first solver as its regime
+        for i, lab in enumerate(labels):
+            m = np.array([str(p["regime"]) == lab for p in pts])
+            if m.any():
+                ax.scatter(px[m], py[m], s=60, marker="s", color=REGIME_COLOURS[
+                    i % len(REGIME_COLOURS)], label=f"{lab} ({first})", zorder=1)
+    else:
+        vals = np.array([np.nan if p["value"] is None else p["value"] for p in pts])
+        sc = ax.scatter(px, py, c=vals, s=60, marker="s", cmap="viridis", zorder=1)
+        fig.colorbar(sc, ax=ax, label=result["observable"])
+    for i, s in enumerate(solvers):
+        col = _hex(_colour(i))
+        mine = [p for p in result["points"] if p["solver"] == s]
+        ax.plot([p["params"][x["name"]] for p in mine],
+                [p["params"][y["name"]] if y else 0.0 for p in mine], ".", ms=2.5, color=col,
+                zorder=2)
+        b = result["boundaries"].get(s, [])
+        if b:
+            bx = [c["x"] for c in b]
+            by = [c["y"] if y else 0.0 for c in b]
+            # later solvers smaller and dashed: boundaries that agree stay visible together
+            ax.plot(bx, by, "o" if y else "|", ls="-" if i == 0 else "--",
+                    ms=max(3, 10 - 2.5 * i), mew=2, lw=max(0.8, 2.5 - 0.6 * i), color=col,
+                    label=f"{s} boundary", zorder=3 + i)
+    ax.set_xlabel(f"{x['name']} [{x['unit']}]")
+    ax.set_ylabel(f"{y['name']} [{y['unit']}]" if y else "")
+    if not y:
+        ax.set_yticks([])
+    ax.set_title(f"map: {result['scene']}"
+                 + (f" — {result['observable']}" if result["observable"] else " — regimes"))
+    ax.legend(fontsize=7, loc="best")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    save_figure(fig, path)
+
+
+def markdown(result):
+    x, y = result["x"], result["y"]
+    md = [f"## Map: {result['scene']} over {x['name']}" + (f" × {y['name']}" if y else ""),
+          "", f"{x['name']} ∈ [{x['lo']:g}, {x['hi']:g}] {x['unit']}"
+          + (f", {y['name']} ∈ [{y['lo']:g}, {y['hi']:g}] {y['unit']}" if y else "")
+          + f"; brackets ≤ {result['bracket_width']:.3g} {x['unit']} (resolution "
+          f"{result['resolution']:g} of the range); coarse grid {result['coarse']}; "
+          f"set {result['set'] or '—'}.", "",
+          "| solver | runs | uniform grid | points / core-s |", "|---|---|---|---|"]
+    for s, n in result["runs"].items():
+        pps = result["points_per_core_second"].get(s)
+        md.append(f"| {s} | {n} | {result['uniform_grid_runs']} | "
+                  f"{'—' if pps is None else f'{pps:.0f}'} |")
+    md += ["", "| solver | row | from → to | crossing | bracket | error estimate | regime "
+           "holds at tighter settings |", "|---|---|---|---|---|---|---|"]
+    for s, cs in result["boundaries"].items():
+        for c in cs:
+            e, row = c.get("error"), c["y"]
+            md.append(f"| {s} | {'—' if row is None else f'{row:.6g}'} | "
+                      f"{c['from']} → {c['to']} | {c['x']:.6g} | [{c['bracket'][0]:.6g}, "
+                      f"{c['bracket'][1]:.6g}] | {'—' if e is None else f'{e:.2g}'} | "
+                      f"{ {True: 'yes', False: 'no', None: '—'}[c.get('holds')] } |")
+    if result["verdicts"]:
+        md += ["", "| pair | verdict | why |", "|---|---|---|"]
+        for v in result["verdicts"]:
+            md.append(f"| {v['a']} ~ {v['b']} | {v['verdict']} | {'; '.join(v['why'])} |")
+    md += ["", "![map](map.png)", ""]
+    return md
+
+
+def write_map_recording(path, result):
+    """Points per solver (coloured by regime index or value) and each boundary as a strip."""
+    import rerun as rr
+    x, y = result["x"], result["y"]
+    key, labels = _labels(result)
+    with atomic_path(path) as tmp, \
+            rr.RecordingStream(APPLICATION_ID, recording_id=f"map-{path.parent.name}") as rec:
+        rec.save(str(tmp))
+        for i, s in enumerate(result["runs"] or result["boundaries"]):
+            mine = [p for p in result["points"] if p["solver"] == s]
+            pos = [[p["params"][x["name"]], p["params"][y["name"]] if y else 0.0, 0.0]
+                   for p in mine]
+            if pos:
+                rec.log(f"map/{s}/points", rr.Points3D(
+                    pos, colors=[_colour(i)] * len(pos), radii=0.004 * (x["hi"] - x["lo"]),
+                    labels=[str(p[key]) for p in mine]), static=True)
+            b = result["boundaries"].get(s, [])
+            if b:
+                strip = [[c["x"], c["y"] if y else 0.0, 0.0] for c in b]
+                rec.log(f"map/{s}/boundary", rr.LineStrips3D([strip], colors=[_colour(i)]),
+                        static=True)
+    return path
+
+
+def write_map_outputs(out_dir, result, record=True):
+    """map.png, report.md (the map section) and map.rrd in `out_dir`; map.json is the
+    caller's (the result dict with these paths)."""
+    plot_map(out_dir / "map.png", result)
+    write_text(out_dir / "report.md", "\n".join([f"# Map: {result['scene']}", ""]
+                                                 + markdown(result)[2:]) + "\n")
+    files = {"plot": str(out_dir / "map.png"), "report": str(out_dir / "report.md")}
+    if record:
+        files["recording"] = str(write_map_recording(out_dir / "map.rrd", result))
+    return files

@@ -56,7 +56,10 @@ from ..scenes import get_scene
 from . import budget, guard, runner
 
 STORE_VERSION = 1          # bump when the stored result format changes: everything reruns
-TOP_KEYS = ("name", "cases", "max_output_gib", "max_steps")
+TOP_KEYS = ("name", "cases", "maps", "max_output_gib", "max_steps", "max_jobs")
+MAP_KEYS = ("name", "scene", "x", "y", "set", "solvers", "resolution", "coarse", "observable",
+            "level", "engines")
+MAX_JOBS = 10_000          # jobs (cases × solvers) a campaign may plan before it is refused
 CASE_KEYS = ("name", "scene", "set", "sweep", "solvers", "dt", "rtol", "integrator",
              "settings", "timeout_s")
 
@@ -69,10 +72,19 @@ def default_campaign(name: str = "default") -> dict:
     scene, every solver, minutes) or "long" (the cases a scene marks `"campaign": "long"`, e.g.
     the engines' full sail deployment, tens of minutes)."""
     from ..scenes import SCENES
-    return {"name": name,
+    camp = {"name": name,
             "cases": [{"scene": sc.name, **{k: v for k, v in case.items() if k != "campaign"}}
                       for sc in SCENES.values() for case in sc.campaign_cases
                       if case.get("campaign", "default") == name]}
+    if name == "default":              # each scene's default maps
+        camp["maps"] = [{"name": f"{sc.name}-{m.name}", "scene": sc.name, "x": m.x,
+                         **({"y": m.y} if m.y else {}), "set": dict(m.set),
+                         "resolution": m.resolution, "coarse": list(m.coarse),
+                         **({"solvers": list(m.solvers)} if m.solvers else {}),
+                         **({"observable": m.observable} if m.observable else {}),
+                         **({"level": m.level} if m.level is not None else {})}
+                        for sc in SCENES.values() for m in sc.maps]
+    return camp
 
 
 # --- the file -------------------------------------------------------------------------------
@@ -123,9 +135,28 @@ def check_shape(camp, src):
     for k in ("max_output_gib", "max_steps"):
         if k in camp and not (_is_num(camp[k]) and camp[k] > 0):
             bad(k, f"must be a positive number, got {camp[k]!r}")
+    if "max_jobs" in camp and not (isinstance(camp["max_jobs"], int) and camp["max_jobs"] > 0):
+        bad("max_jobs", f"must be a positive whole number, got {camp['max_jobs']!r}")
+    maps = camp.get("maps", [])
+    if not isinstance(maps, list):
+        bad("maps", "must be a list of maps ([[maps]] in TOML)")
+    for i, m in enumerate(maps):
+        if not isinstance(m, dict):
+            bad(f"maps[{i}]", "must be a table/object")
+        for k in m:
+            if k not in MAP_KEYS:
+                bad(f"maps[{i}].{k}", f"unknown key (known: {', '.join(MAP_KEYS)})")
+        for k in ("scene", "x"):
+            if not isinstance(m.get(k), str):
+                bad(f"maps[{i}].{k}", "missing or not a string")
+        if "name" in m and not _safe_name(m["name"]):
+            bad(f"maps[{i}].name", f"{m['name']!r} must be a non-empty string without '/'")
     cases = camp.get("cases")
-    if not isinstance(cases, list) or not cases:
+    if (not isinstance(cases, list) or not cases) and not maps:
         bad("cases", "missing or empty: a list of cases ([[cases]] in TOML)")
+    cases = cases or []
+    if not isinstance(cases, list):
+        bad("cases", "must be a list of cases ([[cases]] in TOML)")
     for i, c in enumerate(cases):
         at = f"cases[{i}]"
         if not isinstance(c, dict):
@@ -322,13 +353,29 @@ def _prefixed(where, fn, *args):
         raise BadInput(f"{where}: {e}") from None
 
 
-def plan(camp, src="built-in campaign", timeout_s=None, max_output_gib=None, max_steps=None):
+def plan(camp, src="built-in campaign", timeout_s=None, max_output_gib=None, max_steps=None,
+         max_jobs=None):
     """Validate every case and sweep point up front (bad input stops the campaign before
     anything runs) and list the jobs."""
     max_output_gib = max_output_gib or camp.get("max_output_gib")
     max_steps = max_steps or camp.get("max_steps")
+    max_jobs = max_jobs or camp.get("max_jobs") or MAX_JOBS
+    # the size of the work first, from the sweeps' lengths alone: a sweep of a million points
+    # is refused in milliseconds, before any point is built or checked
+    n_jobs = 0
+    for i, c in enumerate(camp.get("cases", [])):
+        n = 1
+        for spec in c.get("sweep", {}).values():
+            n *= (spec["num"] if isinstance(spec, dict) and isinstance(spec.get("num"), int)
+                  else len(spec) if isinstance(spec, list) else 1)
+        n_jobs += n * len(c.get("solvers")
+                          or _prefixed(f"{src}: cases[{i}].scene", get_scene, c["scene"]).leaves)
+    if n_jobs > max_jobs:
+        raise BadInput(f"{src}: {n_jobs} jobs (cases × sweep points × solvers) exceed the "
+                       f"budget of {max_jobs}: shorten the sweeps or set max_jobs "
+                       f"(or --max-jobs)")
     cases, jobs, names = [], [], set()
-    for i, c in enumerate(camp["cases"]):
+    for i, c in enumerate(camp.get("cases", [])):
         at = f"{src}: cases[{i}]"
         sc = _prefixed(f"{at}.scene", get_scene, c["scene"])
         name = c.get("name") or f"case{i}-{sc.name}"
@@ -369,6 +416,25 @@ def plan(camp, src="built-in campaign", timeout_s=None, max_output_gib=None, max
                 jobs.append(Job(pname, sc.name, params, overrides, s.name, (s.name,), settings,
                                 limit, job_digest(sc, params, [s], settings)))
     return cases, jobs
+
+
+def plan_maps(camp, src="built-in campaign", max_jobs=None):
+    """Every `[[maps]]` entry planned (validated, its work estimated) before anything runs."""
+    from .maps import plan_map
+    out, names = [], set()
+    for i, m in enumerate(camp.get("maps", [])):
+        at = f"{src}: maps[{i}]"
+        name = m.get("name") or f"map{i}-{m['scene']}"
+        if name in names:
+            raise BadInput(f"{at}.name: duplicate map name {name!r}")
+        names.add(name)
+        coarse = m.get("coarse")
+        pl = _prefixed(at, plan_map, m["scene"], m["x"], m.get("y"), m.get("set"),
+                       m.get("solvers"), m.get("resolution", 1e-3),
+                       tuple(coarse) if coarse else None, m.get("observable"), m.get("level"),
+                       m.get("engines", "boundary"), max_jobs or camp.get("max_jobs"))
+        out.append((name, pl))
+    return out
 
 
 def _settings(sc, s, c, extra, params):
@@ -442,7 +508,7 @@ def connect(scheduler, timeout_s=10):
                        ) from None
 
 
-def make_executor(kind, scheduler, workers):
+def make_executor(kind, scheduler, workers, ignore_sigint=False):
     if kind == "dask":
         try:
             from distributed import Client, LocalCluster
@@ -457,12 +523,13 @@ def make_executor(kind, scheduler, workers):
         return client.get_executor(), client
     # spawn: engines start threads; a forked child would inherit a half-initialised state.
     # The children inherit one BLAS thread each (compare/__init__.py)
-    # workers ignore SIGINT: Ctrl-C reaches the whole process group, and only this process
-    # decides what happens (stop the workers, keep what is stored, say how to resume)
+    # a campaign's workers ignore SIGINT: Ctrl-C reaches the whole process group, and only the
+    # main process decides what happens (stop the workers, keep what is stored, say how to
+    # resume); other callers keep the default (a worker's KeyboardInterrupt ends its job)
+    quiet = dict(initializer=signal.signal, initargs=(signal.SIGINT, signal.SIG_IGN)) \
+        if ignore_sigint else {}
     return ProcessPoolExecutor(max_workers=workers or 2,
-                               mp_context=multiprocessing.get_context("spawn"),
-                               initializer=signal.signal,
-                               initargs=(signal.SIGINT, signal.SIG_IGN)), None
+                               mp_context=multiprocessing.get_context("spawn"), **quiet), None
 
 
 @contextmanager
@@ -499,18 +566,19 @@ def _stop_workers(ex, store):
 
 
 def run_campaign(path, out, executor="local", scheduler=None, workers=None, timeout_s=None,
-                 verbose=False, max_output_gib=None, max_steps=None, view=None):
+                 verbose=False, max_output_gib=None, max_steps=None, view=None, max_jobs=None):
     """Plan (everything validated), run what is not stored yet, report each case as its jobs
     come in, then the campaign report. Returns the summary (also in summary.json)."""
     camp = load_campaign(path)
     src = str(path) if path else "built-in campaign"
-    cases, jobs = plan(camp, src, timeout_s, max_output_gib, max_steps)
+    cases, jobs = plan(camp, src, timeout_s, max_output_gib, max_steps, max_jobs)
+    maps = plan_maps(camp, src, max_jobs)
     view = view or PlainProgress()
     out_dir = Path(out) / "campaign" / camp.get("name", "campaign")
     with guard.folder_lock(out_dir, "xval campaign", view.log):
         try:
             return _run_locked(camp, cases, jobs, out_dir, view, executor, scheduler, workers,
-                               verbose)
+                               verbose, maps)
         except KeyboardInterrupt:
             store = out_dir / "jobs"
             n = sum(is_done(j, store) for j in jobs)
@@ -518,7 +586,8 @@ def run_campaign(path, out, executor="local", scheduler=None, workers=None, time
                               f"reused") from None
 
 
-def _run_locked(camp, cases, jobs, out_dir, view, executor, scheduler, workers, verbose):
+def _run_locked(camp, cases, jobs, out_dir, view, executor, scheduler, workers, verbose,
+                maps=()):
     # summary.json is the campaign's done-marker (written last): while the campaign runs, or
     # after it was stopped, the folder has none and `xval diff` calls it incomplete
     (out_dir / "summary.json").unlink(missing_ok=True)
@@ -535,7 +604,7 @@ def _run_locked(camp, cases, jobs, out_dir, view, executor, scheduler, workers, 
         if not pending[c.name]:
             outcome[c.name] = _finish_safely(c, jobs, store, out_dir, crashed, reused, view)
     if todo:
-        ex, client = make_executor(executor, scheduler, workers)
+        ex, client = make_executor(executor, scheduler, workers, ignore_sigint=True)
         t_start = time.time()
         stopped = False
         try:
@@ -571,9 +640,28 @@ def _run_locked(camp, cases, jobs, out_dir, view, executor, scheduler, workers, 
                 ex.shutdown(wait=True)
             if client is not None:
                 client.close()
+    map_results = [_run_map(name, pl, out_dir, executor, scheduler, workers, view)
+                   for name, pl in maps]
     from ..output.campaign_report import write_campaign_report
     return write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed,
-                                 time.perf_counter() - t0)
+                                 time.perf_counter() - t0, map_results)
+
+
+def _run_map(name, pl, out_dir, executor, scheduler, workers, view):
+    """A campaign's map: its points are jobs stored under a digest of their inputs (scene,
+    parameters, solver, settings, package versions, the models' code), so a rerun reuses
+    them as it reuses cases."""
+    from .maps import map_to_folder
+    sc = pl["scene"]
+    salt = {"store": STORE_VERSION, "code": job_code(sc, pl["chosen"]),
+            "versions": {s.name: solvers.versions(s) for s in pl["chosen"]}}
+    view.note(f"map {name}: ~{pl['estimate']['runs']} runs")
+    res = map_to_folder(pl, None, executor=executor, scheduler=scheduler, workers=workers,
+                        store=out_dir / "jobs" / "map-points", log=view.log,
+                        out_dir=out_dir / "maps" / name, salt=salt)
+    res["name"] = name
+    view.log(f"map {name}: {sum(res['runs'].values())} runs, {res['reused']} reused")
+    return res
 
 
 def dispatch_order(jobs):

@@ -308,3 +308,22 @@ def test_a_frequency_case_moved_by_1e_6_in_stiffness(tmp_path):
         assert row["state"] == "changed", name
         assert row["max_rel"] == pytest.approx(0.5e-6 * 2000.0 / k_eff, rel=1e-3), name
     assert {n.split(" (")[0] for n in rows} >= {"mode 1", "mode 2"}
+
+
+def test_two_map_folders_and_a_baseline_of_one(tmp_path):
+    """`xval map` folders (map.json: boundaries per solver as {x, y, bracket, from, to})."""
+    def folder(name, x):
+        d = tmp_path / name
+        d.mkdir()
+        (d / "map.json").write_text(json.dumps(
+            {"scene": "rotor-spinup", "boundaries": {"quaternion": [
+                {"x": x, "y": None, "bracket": [x - 1e-3, x + 1e-3], "from": "capture",
+                 "to": "passage"}]}}))
+        return d
+    a, b, c = folder("a", 3.0), folder("b", 3.0015), folder("c", 3.0025)
+    assert _diff(a, b, tmp_path / "o")[0] == 0          # 1.5e-3 within 1e-3 + 1e-3
+    rc, obj, se = _diff(a, c, tmp_path / "o")
+    assert rc == 1 and obj["maps"][0]["map"] == "rotor-spinup", se
+    base = tmp_path / "base.npz"
+    sides.save_baseline(a, base)
+    assert _diff(base, c, tmp_path / "o")[0] == 1

@@ -190,6 +190,11 @@ def pair_cases(old: Side, new: Side):
     """Case names of `old` → those of `new`; BadInput when the same name holds different
     scenes or nothing is in common."""
     common = [n for n in old.cases if n in new.cases]
+    if not old.cases and not new.cases:               # two map folders: their boundaries
+        if not set(old.maps) & set(new.maps):
+            raise BadInput(f"different scenes: {old.path} maps {', '.join(old.maps)}, "
+                           f"{new.path} maps {', '.join(new.maps)}")
+        return {}
     if not common and len(old.cases) == 1 and len(new.cases) == 1:
         (a, ca), (b, cb) = next(iter(old.cases.items())), next(iter(new.cases.items()))
         if ca.scene != cb.scene:

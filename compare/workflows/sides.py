@@ -92,6 +92,8 @@ def load_side(path) -> Side:
         return _load_campaign(p)
     if (p / "result.json").exists() or guard.is_incomplete(p):
         return _load_run(p)
+    if (p / "map.json").exists():                    # an `xval map` folder
+        return Side(p, "map", {}, _load_maps(p))
     raise BadInput(f"{path}: not a campaign folder (summary.json), run folder (result.json) "
                    f"or baseline file")
 
@@ -179,7 +181,8 @@ def _load_maps(p):
             obj = json.loads(f.read_text())
         except (OSError, ValueError):
             continue
-        out[str(f.parent.relative_to(p)) or obj.get("scene", "map")] = {
+        key = str(f.parent.relative_to(p))
+        out[obj.get("scene", "map") if key == "." else key] = {
             "scene": obj.get("scene"), "boundaries": obj.get("boundaries") or {}}
     return out
 

@@ -224,7 +224,8 @@ def extremes(scene: str, solvers=None, *, include_slow: bool = False, timeout=No
 
 def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | None = None,
              workers: int | None = None, timeout=None, out=None, verbose: bool = False,
-             max_output_gib=None, max_steps=None, progress: Callable | None = None,
+             max_output_gib=None, max_steps=None, max_jobs=None,
+             progress: Callable | None = None,
              checking: Callable = contextlib.nullcontext) -> Summary:
     """A campaign (`xval campaign`): a .json/.toml file, a built-in name ("default", "long";
     None is the default campaign) or the campaign as a dict (the file's shape). Stored results
@@ -250,9 +251,11 @@ def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | Non
     with checking("checking the campaign, loading the models, planning the jobs …"):
         loaded = path_or_dict if isinstance(path_or_dict, dict) else \
             camp.load_campaign(path_or_dict)
-        camp.plan(loaded, "campaign" if isinstance(path_or_dict, dict)
-                  else (path_or_dict or "built-in campaign"), timeout, max_output_gib,
-                  max_steps)
+        where = ("campaign" if isinstance(path_or_dict, dict)
+                 else (path_or_dict or "built-in campaign"))
+        max_jobs = positive_int("--max-jobs", max_jobs)
+        camp.plan(loaded, where, timeout, max_output_gib, max_steps, max_jobs)
+        camp.plan_maps(loaded, where, max_jobs)
     if scheduler:                      # reachable before anything is written
         with checking(f"connecting to {scheduler} …"):
             camp.connect(scheduler).close()
@@ -267,7 +270,7 @@ def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | Non
         summary = camp.run_campaign(source, out, executor=executor, scheduler=scheduler,
                                     workers=workers, timeout_s=timeout, verbose=verbose,
                                     max_output_gib=max_output_gib, max_steps=max_steps,
-                                    view=view)
+                                    max_jobs=max_jobs, view=view)
     return Summary("campaign", summary, Path(summary["report"]).parent, temporary)
 
 

@@ -177,6 +177,9 @@ def build_parser():
     sp.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     sp.add_argument("--timeout", type=_positive("--timeout"), metavar="S",
                     help="wall-clock limit per job unless its case sets timeout_s")
+    sp.add_argument("--max-jobs", type=_positive_int("--max-jobs"), default=None,
+                    metavar="N", help="refuse to start a campaign of more than N jobs (cases × "
+                                      "sweep points × solvers; default 10000)")
     sp.add_argument("--verbose", action="store_true",
                     help="show each job's engine messages (banners, warnings) as it finishes; "
                          "they are always in the job's log and the report")
@@ -400,7 +403,8 @@ def cmd_campaign(args):
             r = api.campaign(args.file, executor=args.executor, scheduler=args.scheduler,
                              workers=args.workers, timeout=args.timeout, out=args.out,
                              verbose=args.verbose, max_output_gib=args.max_output_gib,
-                             max_steps=args.max_steps, progress=progress_view, checking=busy)
+                             max_steps=args.max_steps, max_jobs=args.max_jobs,
+                             progress=progress_view, checking=busy)
     except Interrupted as e:             # Ctrl-C: workers stopped, finished jobs kept
         again = " ".join(["xval campaign"] + ([args.file] if args.file else [])
                          + ["--out", args.out])

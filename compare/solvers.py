@@ -251,13 +251,15 @@ def tighter_settings(leaf: ModuleType, settings: dict) -> tuple[dict | None, flo
 
 
 def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
-             timeout_s: float | None = None, estimate_error: bool = False) -> Trajectory:
+             timeout_s: float | None = None, estimate_error: bool = False,
+             warm_up: bool = True) -> Trajectory:
     """Run one solver on one scene; always returns a Trajectory (status tells what happened).
     `timeout_s` bounds the wall time of the run (compile included): status "timeout". Settings
     were checked before (`settings_for`); anything a leaf raises now is recorded as `error`.
     `estimate_error`: rerun at tighter settings and keep factor·|Δ| per channel as the run's
-    own numerical error (`Trajectory.errors`), which the verdicts weigh."""
-    tr = _simulate(scene, solver, params, settings, timeout_s)
+    own numerical error (`Trajectory.errors`), which the verdicts weigh. `warm_up=False` skips
+    the separate compile call (a batch of points warms up once)."""
+    tr = _simulate(scene, solver, params, settings, timeout_s, warm_up)
     if estimate_error and tr.status == "ok":
         tight, factor, how = tighter_settings(solver.leaf(scene), settings)
         tr.stats["error_estimate_by"] = how
@@ -272,7 +274,7 @@ def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
     return tr
 
 
-def _simulate(scene, solver, params, settings, timeout_s):
+def _simulate(scene, solver, params, settings, timeout_s, warm_up=True):
     t_out = scene.output_grid(params)
     nan = {c: np.full(len(t_out), np.nan) for c in scene.channels}
     base = dict(scene=scene.name, solver=solver.name, t=t_out, versions=versions(solver),
@@ -282,7 +284,7 @@ def _simulate(scene, solver, params, settings, timeout_s):
         leaf = solver.leaf(scene)
         stats = {}
         with _time_limit(timeout_s):
-            if solver.compiled:        # compile once on a two-point grid, timed on its own
+            if solver.compiled and warm_up:   # compile on a two-point grid, timed on its own
                 t0 = time.perf_counter()
                 leaf.simulate(params, t_out[:2], settings)
                 stats["compile_s"] = time.perf_counter() - t0

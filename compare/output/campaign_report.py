@@ -8,6 +8,7 @@ import numpy as np
 from ..atomic import write_json, write_text
 from .citations import papers_in
 from .joblog import distinct_lines
+from .map_plot import markdown as map_markdown
 from .report import fmt_value, plot_style
 
 
@@ -122,7 +123,8 @@ def sweep_plot(parent, points, outcome, path):
     return save_figure(fig, path)
 
 
-def write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed, wall_s):
+def write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed, wall_s,
+                          maps=()):
     out_dir = Path(out_dir)
     name = camp.get("name")
     n_failed = sum(any(r["status"] != "ok" for r in outcome.get(c.name, {}).get("runs", []))
@@ -199,6 +201,14 @@ def write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed, 
         md += _findings_table(points, outcome)
         for p in points:
             md += _reuse_and_messages(p, jobs, reused, out_dir)
+    summary["maps"] = []
+    for m in maps:                       # the campaign's maps: each folder has its own files
+        rel = Path(m["folder"]).relative_to(out_dir)
+        md += ["", *[line.replace("](map.png)", f"]({rel}/map.png)")
+                     for line in map_markdown(m)]]
+        summary["maps"].append({"map": m["name"], "scene": m["scene"], "folder": str(rel),
+                                "runs": m["runs"], "reused": m["reused"],
+                                "boundaries": m["boundaries"], "verdicts": m["verdicts"]})
     report = out_dir / "report.md"
     write_text(report, "\n".join(md) + "\n")
     summary["report"] = str(report)

@@ -1,0 +1,124 @@
+"""`xval map`: boundaries against an independent bisection, the batch path against single runs,
+resume, Dask = process pool, work bounded before anything runs."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from compare import solvers
+from compare.physics.rotor import constants
+from compare.scenes import get_scene
+from compare.workflows import maps
+from compare.workflows.campaign import run_campaign
+
+BASE = {"eccentricity": 0.005, "t_end": 10}
+RES = 1e-2                                    # of the torque range 2.5–3.5: brackets ≤ 0.01
+
+
+def _passes(torque, solver):
+    """The test's own reading of the spec: passage when |ω| over the last 10 % of the run stays
+    above 1.1 × the forward critical speed √(k_eff / (I_t − I_p))."""
+    sc = get_scene("rotor-spinup")
+    p = sc.resolve({**BASE, "torque": torque})
+    tr = solvers.simulate(sc, solvers.get_solver(solver), p,
+                          solvers.settings_for(solvers.get_solver(solver), sc.name,
+                                               t_out=sc.output_grid(p)))
+    w, t = tr.channels["omega_norm"], tr.t
+    return bool(np.min(w[t >= 0.9 * t[-1]]) > 1.1 * constants(p)["forward_critical"])
+
+
+def test_map_boundary_equals_an_independent_bisection_with_another_solver():
+    plan = maps.plan_map("rotor-spinup", "torque=2.5:3.5", overrides=BASE,
+                         solver_names=["quaternion"], resolution=RES, coarse=(5, 1))
+    res = maps.run_map(plan)
+    (c,) = res["boundaries"]["quaternion"]
+    assert (c["from"], c["to"]) == ("capture", "passage")
+    assert np.ptp(c["bracket"]) <= RES * 1.0 + 1e-12
+    lo, hi = 2.5, 3.5                          # bisection with euler-vector, done here
+    assert not _passes(lo, "euler-vector") and _passes(hi, "euler-vector")
+    while hi - lo > RES:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if not _passes(mid, "euler-vector") else (lo, mid)
+    # the two brackets overlap: the same crossing to within the resolution
+    assert c["bracket"][0] <= hi and lo <= c["bracket"][1]
+    assert abs(c["x"] - 0.5 * (lo + hi)) <= RES
+
+
+def test_batch_path_returns_the_single_runs():
+    sc = get_scene("rotor-spinup")
+    s = solvers.get_solver("quaternion")
+    p = sc.resolve({**BASE, "torque": 3.0})
+    st = solvers.settings_for(s, sc.name, t_out=sc.output_grid(p))
+    rows = maps.evaluate_chunk(sc.name, s.name, BASE, [{"torque": 2.0}, {"torque": 3.3}], st,
+                               None)
+    for row, torque in zip(rows, (2.0, 3.3)):
+        q = sc.resolve({**BASE, "torque": torque})
+        one = solvers.simulate(sc, s, q, st)
+        assert row["label"] == sc.regime(q, one)
+    # a point after the first skips the warm-up call: the trajectory is bit-identical
+    a = solvers.simulate(sc, s, p, st)
+    b = solvers.simulate(sc, s, p, st, warm_up=False)
+    for ch in sc.channels:
+        np.testing.assert_array_equal(a.channels[ch], b.channels[ch])
+
+
+def _campaign(tmp_path, executor="local"):
+    camp = {"name": "m", "maps": [{"name": "m1", "scene": "rotor-spinup", "x": "torque=2.5:3.5",
+                                   "set": BASE, "solvers": ["quaternion"], "resolution": 0.05,
+                                   "coarse": [3, 1]}]}
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps(camp))
+    return run_campaign(str(path), tmp_path / "out", executor=executor, workers=1)
+
+
+def test_campaign_maps_resume_their_points(tmp_path):
+    first = _campaign(tmp_path)
+    (m,) = first["maps"]
+    assert m["reused"] == 0 and m["boundaries"]["quaternion"]
+    second = _campaign(tmp_path)
+    (m2,) = second["maps"]
+    assert m2["reused"] == sum(m["runs"].values()) and sum(m2["runs"].values()) == 0
+    assert m2["boundaries"] == m["boundaries"]
+
+
+def test_dask_map_equals_the_process_pool(tmp_path):
+    pytest.importorskip("distributed")
+    plan = maps.plan_map("rotor-spinup", "torque=2.5:3.5", overrides=BASE,
+                         solver_names=["quaternion"], resolution=0.05, coarse=(3, 1))
+    a = maps.map_to_folder(plan, tmp_path / "a", executor="local", workers=2, record=False)
+    b = maps.map_to_folder(plan, tmp_path / "b", executor="dask", workers=2, record=False)
+    assert a["points"] == b["points"] and a["boundaries"] == b["boundaries"]
+
+
+def _xval(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "compare", *args], cwd=cwd,
+                          capture_output=True, text=True)
+
+
+def test_work_over_the_budget_is_refused_with_one_line(tmp_path):
+    r = _xval("map", "rotor-spinup", "--x", "torque=1:5", "--y", "eccentricity=0:0.02",
+              "--max-jobs", "100", "--out", str(tmp_path / "o"), cwd=tmp_path)
+    assert r.returncode == 2 and "exceed the budget of 100 runs" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "o").exists()
+    f = tmp_path / "big.toml"
+    f.write_text('[[cases]]\nscene = "rotor-spinup"\n'
+                 'sweep = { torque = { start = 1.0, stop = 4.0, num = 1000000 } }\n')
+    r = _xval("campaign", str(f), "--out", str(tmp_path / "o"), cwd=tmp_path)
+    assert r.returncode == 2 and "4000000 jobs" in r.stderr and "max_jobs" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+
+
+def test_map_json_has_the_contract_fields(tmp_path):
+    r = _xval("map", "rotor-spinup", "--x", "torque=2.5:3.5", "--set", "eccentricity=0.005",
+              "--solver", "quaternion", "--resolution", "0.05", "--coarse", "3", "--json",
+              "--out", str(tmp_path), cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    obj = json.loads(r.stdout)
+    assert obj["scene"] == "rotor-spinup" and obj["y"] is None
+    assert {"params", "solver", "regime"} <= set(obj["points"][0])
+    (c,) = obj["boundaries"]["quaternion"]
+    assert {"x", "y", "bracket", "from", "to"} <= set(c) and c["y"] is None
+    for f in ("plot", "report", "recording"):
+        assert (tmp_path / obj["files"][f]).exists()

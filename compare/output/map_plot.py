@@ -64,7 +64,8 @@ def plot_map(path, result):
         ax.set_yticks([])
     ax.set_title(f"map: {result['scene']}"
                  + (f" — {result['observable']}" if result["observable"] else " — regimes"))
-    ax.legend(fontsize=7, loc="best")
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7, loc="best")
     ax.grid(alpha=0.3)
     fig.tight_layout()
     save_figure(fig, path)

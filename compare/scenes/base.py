@@ -71,6 +71,7 @@ class MapSpec:
     coarse: tuple = (17, 9)
     observable: str | None = None    # a map observable's name; None: the scene's regime
     level: float | None = None
+    engines: str = "boundary"        # or "everywhere"
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ import numpy as np
 
 from ..errors import BadInput
 from ..physics import bearing_rotor as physics
-from .base import Extreme, Finding, Scene
+from .base import Extreme, Finding, MapSpec, Scene
 from .params import Param, positive
 
 SOURCE = ("seed 001 (001_d37db2f6f0246403.txt): shaft in Rodrigues–Hamilton parameters in the "
@@ -19,6 +19,18 @@ def check(values):
                        "kg·m² (no rigid body has such inertias)")
 
 
+def _last_revs(tr):
+    """The last five revolutions, at most the second half of the run."""
+    a = tr.channels["spin_angle"]
+    return (a >= a[-1] - 5 * 2 * np.pi) & (tr.t >= 0.5 * tr.t[-1])
+
+
+def spin_ripple(params, tr):
+    """Peak-to-peak spin rate over the last five revolutions [rad/s]: the defect's
+    once-per-revolution signature (the findings' number and the map observable)."""
+    return float(np.ptp(tr.channels["spin_rate"][_last_revs(tr)]))
+
+
 def findings(params, trajectories):
     """Steady spin against the defect-free motor/friction balance, the once-per-revolution
     ripple and the orbit of journal a over the last five revolutions (at most the second half
@@ -29,15 +41,12 @@ def findings(params, trajectories):
     w_bal = physics.steady_spin_rate(params)
     sag = physics.static_sag(params)
 
-    def last_revs(tr):
-        a = tr.channels["spin_angle"]
-        return (a >= a[-1] - 5 * 2 * np.pi) & (tr.t >= 0.5 * tr.t[-1])
-
     def fmt(fn, unit, digits=6):
         return ", ".join(f"{tr.solver} {fn(tr):.{digits}g}{unit}" for tr in ok)
 
     mean = lambda tr: float(np.mean(tr.channels["spin_rate"][last_revs(tr)]))      # noqa: E731
-    ripple = lambda tr: float(np.ptp(tr.channels["spin_rate"][last_revs(tr)]))     # noqa: E731
+    ripple = lambda tr: spin_ripple(params, tr)                                   # noqa: E731
+    last_revs = _last_revs
     orbit = lambda tr: float(np.hypot(np.ptp(tr.channels["journal_a_x"][last_revs(tr)]),  # noqa
                                       np.ptp(tr.channels["journal_a_y"][last_revs(tr)])))
     ref = ok[0]
@@ -162,6 +171,12 @@ BEARING_ROTOR = Scene(
     plots=plots,
     extremes=BEARING_EXTREMES,
     campaign_cases=({"name": "bearing-rotor"},),
+    map_observables={"spin_ripple": (spin_ripple, "rad/s", "peak-to-peak spin rate over the "
+                                     "last five revolutions")},
+    # the diagnostic curve: ripple against defect height, every solver at every point (the
+    # engines' runs are the curve's check; its slope near zero defect from each of them)
+    maps=(MapSpec("ripple-vs-defect", x="defect_height=0:4e-5", resolution=0.05, coarse=(5, 1),
+                  observable="spin_ripple", engines="everywhere"),),
     notes="Force laws, spin angle (swing–twist about the shaft axis) and every observable are "
           "computed by compare/physics/bearing_rotor.py for all solvers; all start at the "
           "defect-free static sag, unrotated, at rest.",

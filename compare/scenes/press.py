@@ -5,7 +5,7 @@ import numpy as np
 
 from ..errors import BadInput
 from ..physics import press as phys
-from .base import Extreme, Finding, Scene
+from .base import Extreme, Finding, MapSpec, Scene
 from .params import Param, positive
 
 SOURCE = "seed 003 (clutchless crank press; Lagrange partial systems, linear-acceleration method)"
@@ -188,6 +188,12 @@ PRESS_CYCLE = Scene(
                 why="stiff slider through lock and release"),
     ),
     campaign_cases=({"name": "press-cycle"},),
+    map_observables={"lock_time": (lambda p, tr: lock_time(p, tr), "s",
+                                   "the instant the rocker locks onto the slider")},
+    # lock instant over the slider's stiffness; where the rocker stops locking (between 1e6
+    # and 1e7 N/m at the defaults) bracketed by the custom solvers, checked by the engines
+    maps=(MapSpec("lock-vs-slider-stiffness", x="slider_stiffness=1e5:1e7", resolution=1e-2,
+                  coarse=(9, 1), observable="lock_time"),),
     notes="The lock is a plastic impact located as a state event; energy_balance includes the "
           "press work and the energy lost at the lock.")
 

@@ -82,7 +82,8 @@ def default_campaign(name: str = "default") -> dict:
                          "resolution": m.resolution, "coarse": list(m.coarse),
                          **({"solvers": list(m.solvers)} if m.solvers else {}),
                          **({"observable": m.observable} if m.observable else {}),
-                         **({"level": m.level} if m.level is not None else {})}
+                         **({"level": m.level} if m.level is not None else {}),
+                         "engines": m.engines}
                         for sc in SCENES.values() for m in sc.maps]
     return camp
 

@@ -35,10 +35,12 @@ from . import budget
 
 NONE = "none"                     # an observable's label where its event did not happen
 MAX_JOBS = 100_000                # runs a map may plan before it is refused (--max-jobs)
-# seconds per run used for the estimate before anything runs, per solver engine, measured at
-# rotor-spinup's defaults over 10 s (numba: quaternion 3 ms, euler-vector 5 ms; MuJoCo 86 ms;
-# Exudyn 316 ms): scaled with t_end / 10 s
-COST_PER_10S = {"numba": 5e-3, "numpy": 1e-3, "scipy": 0.05, "mujoco": 0.09, "exudyn": 0.32}
+# the estimate before anything runs: seconds per output sample and per run, by solver engine,
+# measured on rotor-spinup over 10 s at 1001 samples (quaternion 3.3 ms, euler-vector 5 ms,
+# MuJoCo 86 ms, Exudyn 316 ms per run) plus a fixed cost per run; rough for other scenes
+COST_PER_SAMPLE = {"numba": 5e-6, "numpy": 1e-6, "scipy": 5e-5, "mujoco": 9e-5,
+                   "exudyn": 3.2e-4}
+COST_PER_RUN = {"mujoco": 0.02, "exudyn": 0.05}
 
 
 @dataclass(frozen=True)
@@ -119,6 +121,7 @@ class Runner:
         self.executor, self.workers = executor, workers
         self.store = Path(store) if store else None
         self.memo, self.log = {}, log or (lambda m: None)
+        self.tight = {}                  # point key → "regime holds/flips at <settings>"
         self.runs, self.wall = {}, {}
 
     def _key(self, solver, settings, pt):
@@ -235,14 +238,16 @@ def refine_observable(runner, solver, settings, lines, x_axis, width, level, y_n
                       max_rounds=12):
     """A scalar observable on each line: bisect where it crosses `level` (or where the event
     starts or stops happening); without a level, where it changes fastest — intervals whose
-    change exceeds 1/8 of the line's range — until they are ≤ width."""
+    change exceeds twice the line's median change (a straight line is not refined) — until
+    they are ≤ width."""
     for _ in range(max_rounds):
         mids = []
         for y, pts in lines.items():
             xs = sorted(pts)
             vals = [pts[x] for x in xs]
-            fin = [v for v in vals if v is not None]
-            rng = (max(fin) - min(fin)) if fin else 0.0
+            steps = [abs(b - a) for a, b in zip(vals, vals[1:])
+                     if a is not None and b is not None]
+            fast = 2 * float(np.median(steps)) if steps else 0.0
             for i in range(len(xs) - 1):
                 if xs[i + 1] - xs[i] <= width * (1 + 1e-9):
                     continue
@@ -254,7 +259,7 @@ def refine_observable(runner, solver, settings, lines, x_axis, width, level, y_n
                 elif level is not None:
                     split = (a - level) * (b - level) < 0
                 else:
-                    split = rng > 0 and abs(b - a) > rng / 8
+                    split = fast > 0 and abs(b - a) > fast
                 if split:
                     mids.append((y, 0.5 * (xs[i] + xs[i + 1])))
         if not mids:
@@ -297,6 +302,10 @@ def crossing_errors(runner, solver, settings, tight, lines, found, x_axis, width
         a, b = rows[2 * i]["label"], rows[2 * i + 1]["label"]
         c["holds"] = a == c["from"] and b == c["to"]
         c["error_by"] = f"bracket rerun at {_settings_text(tight)}"
+        for x, was, now in zip(c["bracket"], (c["from"], c["to"]), (a, b)):
+            key = runner._key(solver, settings, _pt(x_axis.name, x, y_name, c["y"]))
+            runner.tight[key] = (f"regime {'holds' if was == now else 'flips to ' + now} at "
+                                 f"{_settings_text(tight)}")
         if c["holds"]:
             c["error"] = 0.0
             continue
@@ -378,12 +387,13 @@ def estimate(sc, x_axis, y_axis, chosen, resolution, coarse, engines, params):
     rounds = max(1, math.ceil(math.log2(max(2.0, 1.0 / (resolution * (nx - 1))))))
     per_custom = nx * rows + 2 * rows * rounds + 4 * rows
     per_engine = (nx * rows + 2 * rows * rounds) if engines == "everywhere" else 8 * rows
-    horizon = params.get("t_end", 10.0) / 10.0
+    samples = params["t_end"] / params["output_dt"] + 1
     runs, secs = 0, 0.0
     for s in chosen:
-        n = per_engine if s.name in ("exudyn", "mujoco") else per_custom
+        n = per_engine if is_engine(s) else per_custom
         runs += n
-        secs += n * COST_PER_10S.get(s.engine, 0.1) * horizon
+        secs += n * (COST_PER_SAMPLE.get(s.engine, 1e-4) * samples
+                     + COST_PER_RUN.get(s.engine, 1e-3))
     return runs, secs
 
 
@@ -500,24 +510,57 @@ def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=N
             crossing_errors(runner, s.name, settings[s.name], tight, lines[s.name],
                             found[s.name], xa, width, y_name)
     wall = time.perf_counter() - t0
+    slopes = {}                          # an observable's slope over each line's first step
+    if what is not None:
+        for name, ls in lines.items():
+            for y, pts in ls.items():
+                xs = [x for x in sorted(pts) if pts[x] is not None][:2]
+                if len(xs) == 2:
+                    slopes.setdefault(name, []).append(
+                        {"y": y, "at": xs[0], "slope": (pts[xs[1]] - pts[xs[0]])
+                         / (xs[1] - xs[0])})
     uniform = (int(round(1 / plan["resolution"])) + 1) * len(ys)
-    points = [{"solver": s, "params": _pt(xa.name, x, y_name, y),
-               ("regime" if what is None else "value"): v}
-              for s, ls in lines.items() for y, pts in ls.items() for x, v in sorted(pts.items())]
+    points = []
+    for s, ls in lines.items():
+        for y, pts in ls.items():
+            for x, v in sorted(pts.items()):
+                pt = _pt(xa.name, x, y_name, y)
+                row = runner.memo[runner._key(s, settings[s], pt)]
+                tight = runner.tight.get(runner._key(s, settings[s], pt))
+                points.append({"solver": s, "params": pt,
+                               ("regime" if what is None else "value"): v,
+                               "status": row["status"], "reason": row.get("reason"),
+                               # the point's own check: its regime rerun at tighter settings
+                               # (points bracketing a crossing); None where not rerun
+                               "error_estimate": tight})
     return {"scene": sc.name, "x": xa.as_dict(), "y": ya.as_dict() if ya else None,
             "set": plan["overrides"], "observable": what, "level": level,
             "resolution": plan["resolution"], "bracket_width": width,
             "coarse": list(plan["coarse"]), "engines": plan["engines"],
             "settings": settings, "estimate": plan["estimate"],
             "points": points, "boundaries": found,
-            "verdicts": compare_boundaries(found, width) if what is None or level is not None
-            else [],
+            "verdicts": compare_boundaries(found, width),
+            "value_deviation": _value_deviation(lines) if what is not None else [],
+            "slope_at_lo": slopes,
             "runs": dict(runner.runs), "uniform_grid_runs": uniform,
             "run_wall_s": dict(runner.wall), "wall_s": wall,
             "points_per_core_second": {s: runner.runs[s] / runner.wall[s]
                                        for s in runner.runs if runner.wall.get(s)},
             "points_per_second": sum(runner.runs.values()) / wall if wall > 0 else None,
             "reused": sum(1 for r in runner.memo.values() if r.get("reused"))}
+
+
+def _value_deviation(lines):
+    """An observable's largest difference between two solvers over the points both ran."""
+    names, out = list(lines), []
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            d = [abs(lines[a][y][x] - lines[b][y][x]) for y in lines[a] if y in lines[b]
+                 for x in lines[a][y] if x in lines[b][y]
+                 and lines[a][y][x] is not None and lines[b][y][x] is not None]
+            if d:
+                out.append({"a": a, "b": b, "points": len(d), "max_abs": max(d)})
+    return out
 
 
 def _observable_at(runner, solver, settings, ref_found, xa, y_name):

@@ -33,7 +33,6 @@ import ast
 import hashlib
 import itertools
 import json
-import multiprocessing
 import signal
 import sys
 import threading
@@ -54,6 +53,7 @@ from ..output.joblog import captured, distinct_lines
 from ..output.progress import PlainProgress
 from ..scenes import get_scene
 from . import budget, guard, runner
+from .executors import connect, make_executor  # noqa: F401  (connect: the API's check)
 
 STORE_VERSION = 1          # bump when the stored result format changes: everything reruns
 TOP_KEYS = ("name", "cases", "maps", "max_output_gib", "max_steps", "max_jobs")
@@ -492,45 +492,6 @@ def is_done(job, store):
         return False
     meta = _stored_meta(f)
     return meta["stats"].get("input_digest") == job.digest and meta["status"] != "timeout"
-
-
-def connect(scheduler, timeout_s=10):
-    """A Dask client of the scheduler at `scheduler`; BadInput (one line) when none answers."""
-    try:
-        from distributed import Client
-    except ImportError:
-        raise BadInput("--executor dask needs the optional extra: pip install "
-                       "'xval[dask]'") from None
-    try:
-        return Client(scheduler, timeout=f"{timeout_s}s")
-    except (OSError, TimeoutError, ValueError) as e:
-        raise BadInput(f"--scheduler {scheduler}: no Dask scheduler answers there "
-                       f"({type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''})"
-                       ) from None
-
-
-def make_executor(kind, scheduler, workers, ignore_sigint=False):
-    if kind == "dask":
-        try:
-            from distributed import Client, LocalCluster
-        except ImportError:
-            raise BadInput("--executor dask needs the optional extra: pip install "
-                           "'xval[dask]'") from None
-        if scheduler:
-            client = connect(scheduler)
-        else:
-            client = Client(LocalCluster(n_workers=workers or 2, threads_per_worker=1,
-                                         dashboard_address=None, silence_logs=50))
-        return client.get_executor(), client
-    # spawn: engines start threads; a forked child would inherit a half-initialised state.
-    # The children inherit one BLAS thread each (compare/__init__.py)
-    # a campaign's workers ignore SIGINT: Ctrl-C reaches the whole process group, and only the
-    # main process decides what happens (stop the workers, keep what is stored, say how to
-    # resume); other callers keep the default (a worker's KeyboardInterrupt ends its job)
-    quiet = dict(initializer=signal.signal, initargs=(signal.SIGINT, signal.SIG_IGN)) \
-        if ignore_sigint else {}
-    return ProcessPoolExecutor(max_workers=workers or 2,
-                               mp_context=multiprocessing.get_context("spawn"), **quiet), None
 
 
 @contextmanager

@@ -32,6 +32,7 @@ from ..atomic import write_json
 from ..errors import BadInput
 from ..scenes import get_scene
 from . import budget
+from .executors import make_executor
 
 NONE = "none"                     # an observable's label where its event did not happen
 MAX_JOBS = 100_000                # runs a map may plan before it is refused (--max-jobs)
@@ -584,7 +585,6 @@ def map_to_folder(plan, out, settings_for=None, executor="local", scheduler=None
     """Run a planned map with the campaign's executors (process pool or Dask) into
     OUT/maps/<scene>-<stamp>-<pid>/ (or `out_dir`): map.json, map.png, report.md, map.rrd."""
     from ..output.map_plot import write_map_outputs
-    from .campaign import make_executor
     out_dir = Path(out_dir) if out_dir else map_dir(out, plan["scene"].name)
     out_dir.mkdir(parents=True, exist_ok=True)
     workers = workers or 2

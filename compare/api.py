@@ -222,6 +222,34 @@ def extremes(scene: str, solvers=None, *, include_slow: bool = False, timeout=No
     return Summary("extremes", obj, Path(obj["report"]).parent, temporary)
 
 
+def map(scene: str, x: str, y: str | None = None, solvers=None, *,
+        resolution: float = 1e-3, coarse=None, observable: str | None = None, level=None,
+        engines: str = "boundary", executor: str = "local", scheduler: str | None = None,
+        workers: int | None = None, max_jobs=None, record: bool = True, out=None,
+        params: dict | None = None, log: Callable | None = None, **kw) -> Summary:
+    """A map (`xval map`): the scene's regimes, or `observable`, over `x` (and `y`), each
+    "NAME=LO:HI"; every solver's crossings with brackets ≤ resolution × the x range, their
+    error estimates and the pairwise verdicts (`s["boundaries"]`, `s["verdicts"]`)."""
+    from .workflows.maps import map_to_folder, plan_map
+    if executor not in ("local", "dask"):
+        raise BadInput(f"--executor: {executor!r} is not local or dask")
+    if scheduler and executor != "dask":
+        raise BadInput("--scheduler needs --executor dask")
+    positive_int("--workers", workers)
+    plan = plan_map(scene, x, y, _overrides(params, kw), _names(solvers),
+                    positive("--resolution", resolution), coarse, observable, level, engines,
+                    positive_int("--max-jobs", max_jobs))
+    (log or _quiet)(f"map {scene}: ~{plan['estimate']['runs']} runs planned "
+                    f"(~{plan['estimate']['seconds']:.3g} s of solver time)")
+    out, temporary = _out(out)
+    make_out(str(out))
+    with _removed_on_error(temporary):
+        obj = map_to_folder(plan, out, executor=executor, scheduler=scheduler,
+                            workers=workers, record=record, log=log or _quiet)
+    obj["report"] = obj["files"]["report"]
+    return Summary("map", obj, Path(obj["folder"]), temporary)
+
+
 def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | None = None,
              workers: int | None = None, timeout=None, out=None, verbose: bool = False,
              max_output_gib=None, max_steps=None, max_jobs=None,

@@ -454,34 +454,21 @@ def _coarse(text):
 
 
 def cmd_map(args):
-    from .workflows.maps import map_to_folder, plan_map
+    from . import api
     check_out(args.out)
-    if args.scheduler and args.executor != "dask":
-        raise BadInput("--scheduler needs --executor dask")
     coarse = _coarse(args.coarse) if args.coarse else None
     if coarse and not args.y:
         coarse = (coarse[0], 1)
-    plan = plan_map(args.scene, args.x, args.y, parse_sets(args.set), args.solver,
-                    args.resolution, coarse, args.observable, args.level, args.engines,
-                    args.max_jobs)
-    est = plan["estimate"]
-    _log(f"map {plan['scene'].name}: ~{est['runs']} runs planned (~{est['seconds']:.3g} s "
-         f"of solver time)")
-    make_out(args.out)
     with stdout_to_stderr():
-        obj = map_to_folder(plan, args.out, executor=args.executor, scheduler=args.scheduler,
-                            workers=args.workers, record=not args.no_record, log=_log)
+        r = api.map(args.scene, args.x, args.y, args.solver, resolution=args.resolution,
+                    coarse=coarse, observable=args.observable, level=args.level,
+                    engines=args.engines, executor=args.executor, scheduler=args.scheduler,
+                    workers=args.workers, max_jobs=args.max_jobs, record=not args.no_record,
+                    out=args.out, params=parse_sets(args.set), log=_log)
     if args.json:
-        emit_json(obj)
+        emit_json(r.data)
     else:
-        for s, cs in obj["boundaries"].items():
-            for c in cs:
-                row = "" if c["y"] is None else f" at {obj['y']['name']} = {c['y']:.6g}"
-                print(f"{s:14s} {c['from']} → {c['to']}{row}: {obj['x']['name']} in "
-                      f"[{c['bracket'][0]:.6g}, {c['bracket'][1]:.6g}]")
-        for v in obj["verdicts"]:
-            print(f"{v['a']} vs {v['b']}: {v['verdict']} — {'; '.join(v['why'])}")
-        print(f"report: {obj['files']['report']}")
+        print(r)
     return 0
 
 

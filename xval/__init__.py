@@ -3,12 +3,23 @@
 The distribution's name as an import: the same operations as the `xval` command (the command
 is a thin layer over them), implemented in `compare.api`. See the README's "Python API".
 """
-from compare.api import assert_agree, bench, campaign, diff, extremes, modes, run, scenes, show
+from compare.api import (
+    assert_agree,
+    bench,
+    campaign,
+    diff,
+    extremes,
+    map,
+    modes,
+    run,
+    scenes,
+    show,
+)
 from compare.errors import BadInput
 from compare.workflows.results import ModesResult, SceneInfo, Summary, TimeResult
 
 XvalError = BadInput            # one exception type for bad arguments; either name catches it
 
-__all__ = ["run", "modes", "bench", "extremes", "campaign", "diff", "scenes", "show",
+__all__ = ["run", "modes", "bench", "extremes", "map", "campaign", "diff", "scenes", "show",
            "assert_agree", "BadInput", "XvalError", "TimeResult", "ModesResult", "Summary",
            "SceneInfo"]

@@ -84,8 +84,16 @@ def markdown(result):
         pps = result["points_per_core_second"].get(s)
         md.append(f"| {s} | {n} | {result['uniform_grid_runs']} | "
                   f"{'—' if pps is None else f'{pps:.0f}'} |")
-    md += ["", "| solver | row | from → to | crossing | bracket | error estimate | regime "
-           "holds at tighter settings |", "|---|---|---|---|---|---|---|"]
+    if result.get("slope_at_lo"):
+        md += ["", f"Slope of {result['observable']} at the low end of {x['name']}: "
+               + "; ".join(f"{s} {d['slope']:.8g}" for s, ds in result["slope_at_lo"].items()
+                           for d in ds[:1]) + " (first step of each solver's first line)."]
+    for v in result.get("value_deviation", []):
+        md.append(f"- {v['a']} ~ {v['b']}: largest |Δ {result['observable']}| "
+                  f"{v['max_abs']:.3g} over {v['points']} common points")
+    if any(result["boundaries"].values()):
+        md += ["", "| solver | row | from → to | crossing | bracket | error estimate | "
+               "regime holds at tighter settings |", "|---|---|---|---|---|---|---|"]
     for s, cs in result["boundaries"].items():
         for c in cs:
             e, row = c.get("error"), c["y"]
@@ -93,9 +101,10 @@ def markdown(result):
                       f"{c['from']} → {c['to']} | {c['x']:.6g} | [{c['bracket'][0]:.6g}, "
                       f"{c['bracket'][1]:.6g}] | {'—' if e is None else f'{e:.2g}'} | "
                       f"{ {True: 'yes', False: 'no', None: '—'}[c.get('holds')] } |")
-    if result["verdicts"]:
+    verdicts = [v for v in result["verdicts"] if v["verdict"] != "no data"]
+    if verdicts:
         md += ["", "| pair | verdict | why |", "|---|---|---|"]
-        for v in result["verdicts"]:
+        for v in verdicts:
             md.append(f"| {v['a']} ~ {v['b']} | {v['verdict']} | {'; '.join(v['why'])} |")
     md += ["", "![map](map.png)", ""]
     return md

@@ -392,6 +392,15 @@ class Summary:
             return ([f"{s['changed']} changed, {s['unchanged']} unchanged, {s['new']} new, "
                      f"{s['gone']} gone (runs); {s['channels_changed']} channels changed"]
                     + list(d["lines"]) + [f"note: {n}" for n in d["notes"][:20]])
+        if self.kind == "map":
+            out = []
+            for s, cs in d["boundaries"].items():
+                for c in cs:
+                    row = "" if c["y"] is None else f" at {d['y']['name']} = {c['y']:.6g}"
+                    out.append(f"{s:14s} {c['from']} → {c['to']}{row}: {d['x']['name']} in "
+                               f"[{c['bracket'][0]:.6g}, {c['bracket'][1]:.6g}]")
+            return out + [f"{v['a']} vs {v['b']}: {v['verdict']} — {'; '.join(v['why'])}"
+                          for v in d["verdicts"] if v["verdict"] != "no data"]
         return [f"campaign {d['name']}: {d['n_jobs']} jobs ({d['n_run']} run, "
                 f"{d['n_reused']} reused), {d['n_failed']} cases with a failed solver, "
                 f"{d['n_crashed']} crashed jobs; {d['wall_s']:.1f} s"]

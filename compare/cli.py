@@ -325,11 +325,12 @@ def cmd_extremes(args):
 
 def cmd_list(args):
     from .output.citations import cite_short
-    from .scenes import SCENES
+    from .scenes import ORIGIN, SCENES
     from .solvers import REGISTRY, solvers_for
     for sc in SCENES.values():
+        plug = f"  [plug-in: {ORIGIN[sc.name][0]}]" if sc.name in ORIGIN else ""
         print(f"scene  {sc.name:20s} {sc.kind:5s}  solvers: "
-              f"{', '.join(s.name for s in solvers_for(sc.name))}  — {sc.title}")
+              f"{', '.join(s.name for s in solvers_for(sc.name))}  — {sc.title}{plug}")
     for s in REGISTRY.values():
         print(f"solver {s.name:20s} scenes: {', '.join(s.leaves)}  — {cite_short(s.doc)}")
     return 0

@@ -14,6 +14,7 @@ import functools
 import importlib
 import importlib.metadata
 import signal
+import sys
 import threading
 import time
 import traceback
@@ -26,7 +27,7 @@ import numpy as np
 from .analysis.trajectory import Modes, Trajectory
 from .contract import LeafResult, ModesResult, canonical_integrator, merge_settings
 from .errors import BadInput
-from .scenes import SCENES, Scene, get_scene
+from .scenes import PLUGIN_SOLVERS, SCENES, Scene, get_scene
 
 
 @dataclass(frozen=True)
@@ -74,6 +75,12 @@ REGISTRY = {s.name: s for s in (
     Solver("exudyn", "Exudyn 1.13 reference model", "exudyn"),
     Solver("mujoco", "MuJoCo 4.0 reference model", "mujoco"),
 )}
+for _s in PLUGIN_SOLVERS:             # solvers that plug-in packages add (compare.scenes)
+    if _s["name"] in REGISTRY:
+        print(f"xval: warning: plug-in solver {_s['name']!r} left out: the name is taken",
+              file=sys.stderr)
+    else:
+        REGISTRY[_s["name"]] = Solver(**_s)
 
 
 def get_solver(name: str) -> Solver:

@@ -31,6 +31,7 @@ stored result and raises `Interrupted` (the CLI prints one line and exits 130).
 """
 import ast
 import hashlib
+import importlib.util
 import itertools
 import json
 import signal
@@ -268,6 +269,13 @@ def _source(module_name):
         return base / "__init__.py", True
     if base.with_suffix(".py").is_file():
         return base.with_suffix(".py"), False
+    if module_name.split(".")[0] not in PROJECT_PACKAGES:   # a plug-in package's module
+        try:
+            spec = importlib.util.find_spec(module_name)
+        except (ImportError, ValueError):
+            spec = None
+        if spec is not None and spec.origin and spec.origin.endswith(".py"):
+            return Path(spec.origin), spec.submodule_search_locations is not None
     return None, False
 
 
@@ -290,7 +298,8 @@ def _imports(module_name):
                 base = ".".join(parts + ([base] if base else []))
             found.append(base)
             found += [f"{base}.{a.name}" for a in node.names]   # `from pkg import submodule`
-    return path, [m for m in found if m.split(".")[0] in PROJECT_PACKAGES]
+    own = PROJECT_PACKAGES + (module_name.split(".")[0],)    # a plug-in follows its own too
+    return path, [m for m in found if m.split(".")[0] in own]
 
 
 _CODE = {}
@@ -321,6 +330,9 @@ def code_digest(module_names):
 
 
 def _scene_module(scene):
+    from ..scenes import ORIGIN
+    if scene.name in ORIGIN:                   # a plug-in's scene: the module it came from
+        return ORIGIN[scene.name][1]
     for name, mod in list(sys.modules.items()):
         if name.startswith("compare.scenes.") and any(v is scene for v in vars(mod).values()):
             return name

@@ -1,0 +1,1 @@
+"""A planar double pendulum as an xval plug-in (the template for users' own systems)."""

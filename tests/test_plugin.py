@@ -1,0 +1,106 @@
+"""Users' own systems as plug-ins: the example package examples/double_pendulum installed (into a
+folder of its own, as `pip install` does) and driven through `xval` like a built-in scene; its
+solvers checked against the small-oscillation closed form and energy conservation."""
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+G, L = 9.81, 1.0
+
+
+@pytest.fixture(scope="module")
+def plugin_path(tmp_path_factory):
+    target = tmp_path_factory.mktemp("site")
+    r = subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--target",
+                        str(target), str(ROOT / "examples" / "double_pendulum")],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr[-2000:]
+    return target
+
+
+def xval(plugin_path, *args, cwd):
+    env = {**os.environ, "PYTHONPATH": str(plugin_path)}
+    return subprocess.run([sys.executable, "-m", "compare", *args], cwd=cwd, env=env,
+                          capture_output=True, text=True)
+
+
+def test_the_plugin_scene_is_listed_and_runs_with_all_three_solvers(plugin_path, tmp_path):
+    r = xval(plugin_path, "list", cwd=tmp_path)
+    assert "double-pendulum" in r.stdout and "plug-in: xval-double-pendulum" in r.stdout
+    r = xval(plugin_path, "run", "double-pendulum", "--json", "--no-record", "--out",
+             str(tmp_path), cwd=tmp_path)
+    assert r.returncode == 0, r.stderr[-2000:]
+    obj = json.loads(r.stdout)
+    assert {x["solver"]: x["status"] for x in obj["runs"]} == {
+        "dp-lagrange": "ok", "exudyn": "ok", "mujoco": "ok"}
+    assert obj["comparisons"] and all(c["verdict"] == "agree" for c in obj["comparisons"])
+    # energy conserved: no damping, no drive (measured |ΔE| ≤ 6.4e-12 J of ~30 J at defaults)
+    for x in obj["runs"]:
+        scale = max(abs(x["final"]["kinetic"]), abs(x["final"]["potential"]))
+        assert abs(x["final"]["energy_balance"]) < 1e-10 * scale, x["solver"]
+
+
+def test_small_oscillations_match_the_closed_form(plugin_path, tmp_path):
+    """Started in the slow normal mode (θ2 = √2 θ1 for equal masses and rods), every solver
+    swings at ω = √((g/l)(2 − √2)); the period from the zero crossings of θ1."""
+    a = 1e-3
+    r = xval(plugin_path, "run", "double-pendulum", "--set", f"theta1_0={a}", "--set",
+             f"theta2_0={np.sqrt(2) * a}", "--set", "t_end=10", "--set", "output_dt=0.001",
+             "--json", "--no-record", "--out", str(tmp_path), cwd=tmp_path)
+    assert r.returncode == 0, r.stderr[-2000:]
+    w_exact = np.sqrt(G / L * (2 - np.sqrt(2)))
+    for run in json.loads(r.stdout)["runs"]:
+        with np.load(run["trajectory"]) as z:
+            t, th = z["t"], z["theta1"]
+        i = np.nonzero(np.sign(th[:-1]) != np.sign(th[1:]))[0]
+        tz = t[i] - th[i] * (t[i + 1] - t[i]) / (th[i + 1] - th[i])    # linear interpolation
+        period = 2 * np.mean(np.diff(tz))
+        # amplitude 1e-3 shifts the frequency by ~a²/16 ≈ 6e-8; interpolation error ~1e-7
+        assert abs(2 * np.pi / period - w_exact) / w_exact < 1e-6, run["solver"]
+
+
+def test_bench_extremes_and_campaign_work_on_the_plugin(plugin_path, tmp_path):
+    r = xval(plugin_path, "bench", "double-pendulum", "--repeats", "1", "--set", "t_end=1",
+             "--out", str(tmp_path), cwd=tmp_path)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "fastest" in r.stdout
+    r = xval(plugin_path, "extremes", "double-pendulum", "--strict", "--json", "--out",
+             str(tmp_path), cwd=tmp_path)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert json.loads(r.stdout)["n_failed"] == 0
+    f = tmp_path / "dp.toml"
+    f.write_text('name = "dp"\n[[cases]]\nscene = "double-pendulum"\nset = { t_end = 1 }\n')
+    for _ in range(2):                  # the second run reuses every job (digest of the plug-in)
+        r = xval(plugin_path, "campaign", str(f), "--json", "--out", str(tmp_path), cwd=tmp_path)
+        assert r.returncode == 0, r.stderr[-2000:]
+    s = json.loads(r.stdout)
+    assert s["n_jobs"] == 3 and s["n_reused"] == 3
+
+
+class _EP:
+    def __init__(self, name, load):
+        self.name, self.value, self._load, self.dist = name, f"fake.{name}:X", load, None
+
+    def load(self):
+        return self._load()
+
+
+def test_a_broken_or_clashing_plugin_is_left_out_with_one_line(capsys):
+    from compare.scenes import SCENES, load_plugins
+    before = dict(SCENES)
+
+    def broken():
+        raise ImportError("no module named 'missing_dependency'")
+
+    load_plugins([_EP("broken", broken), _EP("clash", lambda: [SCENES["rotor-spinup"]])])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2
+    assert "plug-in broken" in err[0] and "missing_dependency" in err[0]
+    assert "'rotor-spinup' left out: the name is taken" in err[1]
+    assert SCENES == before

@@ -74,6 +74,12 @@ def test_bench_extremes_and_campaign_work_on_the_plugin(plugin_path, tmp_path):
              str(tmp_path), cwd=tmp_path)
     assert r.returncode == 0, r.stderr[-2000:]
     assert json.loads(r.stdout)["n_failed"] == 0
+    r = xval(plugin_path, "map", "double-pendulum", "--x", "theta1_0=1:3", "--set",
+             "theta2_0=0", "--solver", "dp-lagrange", "--resolution", "1e-2", "--coarse", "9",
+             "--json", "--no-record", "--out", str(tmp_path), cwd=tmp_path)
+    assert r.returncode == 0, r.stderr[-2000:]
+    cs = json.loads(r.stdout)["boundaries"]["dp-lagrange"]
+    assert cs and all(np.ptp(c["bracket"]) <= 0.02 + 1e-12 for c in cs)
     f = tmp_path / "dp.toml"
     f.write_text('name = "dp"\n[[cases]]\nscene = "double-pendulum"\nset = { t_end = 1 }\n')
     for _ in range(2):                  # the second run reuses every job (digest of the plug-in)

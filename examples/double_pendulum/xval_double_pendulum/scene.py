@@ -47,6 +47,12 @@ def findings(params, trajectories):
 
 
 # the solver this plug-in adds (compare.solvers.Solver's fields); exudyn and mujoco are xval's
+def flip_regime(params, tr):
+    """`flips` when the lower rod goes over the top (|θ2| passes π) within the run, else
+    `swings`: the classic map of the double pendulum over its initial angles."""
+    return "flips" if np.nanmax(np.abs(tr.channels["theta2"])) > np.pi else "swings"
+
+
 SOLVERS = ({"name": "dp-lagrange", "doc": "the double pendulum's Lagrange equations on xval's "
             "shared integrators (example plug-in); numba", "engine": "numba", "compiled": True},)
 
@@ -75,6 +81,7 @@ SCENE = Scene(
     energy_scale_channels=("kinetic", "potential"),
     reference_solvers=("dp-lagrange", "mujoco"),
     findings=findings,
+    regime=flip_regime,
     extremes=(Extreme("large swing", {"theta1_0": 2.5, "theta2_0": -2.5, "t_end": 3},
                       bound=1e-6, why="chaotic tumbling: energy must still close"),
               Extreme("tiny swing", {"theta1_0": 1e-4, "theta2_0": 1e-4, "t_end": 3},

@@ -187,10 +187,14 @@ def bisect_lines(runner, solver, settings, lines, x_axis, width, y_name=None):
                     mids.append((y, 0.5 * (xs[i] + xs[i + 1])))
         if not mids:
             return
-        rows = runner.run([(solver, settings, _pt(x_axis.name, x, y_name, y))
-                           for y, x in mids])
-        for (y, x), row in zip(mids, rows):
-            lines[y][x] = row["label"]
+        _fill(runner, solver, settings, lines, mids, x_axis.name, y_name, "label")
+
+
+def _fill(runner, solver, settings, lines, mids, x_name, y_name, key):
+    """Run the points (y, x) of one refinement round as one batch; store their label/value."""
+    rows = runner.run([(solver, settings, _pt(x_name, x, y_name, y)) for y, x in mids])
+    for (y, x), row in zip(mids, rows):
+        lines[y][x] = row[key]
 
 
 def _pt(x_name, x, y_name, y):
@@ -265,10 +269,7 @@ def refine_observable(runner, solver, settings, lines, x_axis, width, level, y_n
                     mids.append((y, 0.5 * (xs[i] + xs[i + 1])))
         if not mids:
             return
-        rows = runner.run([(solver, settings, _pt(x_axis.name, x, y_name, y))
-                           for y, x in mids])
-        for (y, x), row in zip(mids, rows):
-            lines[y][x] = row["value"]
+        _fill(runner, solver, settings, lines, mids, x_axis.name, y_name, "value")
 
 
 def level_crossings(lines, level):

@@ -186,12 +186,21 @@ def modes(scene: str, solvers=None, *, out=None, params: dict | None = None,
 
 def bench(scene: str, solvers=None, *, repeats: int = 3, vary=None, out=None,
           max_output_gib=None, max_steps=None, params: dict | None = None,
-          log: Callable | None = None, **kw) -> Summary:
+          log: Callable | None = None, points: int | None = None, **kw) -> Summary:
     """Work-precision sweep (`xval bench`): each solver along its accuracy knob, error of the
     key channel against a tight reference, median wall time of `repeats` runs. `vary`: trade a
-    model parameter instead, as `"stiffness=1e5,1e6"` or `{"stiffness": [1e5, 1e6]}`."""
-    from .workflows.bench import run_bench
+    model parameter instead, as `"stiffness=1e5,1e6"` or `{"stiffness": [1e5, 1e6]}`.
+    `points=N`: throughput instead — each solver's points per second over N points of the
+    scene's first default map."""
+    from .workflows.bench import run_bench, run_throughput
     positive_int("--repeats", repeats)
+    if points is not None:              # throughput: points per second over the default map
+        positive_int("--points", points)
+        out, temporary = _out(out)
+        with _removed_on_error(temporary):
+            obj = run_throughput(scene, _names(solvers), _overrides(params, kw), out, points,
+                                 log=log or _quiet, make_out=make_out)
+        return Summary("bench", obj, Path(obj["report"]).parent, temporary)
     max_output_gib, max_steps = (positive("--max-output-gib", max_output_gib),
                                  positive("--max-steps", max_steps))
     if isinstance(vary, dict):

@@ -199,6 +199,9 @@ def build_parser():
     common(sp)
     sp.add_argument("--repeats", type=_positive_int("--repeats"), default=3, metavar="N",
                     help="timed runs per rung; the median counts (default 3)")
+    sp.add_argument("--points", type=_positive_int("--points"), metavar="N",
+                    help="throughput instead: each solver's points per second over N points "
+                         "of the scene's default map (the map's batch path)")
     sp.add_argument("--vary", metavar="NAME=V1,V2,...",
                     help="trade a model parameter instead of the step: each solver's default "
                          "settings at each value, errors against the reference at the --set "
@@ -436,7 +439,8 @@ def cmd_bench(args):
     with stdout_to_stderr():
         r = api.bench(args.scene, args.solver, repeats=args.repeats, vary=args.vary,
                       out=args.out, max_output_gib=args.max_output_gib,
-                      max_steps=args.max_steps, params=parse_sets(args.set), log=_log)
+                      max_steps=args.max_steps, params=parse_sets(args.set), log=_log,
+                      points=args.points)
     if args.json:
         emit_json(r.as_json())
     else:

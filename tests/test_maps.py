@@ -122,3 +122,13 @@ def test_map_json_has_the_contract_fields(tmp_path):
     assert {"x", "y", "bracket", "from", "to"} <= set(c) and c["y"] is None
     for f in ("plot", "report", "recording"):
         assert (tmp_path / obj["files"][f]).exists()
+
+
+def test_bench_points_runs_the_map_batch_path(tmp_path):
+    """`xval bench --points N`: every point of the default map's grid is run once per solver;
+    the regimes it meets are those the single-run path gives at the grid's corners."""
+    from compare.workflows.bench import run_throughput
+    obj = run_throughput("rotor-spinup", ["quaternion"], {}, tmp_path, 4, log=lambda m: None)
+    (row,) = obj["rows"]
+    assert row["solver"] == "quaternion" and row["points"] == 4 and row["points_per_second"] > 0
+    assert (tmp_path / "bench").exists()

@@ -18,6 +18,7 @@ import numpy as np
 
 from .. import solvers
 from ..analysis import metrics
+from ..atomic import write_json, write_text
 from ..errors import BadInput
 from ..output.report import fmt_value
 from ..scenes import get_scene
@@ -130,6 +131,33 @@ def parse_vary(text, sc):
     for v in vals:
         sc.resolve({name.strip(): v})          # one-line error for an unknown name or bad value
     return name.strip(), vals
+
+
+def run_throughput(scene_name, solver_names, overrides, out, n_points, log=print,
+                   make_out=None):
+    """`xval bench SCENE --points N`: each solver's points per second on its accurate defaults
+    over N points of the scene's first default map, through the map's batch path."""
+    from .maps import throughput
+    if make_out:
+        make_out(out)
+    obj = throughput(scene_name, solver_names, overrides, n_points, log=log)
+    lines = [f"{r['solver']}: {r['points']} points in {r['wall_s']:.3g} s — "
+             f"{r['points_per_second']:.1f} points/s ({r['points_per_core_second']:.1f} per "
+             f"core-second, {obj['workers']} workers)" for r in obj["rows"]]
+    out_dir = bench_dir(out, f"{scene_name}-points")
+    md = [f"# Throughput: {scene_name}", "", f"{obj['rows'][0]['points'] if obj['rows'] else 0}"
+          f" points over the default map `{obj['map']}` ({obj['x']['name']}"
+          + (f" × {obj['y']['name']}" if obj["y"] else "") + f"), set {obj['set']}; each "
+          "solver at its accurate default settings, after a warm-up batch.", "",
+          "| solver | points | wall [s] | points / s | points / core-s |", "|---|---|---|---|---|"]
+    md += [f"| {r['solver']} | {r['points']} | {r['wall_s']:.3g} | "
+           f"{r['points_per_second']:.1f} | {r['points_per_core_second']:.1f} |"
+           for r in obj["rows"]]
+    obj["summary_lines"] = lines
+    write_text(out_dir / "report.md", "\n".join(md) + "\n")
+    write_json(out_dir / "bench.json", obj)
+    obj["report"] = str(out_dir / "report.md")
+    return obj
 
 
 def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, vary=None,

@@ -600,3 +600,48 @@ def map_to_folder(plan, out, settings_for=None, executor="local", scheduler=None
     result["folder"] = str(out_dir)
     write_json(out_dir / "map.json", result)
     return result
+
+
+def throughput(scene_name, solver_names, overrides, n_points, workers=2, log=None):
+    """Points per second of each solver over `n_points` of the scene's first default map
+    (a grid over its axes), through the map's own batch path: the worker pool warmed up first
+    (models loaded and compiled in every worker), then the points timed, one solver at a
+    time (`xval bench SCENE --points N`)."""
+    from .executors import make_executor
+    sc = get_scene(scene_name)
+    if not sc.maps:
+        raise BadInput(f"--points: scene {sc.name!r} declares no map to take points from")
+    spec = sc.maps[0]
+    base = {**spec.set, **(overrides or {})}
+    plan = plan_map(sc.name, spec.x, spec.y, base, solver_names, coarse=(2, 2) if spec.y
+                    else (2, 1), observable=spec.observable, max_jobs=None)
+    xa, ya = plan["x"], plan["y"]
+    nx = max(2, int(round(math.sqrt(n_points)))) if ya else n_points
+    ny = max(1, int(math.ceil(n_points / nx))) if ya else 1
+    ys = np.linspace(ya.lo, ya.hi, ny) if ya else [None]
+    pts = [_pt(xa.name, x, ya.name if ya else None, y)
+           for y in ys for x in np.linspace(xa.lo, xa.hi, nx)][:n_points]
+    t_out = sc.output_grid(sc.resolve(base))
+    pool, client = make_executor("local", None, workers)
+    rows = []
+    try:
+        for s in plan["chosen"]:
+            st = solvers.settings_for(s, sc.name, t_out=t_out)
+            runner = Runner(sc, base, spec.observable, pool, workers)
+            runner.run([(s.name, st, p) for p in pts[:2 * workers]])        # warm-up
+            runner = Runner(sc, base, spec.observable, pool, workers)
+            t0 = time.perf_counter()
+            runner.run([(s.name, st, p) for p in pts])
+            wall = time.perf_counter() - t0
+            rows.append({"solver": s.name, "points": len(pts), "wall_s": wall,
+                         "points_per_second": len(pts) / wall,
+                         "points_per_core_second": len(pts) / runner.wall[s.name],
+                         "settings": st})
+            (log or (lambda m: None))(f"{s.name}: {len(pts)} points in {wall:.3g} s, "
+                                      f"{len(pts) / wall:.0f} points/s")
+    finally:
+        pool.shutdown(wait=True)
+        if client is not None:
+            client.close()
+    return {"scene": sc.name, "map": spec.name, "x": xa.as_dict(),
+            "y": ya.as_dict() if ya else None, "set": base, "workers": workers, "rows": rows}

@@ -125,8 +125,8 @@ def test_map_json_has_the_contract_fields(tmp_path):
 
 
 def test_bench_points_runs_the_map_batch_path(tmp_path):
-    """`xval bench --points N`: every point of the default map's grid is run once per solver;
-    the regimes it meets are those the single-run path gives at the grid's corners."""
+    """`xval bench --points N` runs N points per solver through the map's batch path and writes
+    its report (the batch path's values are checked against single runs above)."""
     from compare.workflows.bench import run_throughput
     obj = run_throughput("rotor-spinup", ["quaternion"], {}, tmp_path, 4, log=lambda m: None)
     (row,) = obj["rows"]

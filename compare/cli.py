@@ -10,8 +10,7 @@ import math
 import os
 import sys
 
-import numpy as np
-
+from .atomic import clean_json
 from .errors import BadInput
 from .workflows.inputs import check_out, make_out  # noqa: F401  (shared with the API)
 
@@ -37,21 +36,6 @@ def stdout_to_stderr():
         sys.stdout.flush()
         os.dup2(saved, 1)
         os.close(saved)
-
-
-def clean_json(x):
-    """JSON without NaN/Infinity (they become null) and with numpy values as plain Python."""
-    if isinstance(x, dict):
-        return {str(k): clean_json(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [clean_json(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return clean_json(x.tolist())
-    if isinstance(x, np.generic):
-        x = x.item()
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    return x
 
 
 def emit_json(obj):

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..atomic import write_json, write_text
+from ..atomic import clean_json, write_json, write_text
 from .report import plot_style, save_figure
 
 MAX_PLOTS = 80           # a parameter change moves every channel: plot the worst ones
@@ -111,7 +111,7 @@ def write_diff_report(out_dir: Path, obj, arrays):
     write_text(out_dir / "report.md", "\n".join(md) + "\n")
     obj["report"] = str(out_dir / "report.md")
     obj["plots"] = [str(out_dir / p) for p in pngs.values()]
-    write_json(out_dir / "diff.json", _clean(obj))
+    write_json(out_dir / "diff.json", clean_json(obj))
     return obj
 
 
@@ -134,19 +134,6 @@ def _unit(obj, case, solver, ch):
                     if x["channel"] == ch:
                         return x.get("unit", "")
     return ""
-
-
-def _clean(x):
-    """JSON without Infinity/NaN (null) and with numpy values as plain Python."""
-    if isinstance(x, dict):
-        return {str(k): _clean(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_clean(v) for v in x]
-    if isinstance(x, np.generic):
-        x = x.item()
-    if isinstance(x, float) and not np.isfinite(x):
-        return None
-    return x
 
 
 def diff_table(obj):

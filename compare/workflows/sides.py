@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analysis.trajectory import Trajectory
+from ..analysis.trajectory import Trajectory, _py
 from ..atomic import atomic_path
 from ..errors import BadInput
 from . import guard
@@ -271,14 +271,6 @@ def save_baseline(path_in, out) -> dict:
                                 **arrays)
     return {"baseline": str(out), "bytes": out.stat().st_size, "cases": len(cases),
             "samples_full": n_full, "samples_kept": n_kept}
-
-
-def _py(x):
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    raise TypeError(type(x).__name__)
 
 
 def _load_baseline(p):

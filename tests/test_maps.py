@@ -132,3 +132,17 @@ def test_bench_points_runs_the_map_batch_path(tmp_path):
     (row,) = obj["rows"]
     assert row["solver"] == "quaternion" and row["points"] == 4 and row["points_per_second"] > 0
     assert (tmp_path / "bench").exists()
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--x", "nope=1:2"], "nope: unknown parameter"),
+    (["--x", "torque=3:1"], "LO must be below HI"),
+    (["--x", "torque=1:5", "--y", "torque=0:1"], "same parameter"),
+    (["--x", "torque"], "expected NAME=LO:HI"),
+    (["--x", "torque=1:5", "--observable", "ripple"], "not a map observable"),
+    (["--x", "torque=1:5", "--coarse", "1"], "at least 2 points"),
+])
+def test_bad_map_input_is_one_line_and_exit_2(tmp_path, args, words):
+    r = _xval("map", "rotor-spinup", *args, "--out", str(tmp_path / "o"), cwd=tmp_path)
+    assert r.returncode == 2 and words in r.stderr, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "o").exists()

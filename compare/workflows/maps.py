@@ -426,7 +426,14 @@ def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolutio
         if a and a.name in overrides:
             raise BadInput(f"--set {a.name}: it is an axis of the map")
     chosen = solvers.pick(sc, solver_names)
-    coarse = tuple(coarse or ((17, 9) if y_axis else (17, 1)))
+    coarse = tuple(coarse) if isinstance(coarse, (list, tuple)) else (
+        (coarse,) if coarse else ())
+    if not all(isinstance(n, int) and not isinstance(n, bool) for n in coarse) \
+            or len(coarse) > 2:
+        raise BadInput(f"coarse grid: NX or (NX, NY) whole numbers, got {coarse!r}")
+    coarse = (coarse + ((17,) if not coarse else ()) + (9 if y_axis else 1,))[:2]
+    if not y_axis:
+        coarse = (coarse[0], 1)
     if coarse[0] < 2 or (y_axis and coarse[1] < 2):
         raise BadInput("coarse grid: at least 2 points along each axis")
     budget.check_output(sc, overrides, 1)

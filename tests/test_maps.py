@@ -146,3 +146,17 @@ def test_bad_map_input_is_one_line_and_exit_2(tmp_path, args, words):
     r = _xval("map", "rotor-spinup", *args, "--out", str(tmp_path / "o"), cwd=tmp_path)
     assert r.returncode == 2 and words in r.stderr, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "o").exists()
+
+
+def test_sail_deployment_time_observable_is_the_payout_closed_form():
+    """The whole blade is out at L/(r·ω) (the payout law), to the output step."""
+    sc = get_scene("sail-deploy")
+    s = solvers.get_solver("thread-spool-conservative")
+    base = {"L": 0.5, "t_end": 30, "output_dt": 0.01}
+    p = sc.resolve(base)
+    st = solvers.settings_for(s, sc.name, t_out=sc.output_grid(p))
+    rows = maps.evaluate_chunk(sc.name, s.name, base, [{"omega_spool": 3.5}, {"omega_spool": 7}],
+                               st, "deployment_time")
+    for row, w in zip(rows, (3.5, 7.0)):
+        assert row["status"] == "ok"
+        assert abs(row["value"] - 0.5 / (0.01 * w)) <= 0.01 + 1e-9     # one output step

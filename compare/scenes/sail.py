@@ -3,7 +3,7 @@ spec scene-sail.md)."""
 import numpy as np
 
 from ..physics import sail as phys
-from .base import Extreme, Finding, Scene
+from .base import Extreme, Finding, MapSpec, Scene
 from .params import Param, positive
 
 SOURCE = "seed 004 (constant-dimension spring–mass thread unwinding from a spool)"
@@ -38,6 +38,20 @@ def sail_findings(params, trajectories):
 
 
 MAX_FRAMES = 600     # a long deployment is drawn at ≤ 600 instants (stated recording size)
+
+
+def peak_tip_angle(params, tr):
+    """Largest |tip angle| over the run [rad]: how far the blade lags the hub's spin."""
+    return float(np.nanmax(np.abs(tr.channels["tip_angle"])))
+
+
+def deployment_time(params, tr):
+    """When the deployed (stretched) length first comes within 1e-4 of the blade length [s]
+    (None: not within the run); the payout law makes it L/(r·ω) in every solver. Not L
+    itself: the loaded thread's stretch (~1e-6 of L, measured at ω = 7 rad/s) moves the
+    arc length about L by more than a tighter threshold."""
+    i = np.nonzero(tr.channels["deployed_length"] >= params["L"] * (1 - 1e-4))[0]
+    return float(tr.t[i[0]]) if len(i) else None
 
 
 def draw_sail(rec, params, traj, color, offset):
@@ -157,6 +171,13 @@ SAIL = Scene(
     # the whole deployment with the custom solvers (seconds) in the default campaign; the
     # engines' whole deployment at k = 1e7 is step-bound by the thread's 1e5 rad/s modes
     # (Exudyn ~5 min, MuJoCo ~15 min) and runs in `xval campaign long`
+    map_observables={"peak_tip_angle": (peak_tip_angle, "rad", "largest |tip angle|"),
+                     "deployment_time": (deployment_time, "s", "whole blade out")},
+    # the blade's lag over the initial spin, full deployment, the two custom solvers (~0.9 s a
+    # run; the engines take minutes per deployment: `--engines everywhere` on a short horizon)
+    maps=(MapSpec("tip-angle-vs-spin", x="Omega0=2:12", resolution=0.05, coarse=(5, 1),
+                  observable="peak_tip_angle",
+                  solvers=("thread-spool", "thread-spool-conservative")),),
     campaign_cases=({"name": "sail-deploy-full",
                      "solvers": ["thread-spool", "thread-spool-conservative"]},
                     {"name": "sail-deploy-2s", "set": {"t_end": 2}},

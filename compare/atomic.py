@@ -7,6 +7,7 @@ when complete (a rename within one file system is atomic). `mkstemp` creates fil
 """
 import json
 import os
+import re
 import shutil
 import tempfile
 from contextlib import contextmanager
@@ -22,6 +23,22 @@ def _umask():
 def readable_mode():
     """The mode `open(path, "w")` would create a file with."""
     return 0o666 & ~_umask()
+
+
+# mkstemp's name: the prefix, 8 characters from [a-z0-9_], the suffix
+_TEMPORARY = re.compile(r"^\.(?P<stem>.+)\.[a-z0-9_]{8}(?P<suffix>\.[^.]*)?$")
+
+
+def remove_orphans(folder):
+    """Remove the temporary files a killed writer left under `folder` (SIGKILL runs no
+    `finally`). Only safe while no other process writes there: the caller holds the folder's
+    lock. Returns how many were removed."""
+    n = 0
+    for f in Path(folder).rglob(".*"):
+        if f.is_file() and _TEMPORARY.match(f.name):
+            f.unlink(missing_ok=True)
+            n += 1
+    return n
 
 
 @contextmanager

@@ -87,7 +87,7 @@ def _check_intact(camp_dir):
     for f in camp_dir.rglob("*.json"):
         json.loads(f.read_text())
     for rrd in camp_dir.rglob("run.rrd"):
-        for npz in rrd.parent.glob("*.npz"):
+        for npz in rrd.parent.glob("[!.]*.npz"):
             tr = Trajectory.load(npz)
             t, v = load_scalar_series(rrd, f"/omega_norm/{tr.solver}")
             assert len(t) == len(tr.t), f"{rrd} cut: {len(t)} of {len(tr.t)} samples"
@@ -120,6 +120,8 @@ def test_killed_while_running_jobs_resumes_without_loss(tmp_path):
     assert s["n_reused"] == n_stored and s["n_run"] == 3 - n_stored
     assert {c["case"] for c in s["cases"]} == {"spin", "slow"}
     _check_intact(camp_dir)
+    left = [f.name for f in camp_dir.rglob(".*") if f.name != ".lock"]
+    assert not left, f"temporary files of the killed campaign left behind: {left}"
     assert _case_complete(camp_dir, "spin") and _case_complete(camp_dir, "slow")
     report = (camp_dir / "report.md").read_text()
     assert "## spin" in report and "## slow" in report

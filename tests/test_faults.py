@@ -127,6 +127,21 @@ def test_stale_lock_of_a_dead_process_is_taken_over_a_foreign_one_is_not(tmp_pat
     assert "stale lock" in se and not lock.exists()
 
 
+def test_temporaries_of_a_killed_writer_are_removed_once_the_lock_is_held(tmp_path):
+    """SIGKILL runs no cleanup: the half-written temporaries (mkstemp names) stay until the
+    next process that holds the folder's lock; files that are not ours stay untouched."""
+    folder = tmp_path / "campaign"
+    (folder / "case").mkdir(parents=True)
+    orphans = [folder / "case" / ".euler-vector.kz2ivdu0.npz", folder / ".summary.ab_c1234.json"]
+    kept = [folder / ".gitignore", folder / "case" / "result.json", folder / ".lock.stale.77"]
+    for f in orphans + kept:
+        f.write_text("x")
+    said = []
+    with guard.folder_lock(folder, log=said.append):
+        assert not any(f.exists() for f in orphans) and all(f.exists() for f in kept)
+    assert said == [f"{folder}: 2 temporary file(s) of a stopped writer removed"]
+
+
 def test_ctrl_c_stops_the_workers_keeps_finished_jobs_and_says_how_to_resume(tmp_path, popen):
     n = 8
     f = tmp_path / "slow.toml"

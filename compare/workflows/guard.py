@@ -8,6 +8,7 @@ campaign folder locked by the process writing it, and one line for a disk that f
   O_EXCL (two processes cannot both create it). A second campaign on the same folder is
   refused (BadInput, exit 2) naming the owner; a lock whose pid is dead on this host is stale
   and taken over (a lock from another host is never guessed stale: its pid means nothing here).
+  Once the lock is held, the temporary files a killed writer left behind are removed.
 - `write_failure(e)`: the one line for an OSError from writing (ENOSPC, EDQUOT, EFBIG, EROFS),
   naming the file (`atomic_path` sets `filename` to the target) and the cause.
 """
@@ -19,6 +20,7 @@ import socket
 from contextlib import contextmanager
 from pathlib import Path
 
+from ..atomic import remove_orphans
 from ..errors import BadInput
 
 MARKER = "INCOMPLETE"
@@ -131,6 +133,9 @@ def folder_lock(folder, command="xval campaign", log=None):
     else:
         raise BadInput(f"{path}: could not take the lock (another process keeps creating it)")
     try:
+        n = remove_orphans(folder)
+        if n and log:
+            log(f"{folder}: {n} temporary file(s) of a stopped writer removed")
         yield path
     finally:
         path.unlink(missing_ok=True)

@@ -28,6 +28,7 @@ class Campbell:
     unit: str = "rad/s"
     refine: int = 12
     depth: int = 3
+    solvers: tuple = ()     # the solvers that draw it (default: every solver of the run)
 
     def values(self, params):
         get = lambda v: params[v] if isinstance(v, str) else v     # noqa: E731
@@ -121,6 +122,9 @@ class Scene:
     # (json rows, markdown lines) of frequencies identified from time-domain free responses
     campbell: Campbell | None = None
     identify: Callable | None = None
+    # explain_frequencies(params, results, comparisons) -> (json rows, markdown lines): why the
+    # pairs that disagree do (measured), for the report
+    explain_frequencies: Callable | None = None
     # mode_shape_3d(params, solver, shape row) -> [(points (n, 3) m, displacement (n, 3))]:
     # the structure's line strips and one mode's motion Re(displacement·e^{iωt}) on them
     mode_shape_3d: Callable | None = None

@@ -208,6 +208,7 @@ def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print):
     crossings told apart (compare/analysis/campbell.py). Returns the JSON part, the critical
     speeds and the report's lines."""
     cb = sc.campbell
+    chosen = [s for s in chosen if not cb.solvers or s.name in cb.solvers]
     values = cb.values(params)
     memo = {s.name: {} for s in chosen}
 
@@ -303,7 +304,12 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
             obj["mode_shapes_recording"] = str(drawn["recording"])
             obj["mode_shapes_figure"] = str(drawn["figure"])
             md += ["", "## Mode shapes", "", drawn["text"], "", "![mode shapes](mode_shapes.png)"]
-    if sc.campbell and campbell_sweep:
+    if sc.explain_frequencies and any(c.verdict == "disagree" for c in comparisons):
+        rows, lines_md = sc.explain_frequencies(params, results, comparisons)
+        obj["explanations"] = rows
+        md += [""] + lines_md
+    if sc.campbell and campbell_sweep and any(
+            not sc.campbell.solvers or s.name in sc.campbell.solvers for s in chosen):
         obj_cb, crit, text = campbell_diagram(sc, chosen, params, out_dir, log)
         obj["critical_speeds"] = crit
         obj["campbell"] = obj_cb

@@ -1,0 +1,283 @@
+"""What both engine models of the whole helicopter (seed 002, Tables 3 and 4) are given alike:
+the aircraft as a tree of rigid bodies with spring hinges, the multi-blade coordinate transform,
+the eigen-solution and the labels. Each engine only turns the tree into its own model and
+linearises it about steady spin (`reference_models/{mujoco,exudyn}/helicopter.py`).
+
+Route. The rotor spins relative to a fuselage and tail that are not axisymmetric about the
+shaft (fuselage inertia about X 0.50× that about Y, centre of mass 0.4 m off the axis, tail
+boom along −X), so no single frame makes the physical system time-invariant in physical
+coordinates: in the rotor frame the support turns, in the fixed frame the blades do. With
+four identical blades on an isotropic hub and a round shaft, multi-blade coordinates
+(collective b₀, cyclic b_c, b_s, differential b_d per blade coordinate; the shaft's bending
+turned into the fixed frame) make it exactly time-invariant (Coleman): one linearisation at
+any rotor azimuth ψ, q̈ = A_q q + A_v q̇, transformed with q = T(ψ) p,
+
+    p̈ = T⁻¹[(A_q T + Ω A_v T′ − Ω² T″) p + (A_v T − 2Ω T′) ṗ],
+
+gives constant matrices — `tests/test_helicopter_engines.py` checks that they do not depend
+on ψ. This needs neither a time-domain identification (close roots 6.30–6.37 Hz would need
+records of minutes) nor Floquet analysis (one linearisation instead of many).
+
+The tree: the blades, shaft and tail boom in the rigid-finite-element layout of
+beam_chain_common (blades as the rotating-beam model: torsion, flap, lag hinges and the
+section's rotary inertia; shaft: two bending hinges and torsion, tail: torsion and two bending
+hinges, both with their section's rotary inertia, which the engines need for a physical body),
+the hub and fuselage rigid, the drive at the shaft's foot a hinge about z spinning at Ω (its
+coordinate held: the speed is prescribed), the tail's far end clamped (Table 3) or the
+fuselage free (Table 4). No axial flexibility (the paper's 24.1 Hz 'axial cyclic' root has
+none here). The frequencies are fixed-frame; a cyclic mode at ω_F is seen on the blades at
+ω_F + Ω (regressive) or |ω_F − Ω| (progressive), given in extra['rotating_frame_hz'] for
+comparison with mstmm, which writes the whole aircraft in the rotor frame.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from compare.contract import ModesResult, merge_settings
+from compare.physics.mstmm import helicopter_layout
+from reference_models import beam_chain_common as bc
+
+MODES_SETTINGS = {"n_segments": 40, "extrapolate": True, "psi": 0.0}
+SPIN = ("drive", "spin", 0)                # the coordinate held at speed Ω
+TINY_MASS, TINY_INERTIA = 1e-9, 1e-12      # the massless frames (drive, blade roots)
+
+
+@dataclass
+class Body:
+    """A rigid body of the tree: pose in its parent's frame, inertia about its centre of mass
+    in its own frame (principal, diagonal), and the joints between parent and body, applied
+    in order at the body's origin: (coordinate name, kind, axis, stiffness) with kind
+    'hinge' (a spring hinge), 'slide' or 'spin' (the drive, held at speed)."""
+    parent: int
+    pos: np.ndarray
+    mass: float
+    com: np.ndarray
+    inertia: np.ndarray
+    rot: np.ndarray = field(default_factory=lambda: np.eye(3))
+    joints: list = field(default_factory=list)
+
+
+def _inertia(m_line, ell, axial, b1, b2, axis):
+    principal = bc.segment_inertia(m_line, ell, axial, b1, b2)    # [along, t1, t2]
+    out = np.zeros(3)
+    out[axis], out[[i for i in range(3) if i != axis]] = principal[0], principal[1:]
+    return out
+
+
+def _chain(bodies, parent, start, axis, L, n, m_line, inertia, joints, tag, sign=1.0):
+    """n-hinge chain from `start` (parent frame) along unit axis `axis` (− with sign −1);
+    returns the index of the last body and the position of its hinge relative to `start`."""
+    lay = bc.layout(L, n)
+    e = sign * np.eye(3)[axis]
+    prev = None
+    for i, x in enumerate(lay["hinges"]):
+        ell = lay["lengths"][i]
+        bodies.append(Body(parent, np.asarray(start) + x * e if prev is None else (x - prev) * e,
+                           m_line * ell, 0.5 * ell * e, inertia(ell),
+                           joints=[((tag, name, i), "hinge", ax, k / lay["dl"])
+                                   for name, ax, k in joints]))
+        parent, prev = len(bodies) - 1, x
+    return parent, prev * e
+
+
+def tree(params: dict, n: int, free: bool = False) -> list:
+    """The aircraft as bodies (parents before children). Clamped: the tree grows from the
+    tail's far end (parent −1 is the ground); free: from the fuselage on six joints, the
+    tail boom hanging from its rear face. N hinges per blade and tail, N/2 on the shaft."""
+    lay = helicopter_layout(params)
+    t, f, s, b = lay["tail"], lay["fuselage"], lay["shaft"], lay["blade"]
+    half = t["I_alpha"] / 2
+    out: list = []
+
+    def tail_chain(parent, start, sign):
+        return _chain(out, parent, start, 0, t["L"], n, t["m"],
+                      lambda ell: _inertia(t["m"], ell, t["I_alpha"], half, half, 0),
+                      (("torsion", 0, t["GJ"]), ("bend_y", 1, t["EI_flap"]),
+                       ("bend_z", 2, t["EI_lag"])), "tail", sign)
+    ground, spin = -1, [(SPIN, "spin", 2, 0.0)]
+    if free:                        # six coordinates: x, y, z, then turns about x, y, z
+        out.append(Body(ground, f["rear"], f["m"], f["cm"] - f["rear"], f["I"],
+                        joints=[(("fuselage", "free", a), "slide", a, 0.0) for a in range(3)]
+                        + [(("fuselage", "free", 3 + a), "hinge", a, 0.0) for a in range(3)]))
+        fus = len(out) - 1
+        tail_chain(fus, np.zeros(3), -1.0)
+    else:
+        last, tip = tail_chain(ground, t["end"], 1.0)
+        out.append(Body(last, f["rear"] - (t["end"] + tip), f["m"], f["cm"] - f["rear"],
+                        f["I"]))
+        fus = len(out) - 1
+    out.append(Body(fus, s["bottom"] - f["rear"], TINY_MASS, np.zeros(3), [TINY_INERTIA] * 3,
+                    joints=spin))
+    rot = s["I_p"] / 2
+    top, tip = _chain(out, len(out) - 1, np.zeros(3), 2, s["L"], max(n // 2, 2), s["m"],
+                      lambda ell: _inertia(s["m"], ell, s["I_p"], rot, rot, 2),
+                      (("bend_x", 0, s["EI"]), ("bend_y", 1, s["EI"]), ("torsion", 2, s["GJ"])),
+                      "shaft")
+    out.append(Body(top, s["top"] - (s["bottom"] + tip), lay["hub"]["m"],
+                    np.array([0.0, 0.0, -s["top"][2]]), lay["hub"]["I"]))
+    hub, centre, rho = len(out) - 1, -s["top"], params["blade_rho"]
+
+    def blade_inertia(ell):
+        return _inertia(b["m"], ell, b["I_alpha"], rho * b["I_flap"], rho * b["I_lag"], 0)
+    for k in range(4):
+        c, sn = np.cos(k * np.pi / 2), np.sin(k * np.pi / 2)
+        out.append(Body(hub, centre + lay["roots"][k], TINY_MASS, np.zeros(3),
+                        [TINY_INERTIA] * 3, rot=np.array([[c, -sn, 0], [sn, c, 0], [0, 0, 1]])))
+        _chain(out, len(out) - 1, np.zeros(3), 0, b["L"], n, b["m"], blade_inertia,
+               (("torsion", 0, b["GJ"]), ("flap", 1, b["EI_flap"]), ("lag", 2, b["EI_lag"])),
+               f"blade{k}")
+    return out
+
+
+def mbc_transform(names: list, psi: float):
+    """T(ψ), T′, T″ with q = T p over the coordinates in `names`: per blade coordinate the four
+    blades' (b₀, b_c, b_s, b_d) in the four blades' slots; the shaft's rotating-frame bending
+    angles from its fixed-frame ones; everything else unchanged."""
+    idx = {nm: i for i, nm in enumerate(names)}
+    n = len(names)
+    T, T1, T2 = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
+    for i, (part, fam, h) in enumerate(names):
+        if part == "blade0":
+            rows = [idx[(f"blade{k}", fam, h)] for k in range(4)]
+            for k, r in enumerate(rows):
+                a = psi + k * np.pi / 2
+                T[r, rows] = [1.0, np.cos(a), np.sin(a), (-1.0) ** k]
+                T1[r, rows] = [0.0, -np.sin(a), np.cos(a), 0.0]
+                T2[r, rows] = [0.0, -np.cos(a), -np.sin(a), 0.0]
+        elif part == "shaft" and fam == "bend_x":
+            j = [i, idx[("shaft", "bend_y", h)]]
+            c, s = np.cos(psi), np.sin(psi)
+            T[np.ix_(j, j)] = [[c, s], [-s, c]]
+            T1[np.ix_(j, j)] = [[-s, c], [-c, -s]]
+            T2[np.ix_(j, j)] = [[-c, -s], [s, -c]]
+        elif not part.startswith("blade") and not (part == "shaft" and fam == "bend_y"):
+            T[i, i] = 1.0
+    return T, T1, T2
+
+
+def mbc_matrices(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False):
+    """p̈ = K p + D ṗ in multi-blade coordinates (constant when the route is exact), from an
+    engine's `linearised(params, n, psi, free) -> (A_q, A_v, names, seconds)`."""
+    Aq, Av, names, secs = linearised(params, n, psi, free)
+    om = params["speed"]
+    T, T1, T2 = mbc_transform(names, psi)
+    Ti = np.linalg.inv(T)
+    return (Ti @ (Aq @ T + om * Av @ T1 - om**2 * T2), Ti @ (Av @ T - 2 * om * T1), names,
+            secs)
+
+
+def eigen(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False):
+    """Eigenvalues (Im > 0, ascending) and eigenvectors in multi-blade coordinates, the
+    coordinate names, and the seconds the engine spent linearising. Free: rigid-body roots
+    (|s| < 1e-3 rad/s) dropped."""
+    K, D, names, secs = mbc_matrices(linearised, params, n, psi, free)
+    m = len(names)
+    lam, V = np.linalg.eig(np.block([[np.zeros((m, m)), np.eye(m)], [K, D]]))
+    scale = np.max(np.abs(lam))
+    sel = (lam.imag > 1e-9 * scale) & (np.abs(lam) > 1e-3)
+    order = np.argsort(lam.imag[sel])
+    return lam[sel][order], V[:m, sel][:, order], names, secs
+
+
+BLADE_SHARE = 0.3   # a mode whose blades hold this share of |p|² is named after the blades
+
+
+def classify(v: np.ndarray, names: list):
+    """(family, kind, sense) of one mode from its multi-blade coordinates: the blade family and
+    multi-blade kind with the largest share of |p|² when the blades hold at least BLADE_SHARE
+    of it (a lag collective coupled with shaft torsion is a lag mode), else the aircraft part
+    that holds most; sense of a cyclic mode: 'progressive' when b_c + i b_s dominates
+    b_c − i b_s, else 'regressive'."""
+    share: dict = {}
+    cyc: dict = {}
+    blades = 0.0
+    for i, (part, fam, h) in enumerate(names):
+        a2 = abs(v[i]) ** 2
+        if part.startswith("blade"):
+            kind = ("collective", "cyclic", "cyclic", "differential")[int(part[-1])]
+            share[fam, kind] = share.get((fam, kind), 0.0) + a2
+            blades += a2
+            if kind == "cyclic":
+                cyc.setdefault((fam, h), [0j, 0j])[int(part[-1]) - 1] = v[i]
+        else:
+            share[part, ""] = share.get((part, ""), 0.0) + a2
+    blade_keys = [k for k in share if k[1]]
+    if blades >= BLADE_SHARE * sum(share.values()):
+        fam, kind = max(blade_keys, key=share.get)
+    else:
+        fam, kind = max((k for k in share if not k[1]), key=share.get)
+    if kind != "cyclic":
+        return fam, kind, ""
+    prog = sum(abs(c + 1j * s) ** 2 for c, s in cyc.values())
+    regr = sum(abs(c - 1j * s) ** 2 for c, s in cyc.values())
+    return fam, kind, "regressive" if regr >= prog else "progressive"
+
+
+def _frequencies(linearised, params, s, free):
+    """Frequencies (Hz, Richardson-extrapolated from N/2 when asked: pairs by nearest
+    frequency), the extrapolation's change, the (family, kind, sense) of each mode and the
+    seconds spent linearising, in ascending order."""
+    n = bc.checked_segments(s)
+    lam, V, names, secs = eigen(linearised, params, n, s["psi"], free)
+    f = lam.imag / (2 * np.pi)
+    change = np.zeros_like(f)
+    if s["extrapolate"]:
+        lam2, _, _, secs2 = eigen(linearised, params, n // 2, s["psi"], free)
+        secs += secs2
+        f2 = lam2.imag / (2 * np.pi)
+        m = min(len(f), len(f2), 3 * params["n_modes"] + 12)
+        rows, cols = linear_sum_assignment(np.abs(f[:m, None] - f2[None, :m]))
+        ext = f.copy()
+        ext[rows] = (4 * f[rows] - f2[cols]) / 3
+        change[rows] = ext[rows] - f[rows]
+        f = ext
+    return f, change, [classify(V[:, i], names) for i in range(len(f))], secs, len(names)
+
+
+def _on_blades(f, kinds, speed_hz):
+    """The frequency each fixed-frame mode shows on the blades (the rotor frame the paper
+    writes): a regressive cyclic mode at f + Ω, a progressive one at |f − Ω|."""
+    shift = {"regressive": speed_hz, "progressive": -speed_hz, "": 0.0}
+    return np.abs(f + np.array([shift[k[2]] for k in kinds]))
+
+
+def _labels(kinds):
+    """mstmm's names, numbered in the given order within each family and kind: 'flap cyclic
+    1', 'lag collective 1', 'fuselage 2'."""
+    count: dict = {}
+    out = []
+    for fam, kind, _ in kinds:
+        key = f"{fam} {kind}".strip()
+        count[key] = count.get(key, 0) + 1
+        out.append(f"{key} {count[key]}")
+    return out
+
+
+def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
+                   note: str) -> ModesResult:
+    """The helicopter at params['speed'] as the paper reports it: each mode's frequency on the
+    blades (Hz, ascending; fixed-frame cyclic modes shifted by ±Ω), named as mstmm names them
+    (numbered by frequency within each family and kind).
+    N segments per blade and tail (N/2 on the shaft), Richardson-extrapolated from N/2.
+
+    extra: `fixed_frame_hz` (the frequency an observer on the fuselage sees), `whirl`
+    (regressive / progressive for cyclic modes), `richardson_change_hz` (the extrapolation's
+    change: the discretisation error estimate)."""
+    s = merge_settings(settings, MODES_SETTINGS, ())
+    t0 = time.perf_counter()
+    f, change, kinds, secs, n_dof = _frequencies(linearised, params, s, free)
+    blade_f = _on_blades(f, kinds, params["speed"] / (2 * np.pi))
+    order = np.argsort(blade_f)
+    k = params["n_modes"]
+    kinds = [kinds[i] for i in order]
+    return ModesResult(frequencies_hz=blade_f[order][:k], labels=_labels(kinds)[:k],
+                       settings=s, notes=[note],
+                       extra={"fixed_frame_hz": f[order][:k],
+                              "whirl": [w for _, _, w in kinds][:k],
+                              "richardson_change_hz": change[order][:k],
+                              "linearise_s": secs, "modes_s": time.perf_counter() - t0,
+                              "n_dof": n_dof + 1})

@@ -28,6 +28,7 @@ from .analysis.trajectory import Modes, Trajectory
 from .contract import LeafResult, ModesResult, canonical_integrator, merge_settings
 from .errors import BadInput
 from .scenes import PLUGIN_SOLVERS, SCENES, Scene, get_scene
+from .scenes.base import SpeedRegime
 
 
 @dataclass(frozen=True)
@@ -331,6 +332,39 @@ def _simulate(scene, solver, params, settings, timeout_s, warm_up=True):
     return Trajectory(channels=channels, status=status, t_fail=t_fail, reason=reason,
                       stats={**stats, **res.stats}, wall_s=wall, invariants=invariants,
                       extra=res.extra, **base)
+
+
+def regimes(scene: Scene, solver: Solver, params_list: list[dict], settings: dict):
+    """The regimes of many runs in one compiled call, where the leaf offers one (`regimes`) for
+    the scene's SpeedRegime on one output grid: (labels, seconds per run), a label None where
+    the run did not end ok by `simulate`'s rules (leaf status, finite output, the one energy
+    rule: the caller runs that point alone to report why). None where no batch applies or it
+    raised (the caller runs every point alone)."""
+    leaf, reg = solver.leaf(scene), scene.regime
+    if not (isinstance(reg, SpeedRegime) and hasattr(leaf, "regimes") and params_list) or \
+            len({(p["t_end"], p["output_dt"]) for p in params_list}) > 1:
+        return None
+    t_out = scene.output_grid(params_list[0])
+    levels = np.array([reg.levels(p) for p in params_list], float)
+    try:
+        if solver.compiled:              # compile / load apart from the timed call
+            leaf.regimes(params_list[:1], t_out[:2], settings, reg.channel, levels[:1], 0.5)
+        t0 = time.perf_counter()
+        res = leaf.regimes(params_list, t_out, settings, reg.channel, levels, reg.window)
+        wall = time.perf_counter() - t0
+    except Exception:
+        return None
+    if res is None:
+        return None
+    ok = (res["code"] == 0) & res["finite"]
+    if scene.energy_channel:
+        names = (scene.energy_channel, *scene.energy_scale_channels)
+        if not all(c in res["max_abs"] for c in names):
+            return None
+        scale = np.max([res["max_abs"][c] for c in names], axis=0)
+        ok &= ~(res["drift"] > scene.energy_bound * scale)
+    return ([reg.labels[r] if good else None for r, good in zip(res["regime"], ok)],
+            wall / len(params_list))
 
 
 def modes(scene: Scene, solver: Solver, params: dict, settings: dict | None = None) -> Modes:

@@ -109,3 +109,16 @@ def test_hovering_aircraft_is_stable_in_multi_blade_coordinates():
     for psi in (0.0, 0.3):
         lam = hc.eigen(heli.linearised, HP, 8, psi, free=True)[0]
         assert lam.real.max() < 1e-2
+
+
+def test_xval_modes_says_why_the_engines_and_mstmm_differ(tmp_path):
+    """`xval modes` at Ω = 36.65 rad/s: Exudyn's lag collective (coupled with shaft torsion)
+    disagrees with mstmm's; the report runs the pair at rest, where they agree within the
+    allowance, and calls it the frame assumption."""
+    from compare.workflows.modes import run_modes
+    obj, _, _ = run_modes("helicopter-clamped", ["mstmm", "exudyn"], {}, tmp_path,
+                          log=lambda m: None, campbell_sweep=False)
+    rows = {e["mode"]: e for e in obj["explanations"]}
+    lag = rows["lag collective 1"]
+    assert lag["rel"] > 1e-2 and lag["rel_at_rest"] < ALLOW and lag["frame"]   # 1.7e-2, 1.3e-3
+    assert "Why the engines and the paper's model differ" in open(obj["report"]).read()

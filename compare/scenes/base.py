@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..analysis.metrics import first_crossing
 from ..errors import BadInput
 from .params import Param
 
@@ -76,6 +77,26 @@ class MapSpec:
 
 
 @dataclass(frozen=True)
+class SpeedRegime:
+    """A regime read off one channel against two levels of the parameters, `levels(params)`
+    -> (reach, stay): `labels[0]` unless the channel reaches `reach` after t = 0, `labels[2]`
+    where it stays above `stay` from `window` × t_end on, else `labels[1]`. Called on a run it
+    decides that run (`Scene.regime`); a leaf's compiled batch (`regimes`, `solvers.regimes`)
+    decides the same from the same numbers."""
+    channel: str
+    levels: Callable
+    window: float
+    labels: tuple
+
+    def __call__(self, p, tr):
+        reach, stay = self.levels(p)
+        w = tr.channels[self.channel]
+        if first_crossing(tr.t, w, reach) is None:
+            return self.labels[0]
+        return self.labels[2 if np.min(w[tr.t >= self.window * tr.t[-1]]) > stay else 1]
+
+
+@dataclass(frozen=True)
 class PublishedTiming:
     """A computing time the source reports for one of its tables: `seconds` (tool -> s) for
     the runs at `cases` (overrides of the scene's defaults, one run each; `xval bench` sums
@@ -122,8 +143,8 @@ class Scene:
     # (json rows, markdown lines) of frequencies identified from time-domain free responses
     campbell: Campbell | None = None
     identify: Callable | None = None
-    # explain_frequencies(params, results, comparisons) -> (json rows, markdown lines): why the
-    # pairs that disagree do (measured), for the report
+    # explain_frequencies(params, comparisons, modes_at(solver, params), tolerances) -> (json
+    # rows, markdown lines): why the pairs that disagree do (measured), for the report
     explain_frequencies: Callable | None = None
     # mode_shape_3d(params, solver, shape row) -> [(points (n, 3) m, displacement (n, 3))]:
     # the structure's line strips and one mode's motion Re(displacement·e^{iωt}) on them
@@ -142,9 +163,10 @@ class Scene:
     # the channels the recording's first screen shows (default: key channel and energy)
     view_channels: tuple[str, ...] = ()
     # maps (`xval map`): regime(params, trajectory) -> the label of one ok run, decided by the
-    # same function the findings use; map_observables: name -> (fn(params, trajectory) ->
-    # float or None, unit, doc), a scalar per run (None: the event did not happen); maps: the
-    # scene's default maps (MapSpec), run by the default campaign
+    # same function the findings use (a SpeedRegime: a compiled leaf may batch it);
+    # map_observables: name -> (fn(params, trajectory) -> float or None, unit, doc), a scalar
+    # per run (None: the event did not happen); maps: the scene's default maps (MapSpec), run
+    # by the default campaign
     regime: Callable | None = None
     map_observables: dict = field(default_factory=dict)
     maps: tuple = ()

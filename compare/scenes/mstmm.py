@@ -187,7 +187,7 @@ HELICOPTER_CLAMPED = Scene(
     tolerances=HELICOPTER_TOLERANCES,
     campbell=Campbell("speed", 0.0, 50.0, 11, excitation_hz=rotor_speed_hz,
                       solvers=CUSTOM),
-    explain_frequencies=mstmm_frames.explainer("helicopter-clamped"),
+    explain_frequencies=mstmm_frames.explain,
     campaign_cases=helicopter_cases("helicopter-clamped"),
     published_timings=(TABLE3_TIMING,),
 )
@@ -204,7 +204,7 @@ HELICOPTER_HOVER = Scene(
     tolerances=HELICOPTER_TOLERANCES,
     campbell=Campbell("speed", 0.0, 50.0, 11, excitation_hz=rotor_speed_hz,
                       solvers=CUSTOM),
-    explain_frequencies=mstmm_frames.explainer("helicopter-hover"),
+    explain_frequencies=mstmm_frames.explain,
     campaign_cases=helicopter_cases("helicopter-hover"),
 )
 

@@ -10,46 +10,42 @@ this does not explain, and the report says so.
 """
 from __future__ import annotations
 
+import numpy as np
+
 ENGINES = ("exudyn", "mujoco")
 
 
-def explainer(scene_name):
-    def explain(params, results, comparisons):
-        import numpy as np
+def explain(params, comparisons, modes_at, tolerances):
+    """`modes_at(solver name, params)` runs one solver's modes; `tolerances` the scene's."""
+    bad = [c for c in comparisons if c.verdict == "disagree"
+           and (c.a in ENGINES) != (c.b in ENGINES)]
+    if not bad or params["speed"] == 0:
+        return [], []
+    rest = {n: modes_at(n, {**params, "speed": 0.0})
+            for n in sorted({c.a for c in bad} | {c.b for c in bad})}
+    allow = tolerances.get("frequency_by_solver", {})
 
-        from .. import solvers
-        from . import get_scene
-        sc = get_scene(scene_name)
-        bad = [c for c in comparisons if c.verdict == "disagree"
-               and (c.a in ENGINES) != (c.b in ENGINES)]
-        if not bad or params["speed"] == 0:
-            return [], []
-        rest = {n: solvers.modes(sc, solvers.get_solver(n), {**params, "speed": 0.0})
-                for n in sorted({c.a for c in bad} | {c.b for c in bad})}
-        allow = sc.tolerances.get("frequency_by_solver", {})
-
-        def at_rest(a, b):
-            """Largest relative difference of the two at rest, mode by mode in frequency
-            order (at rest the cyclic pairs are degenerate: names would be arbitrary)."""
-            fa, fb = rest[a].frequencies_hz, rest[b].frequencies_hz
-            k = min(len(fa), len(fb))
-            return float(np.max(np.abs(fa[:k] / fb[:k] - 1))) if k else np.inf
-        rows, md = [], ["## Why the engines and the paper's model differ", "",
-                        f"At Ω = {params['speed']:g} rad/s, each pair that disagrees, against "
-                        "the same pair with the rotor at rest (no frame question; at rest "
-                        "compared mode by mode in frequency order):", ""]
-        for c in bad:
-            r = at_rest(c.a, c.b)
-            tol = max(allow.get(c.a, 0.0), allow.get(c.b, 0.0), sc.tolerances["frequency"])
-            frame = r <= tol
-            if not frame:
-                why = f"not the frame alone: the pair differs at rest too ({r:.2e})"
-            else:
-                why = f"the frame assumption: the rotor-frame support moves it by {c.max_rel:.2e}"
-                if c.max_rel > 0.2:     # paired by name: say the shapes may not be alike
-                    why += " (paired by name; spinning, the shapes may couple differently)"
-            rows.append({"a": c.a, "b": c.b, "mode": c.channel, "rel": c.max_rel,
-                         "rel_at_rest": r, "frame": frame, "why": why})
-            md.append(f"- {c.a}–{c.b} {c.channel}: {c.decided_by}; at rest ≤ {r:.2e} → {why}")
-        return rows, md
-    return explain
+    def at_rest(a, b):
+        """Largest relative difference of the two at rest, mode by mode in frequency
+        order (at rest the cyclic pairs are degenerate: names would be arbitrary)."""
+        fa, fb = rest[a].frequencies_hz, rest[b].frequencies_hz
+        k = min(len(fa), len(fb))
+        return float(np.max(np.abs(fa[:k] / fb[:k] - 1))) if k else np.inf
+    rows, md = [], ["## Why the engines and the paper's model differ", "",
+                    f"At Ω = {params['speed']:g} rad/s, each pair that disagrees, against "
+                    "the same pair with the rotor at rest (no frame question; at rest "
+                    "compared mode by mode in frequency order):", ""]
+    for c in bad:
+        r = at_rest(c.a, c.b)
+        tol = max(allow.get(c.a, 0.0), allow.get(c.b, 0.0), tolerances["frequency"])
+        frame = r <= tol
+        if not frame:
+            why = f"not the frame alone: the pair differs at rest too ({r:.2e})"
+        else:
+            why = f"the frame assumption: the rotor-frame support moves it by {c.max_rel:.2e}"
+            if c.max_rel > 0.2:     # paired by name: say the shapes may not be alike
+                why += " (paired by name; spinning, the shapes may couple differently)"
+        rows.append({"a": c.a, "b": c.b, "mode": c.channel, "rel": c.max_rel,
+                     "rel_at_rest": r, "frame": frame, "why": why})
+        md.append(f"- {c.a}–{c.b} {c.channel}: {c.decided_by}; at rest ≤ {r:.2e} → {why}")
+    return rows, md

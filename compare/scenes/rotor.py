@@ -4,7 +4,7 @@ import numpy as np
 from ..analysis.identify import fft_peak, matrix_pencil, transverse_components
 from ..analysis.metrics import first_crossing
 from ..physics.rotor import constants
-from .base import Campbell, Extreme, Finding, MapSpec, Scene
+from .base import Campbell, Extreme, Finding, MapSpec, Scene, SpeedRegime
 from .params import Param, positive
 
 SOURCE = "seed 000 (Euler-vector rotor), seed 001 (quaternion formulation)"
@@ -24,16 +24,18 @@ ROTOR_PARAMS = (
 )
 
 
-def spinup_regime(p, tr):
-    """One run's regime, the findings' own decision: `not reached` (|ω| never reaches √(k/I_t)),
-    `passage` (|ω| over the last 10 % of the run stays above 1.1 × the forward critical speed),
-    else `capture`."""
+def spinup_levels(p):
+    """The speeds `spinup_regime` decides by: √(k/I_t), which |ω| must reach, and 1.1 × the
+    forward critical speed, which it must stay above."""
     c = constants(p)
-    w = tr.channels["omega_norm"]
-    if first_crossing(tr.t, w, c["omega_tilt"]) is None:
-        return "not reached"
-    passed = np.min(w[tr.t >= 0.9 * tr.t[-1]]) > 1.1 * c["forward_critical"]
-    return "passage" if passed else "capture"
+    return c["omega_tilt"], 1.1 * c["forward_critical"]
+
+
+# One run's regime, the findings' own decision: `not reached` (|ω| never reaches √(k/I_t)),
+# `passage` (|ω| over the last 10 % of the run stays above 1.1 × the forward critical speed),
+# else `capture`.
+spinup_regime = SpeedRegime("omega_norm", spinup_levels, 0.9,
+                            ("not reached", "capture", "passage"))
 
 
 def spinup_findings(p, trajectories):

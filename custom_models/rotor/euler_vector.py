@@ -22,6 +22,7 @@ from ..rotation import (
     transverse_vector,
     zhilin_inverse_t,
 )
+from . import batch
 from . import model as rotor
 from .model import (  # noqa: F401  (re-exported: the leaf's settings)
     ADAPTIVE,
@@ -101,6 +102,25 @@ def guard(t, y, p):
     return rotor.FAIL_TILT if th > rotor.TILT_LIMIT else 0
 
 
+@nb.njit(cache=True)
+def kinematics(y, p, out):
+    """One row of `motion` (rotation row-major, fixed-frame ω, work) for the batch path; L and
+    ω = L I₀⁻¹ Lᵀ K as `rhs_into` forms them."""
+    Lg = rotation_t(y[3], y[4], y[5])
+    c, s = np.cos(y[6]), np.sin(y[6])
+    L = (c * Lg[0] + s * Lg[1], c * Lg[1] - s * Lg[0], Lg[2],
+         c * Lg[3] + s * Lg[4], c * Lg[4] - s * Lg[3], Lg[5],
+         c * Lg[6] + s * Lg[7], c * Lg[7] - s * Lg[6], Lg[8])
+    for k in range(9):
+        out[k] = L[k]
+    u = mat_tvec_t(L, y[0], y[1], y[2])
+    J = p[_I0INV:_I0INV + 9]
+    out[9], out[10], out[11] = mat_vec_t(L, J[0] * u[0] + J[1] * u[1] + J[2] * u[2],
+                                         J[3] * u[0] + J[4] * u[1] + J[5] * u[2],
+                                         J[6] * u[0] + J[7] * u[1] + J[8] * u[2])
+    out[12] = y[7]
+
+
 def motion(Y, p):
     Rs = rotations(Y)
     I0inv = p[I0INV].reshape(3, 3)
@@ -125,3 +145,9 @@ def simulate(params, t_out, settings):
     gamma_axial = np.nanmax(np.abs(Y[:, 5]))
     return rotor.result(params, t_out, Y, stats, t_fail, reason, used, motion, p,
                         {"gamma_axial": float(gamma_axial)})
+
+
+def regimes(params_list, t_out, settings, channel, levels, window):
+    """Many points in one compiled call, each reduced to its regime (`batch.regimes`)."""
+    return batch.regimes(rhs_into, guard, kinematics, initial_state, params_list, t_out,
+                         settings, channel, levels, window)

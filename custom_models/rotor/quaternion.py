@@ -20,6 +20,7 @@ from ..rotation import (
     quats_to_matrices,
     transverse_t,
 )
+from . import batch
 from . import model as rotor
 from .model import (  # noqa: F401  (re-exported: the leaf's settings)
     ADAPTIVE,
@@ -81,6 +82,16 @@ def guard(t, y, p):
     return rotor.tilt_guard_z(1.0 - 2.0 * (x * x + qy * qy) / (w * w + x * x + qy * qy + z * z))
 
 
+@nb.njit(cache=True)
+def kinematics(y, p, out):
+    """One row of `motion` (rotation row-major, fixed-frame ω, work) for the batch path."""
+    R = quat_matrix_t(y[0], y[1], y[2], y[3])
+    for k in range(9):
+        out[k] = R[k]
+    out[9], out[10], out[11] = mat_vec_t(R, y[4], y[5], y[6])
+    out[12] = y[7]
+
+
 def motion(Y, p):
     """Rotations, fixed-frame ω and work per output row (NaN rows stay NaN)."""
     Rs = quats_to_matrices(np.ascontiguousarray(Y[:, 0:4]))
@@ -102,3 +113,9 @@ def simulate(params, t_out, settings):
     unit *= np.where(unit[:, :1] < 0, -1.0, 1.0)             # w ≥ 0, as matrix_to_quat gives
     return rotor.result(params, t_out, Y, stats, t_fail, reason, used, motion, p,
                         {"quaternion_norm": float(np.nanmax(np.abs(qn - 1.0)))}, unit)
+
+
+def regimes(params_list, t_out, settings, channel, levels, window):
+    """Many points in one compiled call, each reduced to its regime (`batch.regimes`)."""
+    return batch.regimes(rhs_into, guard, kinematics, initial_state, params_list, t_out,
+                         settings, channel, levels, window)

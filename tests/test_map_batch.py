@@ -1,0 +1,90 @@
+"""The map's compiled batch path (`solvers.regimes`, the rotor leaves' `regimes`) against the
+point-by-point path (`simulate` + the scene's regime), which is the independent reference:
+the same labels on the default map and right at the capture/passage boundary, and failed runs
+handed back to `simulate`."""
+import numpy as np
+import pytest
+
+from compare import solvers
+from compare.scenes import get_scene
+from compare.workflows import maps
+
+SOLVERS = ("quaternion", "euler-vector")
+EDGE = {"eccentricity": 0.005, "t_end": 10}      # one crossing, M* ≈ 2.6–3.1 N·m
+
+
+def _one_by_one(sc, s, points, base, st):
+    """Each point's label from its own full run."""
+    out = []
+    for pt in points:
+        p = sc.resolve({**base, **pt})
+        tr = solvers.simulate(sc, s, p, st, warm_up=False)
+        out.append(sc.regime(p, tr) if tr.status == "ok" else tr.status)
+    return out
+
+
+def _boundary(sc, s, st, lo=2.6, hi=3.1, width=1e-6):
+    """M* at eccentricity 0.005 bisected point by point (capture below, passage above)."""
+    def label(x):
+        return _one_by_one(sc, s, [{"torque": x}], EDGE, st)[0]
+    assert (label(lo), label(hi)) == ("capture", "passage")
+    while hi - lo > width:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if label(mid) == "capture" else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+@pytest.mark.parametrize("name", SOLVERS)
+def test_batch_labels_equal_the_single_runs(name):
+    sc, s = get_scene("rotor-spinup"), solvers.get_solver(name)
+    st = solvers.settings_for(s, sc.name, t_out=sc.output_grid(sc.resolve(EDGE)))
+    spec = sc.maps[0]                              # the default map: torque × eccentricity
+    grid = [{"torque": x, "eccentricity": y, **spec.set}
+            for x in (1.0, 2.5, 4.0, 5.0) for y in (0.0, 0.0125)]
+    m = _boundary(sc, s, st)
+    edge = [{"torque": m + d, **EDGE} for d in (-1e-3, -3e-4, -1e-4, -3e-5, -1e-5, -2e-6,
+                                                2e-6, 1e-5, 3e-5, 1e-4, 3e-4, 1e-3)]
+    points = grid + edge
+    ref = _one_by_one(sc, s, points, {}, st)
+    assert {"capture", "passage"} <= set(ref[len(grid):])     # the edge points straddle M*
+    labels, wall = solvers.regimes(sc, s, [sc.resolve(pt) for pt in points], st)
+    assert labels == ref and wall > 0
+    rows = maps.evaluate_chunk(sc.name, s.name, {}, points, st, None)
+    assert [r["label"] for r in rows] == ref and {r["status"] for r in rows} == {"ok"}
+
+
+@pytest.mark.parametrize("name", SOLVERS)
+def test_failed_runs_go_back_to_simulate(name):
+    """A run that fails — by the integrator (non-finite state, tilt π) or by the adapter's
+    energy rule — has no batch label: the chunk runs it alone and reports what `simulate`
+    reports; the points beside it keep their batch labels."""
+    sc, s = get_scene("rotor-spinup"), solvers.get_solver(name)
+    cases = [({"t_end": 10}, "euler", 5e-4, "energy balance drifted"),
+             ({"t_end": 10}, "euler", 1e-3, "tilt reached pi"),
+             ({"t_end": 0.2, "output_dt": 0.005, "k": 1e7}, "rk4", 5e-3, "")]   # ω h = 13.7
+    for base, integrator, dt, why in cases:
+        points = [{"torque": 1.5}, {"torque": 4.0}]
+        ps = [sc.resolve({**base, **pt}) for pt in points]
+        st = solvers.settings_for(s, sc.name, t_out=sc.output_grid(ps[0]),
+                                  integrator=integrator, dt=dt)
+        trs = [solvers.simulate(sc, s, p, st) for p in ps]
+        assert trs[0].status == "diverged" and why in trs[0].reason
+        labels, _ = solvers.regimes(sc, s, ps, st)
+        assert labels == [sc.regime(p, tr) if tr.status == "ok" else None
+                          for p, tr in zip(ps, trs)]
+        rows = maps.evaluate_chunk(sc.name, s.name, base, points, st, None)
+        assert [(r["status"], r["label"], r.get("reason")) for r in rows] == [
+            (tr.status, sc.regime(p, tr) if tr.status == "ok" else tr.status, tr.reason)
+            for p, tr in zip(ps, trs)]
+
+
+def test_other_paths_are_left_alone():
+    """An observable, or points on different output grids, are not batched."""
+    sc, s = get_scene("rotor-spinup"), solvers.get_solver("quaternion")
+    ps = [sc.resolve({"t_end": 1}), sc.resolve({"t_end": 2})]
+    st = solvers.settings_for(s, sc.name, t_out=sc.output_grid(ps[0]))
+    assert solvers.regimes(sc, s, ps, st) is None
+    sail = get_scene("sail-deploy")
+    assert solvers.regimes(sail, solvers.get_solver("thread-spool"), [sail.resolve({})],
+                           {}) is None
+    assert np.isfinite(sc.regime.levels(ps[0])).all()

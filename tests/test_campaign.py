@@ -138,3 +138,32 @@ def test_json_syntax_error_names_the_line(tmp_path):
     assert rc == 2 and len(se.strip().splitlines()) == 1
     assert "camp.json" in se and "line 3" in se
     assert not (tmp_path / "logs").exists()
+
+
+def test_the_code_digest_follows_a_model_and_what_it_imports_only(tmp_path, monkeypatch):
+    """A result is reused only while its model's code is unchanged: the digest covers the
+    leaf and the project modules it imports (here the shared rotor driver two imports away),
+    not an unrelated model. (After the rooms move it read no file at all — the empty digest —
+    so a model fix did not rerun stored jobs.)"""
+    import hashlib
+    import shutil
+
+    from compare.workflows import campaign
+    for pkg in campaign.PROJECT_PACKAGES:
+        shutil.copytree(campaign.ROOT / pkg, tmp_path / pkg,
+                        ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(campaign, "ROOT", tmp_path)
+    monkeypatch.setattr(campaign, "_CODE", {})
+    leaf = {"custom_models.rotor.quaternion"}
+
+    def digest_after(edit=None):
+        if edit:
+            f = tmp_path / edit
+            f.write_text(f.read_text() + "\n# edited\n")
+        campaign._CODE.clear()
+        return campaign.code_digest(leaf)
+    d0 = digest_after()
+    assert d0 != hashlib.sha256(b"").hexdigest()
+    d1 = digest_after("custom_models/integrators/dense.py")      # leaf → model → dense
+    assert d1 != d0
+    assert digest_after("custom_models/press/model.py") == d1

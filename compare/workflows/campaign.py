@@ -259,7 +259,7 @@ def _canon(x):
 PROJECT_PACKAGES = ("compare", "custom_models", "reference_models")
 
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]          # the checkout: compare/ sits in it
 
 
 def _source(module_name):

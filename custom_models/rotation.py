@@ -151,10 +151,11 @@ def rotation_t(t0, t1, t2):
 
 
 @nb.njit(cache=True)
-def zhilin_inverse_t(t0, t1, t2):
-    """Z⁻¹(θ) as a 9-tuple (see `zhilin_inverse`)."""
-    _, _, _, d = _coefficients(np.sqrt(t0 * t0 + t1 * t1 + t2 * t2))
-    return rodrigues_t(t0, t1, t2, -0.5, d)
+def rotation_zhilin_inverse_t(t0, t1, t2):
+    """L(θ) and Z⁻¹(θ) (see `zhilin_inverse`) as 9-tuples from one evaluation of their
+    coefficients (one sin, one cos: the Euler-vector right-hand side needs both each call)."""
+    a, b, _, d = _coefficients(np.sqrt(t0 * t0 + t1 * t1 + t2 * t2))
+    return rodrigues_t(t0, t1, t2, a, b), rodrigues_t(t0, t1, t2, -0.5, d)
 
 
 @nb.njit(cache=True)

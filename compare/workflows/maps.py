@@ -90,7 +90,7 @@ def evaluate_chunk(scene_name, solver_name, base, points, settings, what):
     point it leaves out (a failed run) and every other solver or observable run one by one
     through `simulate`, models loaded and compiled once per worker, warmed up once per chunk.
     Measured (`xval bench rotor-spinup --points 10000`, 2 cores, runs minutes apart):
-    quaternion 534 → 638–706, euler-vector 360 → 510–532 points/s, the kernel's integration
+    quaternion 534 → 655, euler-vector 360 → 534 points/s, the kernel's integration
     ~97 % of a point's cost. Its loop is plain, one per worker: a prange kernel over both cores
     in a single worker gave 614 and 491."""
     sc, s = get_scene(scene_name), solvers.get_solver(solver_name)

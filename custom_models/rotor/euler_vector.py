@@ -19,8 +19,8 @@ from ..rotation import (
     rotation_t,
     rotation_tensor,
     rotation_z,
+    rotation_zhilin_inverse_t,
     transverse_vector,
-    zhilin_inverse_t,
 )
 from . import batch
 from . import model as rotor
@@ -60,7 +60,7 @@ def rotations(Y):
 def rhs_into(t, y, p, dy):
     """Fused scalar form of the equations above (3×3 matrices as 9-tuples: no allocation)."""
     g0, g1, g2 = y[3], y[4], y[5]
-    Lg = rotation_t(g0, g1, g2)
+    Lg, Zi = rotation_zhilin_inverse_t(g0, g1, g2)
     c, s = np.cos(y[6]), np.sin(y[6])
     L = (c * Lg[0] + s * Lg[1], c * Lg[1] - s * Lg[0], Lg[2],        # L = L(γ)·L(φ e_z)
          c * Lg[3] + s * Lg[4], c * Lg[4] - s * Lg[3], Lg[5],
@@ -70,7 +70,6 @@ def rhs_into(t, y, p, dy):
     om = mat_vec_t(L, J[0] * u[0] + J[1] * u[1] + J[2] * u[2],
                    J[3] * u[0] + J[4] * u[1] + J[5] * u[2],
                    J[6] * u[0] + J[7] * u[1] + J[8] * u[2])           # ω = L I₀⁻¹ Lᵀ K
-    Zi = zhilin_inverse_t(g0, g1, g2)
     a0, a1, a2 = Lg[2], Lg[5], Lg[8]                                # L(γ)·e, the spin axis
     phi_dot = ((Zi[6] * om[0] + Zi[7] * om[1] + Zi[8] * om[2])
                / (Zi[6] * a0 + Zi[7] * a1 + Zi[8] * a2))

@@ -137,6 +137,9 @@ class Scene:
     error_estimate: bool = True
     # the bench's reference: the first runs tightest, the second confirms it (names only)
     reference_solvers: tuple[str, ...] = ()
+    # the solvers `xval bench` walks unless told (default: all): a solver of another model has
+    # no accuracy to measure against the reference, only the model difference
+    bench_solvers: tuple[str, ...] = ()
     check: Callable | None = None   # cross-parameter physical checks, raises BadInput
     findings: Callable | None = None  # (params, trajectories) -> list[Finding]
     # frequency scenes: the Campbell sweep; `identify(params, simulate, solver_names)` returns

@@ -173,7 +173,7 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
             raise BadInput("--vary: frequency scenes are benched along the solvers' own "
                            "accuracy knobs only")
         return run_bench_modes(sc, solver_names, overrides, out, repeats, log, make_out)
-    chosen = solvers.pick(sc, solver_names)
+    chosen = solvers.pick(sc, solver_names or list(sc.bench_solvers))
     budget.check_output(sc, overrides, len(chosen), max_output_gib)
     params = sc.resolve(overrides)
     vary = parse_vary(vary, sc) if vary is not None else None

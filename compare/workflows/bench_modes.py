@@ -203,7 +203,7 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
                     log=print, make_out=None) -> dict:
     """The frequency bench (see the module doc); everything is checked before the bench
     folder is made."""
-    chosen = solvers.pick(sc, solver_names)
+    chosen = solvers.pick(sc, solver_names or list(sc.bench_solvers))
     params = sc.resolve(overrides)
     timing_params = [[sc.resolve(case) for case in pt.cases] for pt in sc.published_timings]
     if make_out:

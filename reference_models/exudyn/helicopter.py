@@ -8,10 +8,10 @@ body's mass sits on its last link. A tree has no welded link, so a body without 
 last link as one rigid body (mass, centre of mass and inertia by the parallel-axis rule),
 its children re-hung from there.
 
-The linearisation is analytic in M and the tree's dynamics (Exudyn differentiates the
-residual numerically only where it must): about steady spin (q = 0, drive angle ψ, drive
-speed Ω), K = −∂f/∂q then holds the centrifugal stiffening and softening, D = −∂f/∂q̇ the
-Coriolis and gyroscopic coupling; nothing rotating-frame is added by hand. The drive's row
+`ComputeLinearizedSystem` gives M and the derivatives of the tree's forces about steady spin
+(q = 0, drive angle ψ, drive speed Ω): K = −∂f/∂q holds the centrifugal stiffening and
+softening, D = −∂f/∂q̇ the Coriolis and gyroscopic coupling (finite differences: D moves with
+ψ by 2.5e-5 after the transform, K by 2e-11); nothing rotating-frame is added by hand. The drive's row
 and column are deleted (its speed prescribed), then A_q = −M⁻¹K, A_v = −M⁻¹D.
 """
 from __future__ import annotations

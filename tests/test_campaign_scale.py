@@ -85,7 +85,8 @@ def _check_intact(camp_dir):
         if not f.name.startswith("."):
             Trajectory.load(f)
     for f in camp_dir.rglob("*.json"):
-        json.loads(f.read_text())
+        if not f.name.startswith("."):        # a killed writer's temporary is not a record
+            json.loads(f.read_text())
     for rrd in camp_dir.rglob("run.rrd"):
         for npz in rrd.parent.glob("[!.]*.npz"):
             tr = Trajectory.load(npz)

@@ -10,9 +10,10 @@ its children re-hung from there.
 
 `ComputeLinearizedSystem` gives M and the derivatives of the tree's forces about steady spin
 (q = 0, drive angle ψ, drive speed Ω): K = −∂f/∂q holds the centrifugal stiffening and
-softening, D = −∂f/∂q̇ the Coriolis and gyroscopic coupling (finite differences: D moves with
-ψ by 2.5e-5 after the transform, K by 2e-11); nothing rotating-frame is added by hand. The drive's row
-and column are deleted (its speed prescribed), then A_q = −M⁻¹K, A_v = −M⁻¹D.
+softening, D = −∂f/∂q̇ the Coriolis and gyroscopic coupling (finite differences: D moves
+with ψ by 2.5e-5 after the transform, K by 2e-11); nothing rotating-frame is added by hand.
+The drive's row and column are deleted (its speed prescribed), then A_q = −M⁻¹K,
+A_v = −M⁻¹D.
 """
 from __future__ import annotations
 

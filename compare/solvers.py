@@ -183,15 +183,24 @@ def _first_bad_time(t, channels):
     return float(t[np.argmax(bad)]) if bad.any() else None
 
 
+def energy_limit(scene, largest):
+    """The drift the energy rule allows: `scene.energy_bound` × the energy scale, the largest
+    |value| of the energy balance and of the scene's `energy_scale_channels` (`largest`:
+    channel -> its largest |value|, a number or one per run)."""
+    names = (scene.energy_channel, *scene.energy_scale_channels)
+    return scene.energy_bound * np.max([np.asarray(largest[c], float) for c in names], axis=0)
+
+
 def _energy_jump(t, channels, scene):
     """The one energy-divergence rule: first time the energy balance leaves E(0) by more than
     `scene.energy_bound` of the energy scale (the largest |value| of the energy balance and of
     the scene's `energy_scale_channels`)."""
     e = channels[scene.energy_channel]
-    scale = max(float(np.max(np.abs(channels[c]))) for c in
-                (scene.energy_channel, *scene.energy_scale_channels))
+    limit = energy_limit(scene, {c: np.max(np.abs(channels[c]))
+                                 for c in (scene.energy_channel, *scene.energy_scale_channels)})
+    scale = limit / scene.energy_bound
     drift = np.abs(e - e[0])
-    bad = np.nonzero(drift > scene.energy_bound * scale)[0]
+    bad = np.nonzero(drift > limit)[0]
     if not len(bad):
         return None, None
     return float(t[bad[0]]), (f"unstable or too coarse: energy balance drifted by "
@@ -358,11 +367,9 @@ def regimes(scene: Scene, solver: Solver, params_list: list[dict], settings: dic
         return None
     ok = (res["code"] == 0) & res["finite"]
     if scene.energy_channel:
-        names = (scene.energy_channel, *scene.energy_scale_channels)
-        if not all(c in res["max_abs"] for c in names):
+        if not {scene.energy_channel, *scene.energy_scale_channels} <= set(res["max_abs"]):
             return None
-        scale = np.max([res["max_abs"][c] for c in names], axis=0)
-        ok &= ~(res["drift"] > scene.energy_bound * scale)
+        ok &= ~(res["drift"] > energy_limit(scene, res["max_abs"]))
     return ([reg.labels[r] if good else None for r, good in zip(res["regime"], ok)],
             wall / len(params_list))
 

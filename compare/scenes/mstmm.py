@@ -174,41 +174,30 @@ def helicopter_params(n_default):
     )
 
 
-HELICOPTER_CLAMPED = Scene(
-    name="helicopter-clamped",
-    title="Helicopter, 4 blades + hub + drive shaft + fuselage + tail, tail end clamped "
-          "(Table 3)",
-    source=SOURCE,
-    kind="modes",
-    params=helicopter_params(13),
-    leaves={**leaves("helicopter"), **engine_leaves("helicopter")},
-    mode_shape_3d=mstmm_shapes.helicopter_clamped,
-    energy_channel=None,
-    tolerances=HELICOPTER_TOLERANCES,
-    campbell=Campbell("speed", 0.0, 50.0, 11, excitation_hz=rotor_speed_hz,
-                      solvers=CUSTOM),
-    bench_solvers=CUSTOM,     # the engines' aircraft is another model (the frame)
-    explain_frequencies=mstmm_frames.explain,
-    campaign_cases=helicopter_cases("helicopter-clamped"),
-    published_timings=(TABLE3_TIMING,),
-)
+def helicopter_scene(name, title, system, n_modes, shapes, **more):
+    """What both helicopter scenes share: the parameters, the four leaves, the allowances,
+    the paper's-model Campbell diagram and bench, the explanation of the engines' differences
+    and the like-for-like campaign cases."""
+    return Scene(name=name, title=title, source=SOURCE, kind="modes",
+                 params=helicopter_params(n_modes),
+                 leaves={**leaves(system), **engine_leaves(system)},
+                 mode_shape_3d=shapes, energy_channel=None, tolerances=HELICOPTER_TOLERANCES,
+                 campbell=Campbell("speed", 0.0, 50.0, 11, excitation_hz=rotor_speed_hz,
+                                   solvers=CUSTOM),
+                 bench_solvers=CUSTOM,     # the engines' aircraft is another model (the frame)
+                 explain_frequencies=mstmm_frames.explain, campaign_cases=helicopter_cases(name),
+                 **more)
 
-HELICOPTER_HOVER = Scene(
-    name="helicopter-hover",
-    title="Hovering helicopter, whole aircraft free: first flexible frequencies (Table 4)",
-    source=SOURCE,
-    kind="modes",
-    params=helicopter_params(8),
-    leaves={**leaves("helicopter_hover"), **engine_leaves("helicopter_hover")},
-    mode_shape_3d=mstmm_shapes.helicopter_hover,
-    energy_channel=None,
-    tolerances=HELICOPTER_TOLERANCES,
-    campbell=Campbell("speed", 0.0, 50.0, 11, excitation_hz=rotor_speed_hz,
-                      solvers=CUSTOM),
-    bench_solvers=CUSTOM,     # the engines' aircraft is another model (the frame)
-    explain_frequencies=mstmm_frames.explain,
-    campaign_cases=helicopter_cases("helicopter-hover"),
-)
+
+HELICOPTER_CLAMPED = helicopter_scene(
+    "helicopter-clamped",
+    "Helicopter, 4 blades + hub + drive shaft + fuselage + tail, tail end clamped (Table 3)",
+    "helicopter", 13, mstmm_shapes.helicopter_clamped, published_timings=(TABLE3_TIMING,))
+
+HELICOPTER_HOVER = helicopter_scene(
+    "helicopter-hover",
+    "Hovering helicopter, whole aircraft free: first flexible frequencies (Table 4)",
+    "helicopter_hover", 8, mstmm_shapes.helicopter_hover)
 
 SCENES = (ROTATING_BEAM, SPINNING_SHAFT, HELICOPTER_CLAMPED, HELICOPTER_HOVER)
 

@@ -6,11 +6,16 @@ solver's output beyond environment noise fails here and has to be explained. Eac
 every channel down-sampled to 64 points plus the final values (frequency scenes: every mode).
 
 Tolerances sit above environment noise, measured when the golden is written: the run is
-repeated with every float parameter scaled by 1 + 1e-12 (the size of the input changes a
-different libm, BLAS or compiler makes), and each channel's tolerance is 100× the largest
-deviation that causes over the run, floored at 1e-12 of the channel's scale. Rewrite them on
-purpose with `python -m pytest tests/test_golden.py --update-golden`; the JSON diff is the
-review, and a failure names the package versions that changed since.
+repeated with every continuous physical parameter (`Param.continuous_physical`: never a count,
+a choice, a threshold, the horizon or the output grid) moved by ±1e-12 of itself, alternating
+signs (the size of the input changes a different libm, BLAS or compiler makes), and each
+channel's tolerance is 100× the largest deviation that causes over the run, floored at 1e-12 of
+the channel's scale. A conserved quantity (the scene's energy balance and invariants) is stored
+as its drift from t = 0, so its golden pins the conservation, not an offset the noise moves.
+`test_a_one_percent_error_fails_the_golden` proves each golden's power: one physical parameter
+of the scene 1 % off fails every solver's golden. Rewrite them on purpose with
+`python -m pytest tests/test_golden.py --update-golden`; the JSON diff is the review, and a
+failure names the package versions that changed since.
 """
 import importlib.metadata
 import json
@@ -40,22 +45,38 @@ def _versions():
                                                        "mujoco")}
 
 
-def _produce(scene_name, solver_name, scale_params=1.0):
-    """{channel: array} — time scenes: 64 samples and the final value; modes: frequencies."""
+def noisy(sc, p: dict, rel: float) -> dict:
+    """`p` with every continuous physical parameter moved by ±`rel` of itself (alternating
+    signs, so no dimensionless group is left exactly unchanged)."""
+    names = [q.name for q in sc.params if q.continuous_physical]
+    return {**p, **{k: p[k] * (1.0 + (rel if i % 2 == 0 else -rel)) for i, k in enumerate(names)}}
+
+
+def _produce(scene_name, solver_name, perturb=None):
+    """({channel: array}, {channel: scale}) — time scenes: 64 samples and the final value,
+    conserved quantities as their drift (scale: the quantity's own); modes: frequencies.
+    `perturb(scene, params) -> params` changes the input."""
     sc = get_scene(scene_name)
     s = solvers.get_solver(solver_name)
     p = sc.resolve(OVERRIDES.get(scene_name, {}))
-    if scale_params != 1.0:
-        p = {k: (v * scale_params if isinstance(v, float) and k not in ("t_end", "output_dt")
-                 else v) for k, v in p.items()}
+    if perturb is not None:
+        p = perturb(sc, p)
     if sc.kind == "modes":
         m = solvers.modes(sc, s, p)
         assert m.status == "ok", m.reason
-        return {lb: np.array([f]) for lb, f in zip(m.labels, m.frequencies_hz)}
+        got = {lb: np.array([f]) for lb, f in zip(m.labels, m.frequencies_hz)}
+        return got, {c: abs(float(v[0])) for c, v in got.items()}
     tr = solvers.simulate(sc, s, p, solvers.settings_for(s, sc.name))
     assert tr.status == "ok", tr.reason
     idx = np.unique(np.linspace(0, len(tr.t) - 1, N_SAMPLES).round().astype(int))
-    return {c: np.append(v[idx], v[-1]) for c, v in tr.channels.items()}
+    drift = conserved(sc)
+    got = {c: np.append(v[idx], v[-1]) - (v[0] if c in drift else 0.0)
+           for c, v in tr.channels.items()}
+    return got, {c: float(np.max(np.abs(v))) for c, v in tr.channels.items()}
+
+
+def conserved(sc) -> set:
+    return ({sc.energy_channel} if sc.energy_channel else set()) | set(sc.invariant_channels)
 
 
 def check(golden: dict, got: dict) -> list[str]:
@@ -77,25 +98,44 @@ def check(golden: dict, got: dict) -> list[str]:
 @pytest.mark.parametrize("scene_name, solver_name", CASES, ids=lambda x: x)
 def test_golden(request, scene_name, solver_name):
     path = GOLDEN / f"{scene_name}--{solver_name}.json"
-    got = _produce(scene_name, solver_name)
+    got, scale = _produce(scene_name, solver_name)
     if request.config.getoption("--update-golden"):
-        moved = _produce(scene_name, solver_name, 1.0 + PERTURB)
-        tol = {c: max(SAFETY * float(np.max(np.abs(moved[c] - v))),
-                      1e-12 * float(np.max(np.abs(v)))) for c, v in got.items()}
+        moved, _ = _produce(scene_name, solver_name, lambda sc, p: noisy(sc, p, PERTURB))
+        tol = {c: max(SAFETY * float(np.max(np.abs(moved[c] - v))), 1e-12 * scale[c])
+               for c, v in got.items()}
         path.write_text(json.dumps({
             "scene": scene_name, "set": OVERRIDES.get(scene_name, {}), "solver": solver_name,
             "versions": _versions(), "noise_perturbation": PERTURB, "safety": SAFETY,
+            "drift": sorted(conserved(get_scene(scene_name)) & set(got)),
             "tolerance": tol, "channels": {c: v.tolist() for c, v in got.items()}},
             indent=1, sort_keys=True) + "\n")
         return
     golden = json.loads(path.read_text())
     assert golden["set"] == OVERRIDES.get(scene_name, {})
+    assert golden["drift"] == sorted(conserved(get_scene(scene_name)) & set(got))
     bad = check(golden, got)
     changed = {k: f"{v} → {_versions()[k]}" for k, v in golden["versions"].items()
                if _versions()[k] != v}
     assert not bad, (f"{solver_name} on {scene_name} moved from its golden: "
                      + "; ".join(bad) + (f" — package versions changed: {changed}"
                                          if changed else " (same package versions)"))
+
+
+# one parameter per scene that every solver reads, 1 % off in the solver under test only
+POWER = {"rotor-spinup": "m", "rotor-whirl": "k", "press": "J1", "press-cycle": "J1",
+         "sail-deploy": "J_hub", "bearing-rotor": "J_p", "rotating-beam": "rho",
+         "spinning-shaft": "m", "helicopter-clamped": "blade_rho",
+         "helicopter-hover": "fuselage_rho"}
+
+
+@pytest.mark.parametrize("scene_name, solver_name", CASES, ids=lambda x: x)
+def test_a_one_percent_error_fails_the_golden(scene_name, solver_name):
+    """The golden's power: a 1 % error in one physical parameter reaching this solver (as a
+    slip in its model would) is seen, whatever the tolerances came out as."""
+    name = POWER[scene_name]
+    got, _ = _produce(scene_name, solver_name, lambda sc, p: {**p, name: p[name] * 1.01})
+    golden = json.loads((GOLDEN / f"{scene_name}--{solver_name}.json").read_text())
+    assert check(golden, got), f"{name} × 1.01 in {solver_name} passes its golden"
 
 
 def test_a_mid_trajectory_change_of_1e_6_fails_the_check():

@@ -164,7 +164,8 @@ def test_bad_settings_raise(engine):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("params", [{"mass_model": "midpoint"}, {"gear_ratio": 3.4},
+@pytest.mark.parametrize("params", [{"mass_model": "midpoint"},
+                                    {"gear_ratio": 3.4, "rotor_inertia": 0.0033},
                                     {"slider_damping": 2000.0}, {"rocker_rate0": -10.0}])
 def test_variants_engines_agree(params):
     a, b = run(ex, params).channels, run(mj, params).channels

@@ -14,7 +14,7 @@ import numba as nb
 import numpy as np
 
 # ---- motor 4A80B4U3, Kloss characteristic (scene-press.md) -----------------------------------
-P_N, N_SYNC_RPM, S_N, LAMBDA_K, ROTOR_J = 1500.0, 1500.0, 0.058, 2.2, 0.0033
+P_N, N_SYNC_RPM, S_N, LAMBDA_K = 1500.0, 1500.0, 0.058, 2.2
 OMEGA_SYNC = 2.0 * math.pi * N_SYNC_RPM / 60.0
 M_N = P_N / (OMEGA_SYNC * (1.0 - S_N))
 M_K = LAMBDA_K * M_N
@@ -52,10 +52,10 @@ def press_power(v: float, a: float, force: float, vreg: float) -> tuple:
 
 
 def crank_rotor_inertia(params: dict) -> float:
-    """The motor rotor u²·J_rotor joins the crank only with a reduction (u ≠ 1); the paper
-    (u = 1) applies the motor characteristic to the crank without it."""
+    """The motor rotor reflected to the crank, u²·J_rotor (the scene's `rotor_inertia`; 0, the
+    paper's model, applies the motor characteristic to the crank without a rotor)."""
     u = float(params["gear_ratio"])
-    return 0.0 if u == 1.0 else u * u * ROTOR_J
+    return u * u * float(params["rotor_inertia"])
 
 
 def link_layout(params: dict) -> dict:

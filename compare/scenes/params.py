@@ -6,6 +6,9 @@ import numpy as np
 
 from ..errors import BadInput
 
+# every time scene's horizon and output grid (Scene.output_grid): how a run is made
+RUN_PARAMS = ("t_end", "output_dt")
+
 
 @dataclass(frozen=True)
 class Param:
@@ -19,6 +22,15 @@ class Param:
     open_lo: bool = False      # e.g. a mass must be > 0, not >= 0
     choices: tuple = ()
     size: int = 3              # length of a vector
+    # a property of the physical system (mass, length, stiffness, speed, torque …), as opposed to
+    # how it is run (horizon, output grid, sweep range) or a threshold that only schedules an
+    # event: goldens' noise and `xval power` perturb only continuous physical parameters
+    physical: bool = True
+
+    @property
+    def continuous_physical(self) -> bool:
+        return (self.physical and self.kind in ("float", "vector")
+                and self.name not in RUN_PARAMS)
 
     def parse(self, text):
         """Value from a `--set` string (or a campaign file's value), validated."""
@@ -63,5 +75,7 @@ class Param:
         return f"{'(' if self.open_lo else '['}{self.lo:g}, {self.hi:g}]"
 
 
-def positive(name: str, default: float, unit: str, doc: str, hi: float = math.inf) -> Param:
-    return Param(name, default, unit, doc, lo=0.0, hi=hi, open_lo=True)
+def positive(name: str, default: float, unit: str, doc: str, hi: float = math.inf,
+             physical: bool = True) -> Param:
+    return Param(name, default, unit, doc, lo=0.0, hi=hi, open_lo=True, physical=physical)
+

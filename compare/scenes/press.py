@@ -29,8 +29,15 @@ _MECHANISM = (
     positive("slider_stiffness", 1e6, "N/m", "slider spring about its initial position",
              hi=1e12),
     Param("slider_damping", 0.0, "N·s/m", "slider damper", lo=0.0, hi=1e9),
-    Param("gear_ratio", 1.0, "", "motor-to-crank reduction u (u ≠ 1 adds u²·0.0033 kg·m²; "
-          "u = 0 disconnects the motor)", lo=0.0, hi=1e3),
+    Param("gear_ratio", 1.0, "", "motor-to-crank reduction u (u = 0 disconnects the motor)",
+          lo=0.0, hi=1e3),
+    # An explicit choice, continuous in u: the crank carries u²·rotor_inertia. The paper (u = 1)
+    # applies the motor characteristic to the crank without the rotor, hence default 0; the
+    # 4A80B4U3's own rotor is 0.0033 kg·m². (It used to join only when u ≠ 1 exactly, so
+    # u = 1 + 1e-12 added 9.7 % of J1 and every golden sized from that step was blind.)
+    Param("rotor_inertia", 0.0, "kg·m²", "motor rotor inertia reflected to the crank as "
+          "u²·rotor_inertia (0: the paper's model; the 4A80B4U3 rotor is 0.0033)",
+          lo=0.0, hi=1e3),
     Param("mass_model", "paper", "", "paper: masses lumped at the joints (eq. 21); midpoint: "
           "link masses at mid-points", kind="choice", choices=("paper", "midpoint")),
     Param("assembly", 1, "", "loop-closure root: 1 x_B > x_A, 2 the other", kind="choice",
@@ -168,7 +175,8 @@ PRESS_CYCLE = Scene(
     title="Press cycle: idle → rocker locks onto the slider → loaded stroke → release",
     source=SOURCE, kind="time", leaves=PRESS_LEAVES,
     params=_MECHANISM + (
-        Param("lock_after", 0.01, "s", "earliest lock time", lo=0.0, hi=1e3),
+        Param("lock_after", 0.01, "s", "earliest lock time", lo=0.0, hi=1e3,
+              physical=False),     # a threshold: the lock then waits for lock_angle
         Param("lock_angle", -48.0, "deg", "rocker angle at which it locks onto the slider",
               lo=-360, hi=360),
         Param("press_force", 2000.0, "N", "working load F resisting the slider while locked "

@@ -251,8 +251,9 @@ def tighter_settings(leaf: ModuleType, settings: dict) -> tuple[dict | None, flo
     the error of the run: a tolerance 100× tighter (factor 10/9: an error-controlled order-p
     method's error goes as tol^(p/(p+1)), so the tight run keeps up to 100^(-1/2) = 1/10 of
     the run's error, which |Δ| then misses; factor 1 fell 0.4 % short on the quaternion rotor's
-    tilt against a 1000× tighter run), else half the step (factor 2: an order-p method's error is 2^p/(2^p − 1) ≤ 2
-    times that difference). None where neither knob exists (a stability-bound explicit step)."""
+    tilt against a 1000× tighter run), else half the step (factor 2: an order-p method's error
+    is 2^p/(2^p − 1) ≤ 2 times that difference). None where neither knob exists (a
+    stability-bound explicit step)."""
     s = dict(settings)
     if s.get("integrator") in getattr(leaf, "ADAPTIVE", ()) and \
             isinstance(s.get("rtol"), (int, float)):

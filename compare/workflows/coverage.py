@@ -30,7 +30,8 @@ def sample(scene: Scene, n: int, seed: int = 0, spread: float = 0.05,
     for _ in range(n):
         over = dict(fixed)
         for p in scene.params:
-            if p.name in fixed or p.name in ("t_end", "output_dt") or p.kind != "float" or not p.default:
+            if p.name in fixed or p.name in ("t_end", "output_dt") or p.kind != "float" \
+                    or not p.default:
                 continue
             v = float(p.default) * (1 + spread * rng.uniform(-1, 1))
             lo = p.lo if not p.open_lo else np.nextafter(p.lo, np.inf)

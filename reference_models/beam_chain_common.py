@@ -246,7 +246,10 @@ def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) 
         spread = max((abs(low[fine["labels"][i]] / f_all[i] - 1) for i in idx
                       if fine["labels"][i] in low), default=0.0)
         extra = {"unextrapolated_hz": fine["frequencies_hz"][idx],
-                 "richardson_spread_rel": float(spread)}
+                 "richardson_spread_rel": float(spread),
+                 # the extrapolation's change: the error of the N chain, an upper bound of
+                 # the extrapolated one's in the 1/N² regime
+                 "frequency_error_hz": np.abs(f - fine["frequencies_hz"][idx])}
         if spread > SPREAD_NOTE:
             notes.append(f"discretisation: extrapolations from N/4–N/2 and N/2–N differ by "
                          f"{spread:.1e} here; raise n_segments")

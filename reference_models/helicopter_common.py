@@ -279,5 +279,6 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
                        extra={"fixed_frame_hz": f[order][:k],
                               "whirl": [w for _, _, w in kinds][:k],
                               "richardson_change_hz": change[order][:k],
+                              "frequency_error_hz": np.abs(change[order][:k]),
                               "linearise_s": secs, "modes_s": time.perf_counter() - t0,
                               "n_dof": n_dof + 1})

@@ -73,3 +73,25 @@ def test_no_extreme_case_returns_ok_with_a_failing_check(scene, tmp_path):
     obj = run_extremes(scene, None, tmp_path, include_slow=True, log=lambda m: None)
     bad = [r for r in obj["results"] if r["outcome"].startswith(("FAILED", "error"))]
     assert not bad, bad
+
+
+def test_a_drift_is_judged_against_the_bound_not_the_bound_plus_its_own_error():
+    """MuJoCo's 9.2e-4 energy drift with an own error estimate 2× the drift (what the tighter
+    rerun reports when the drift is numerical) passed a 1e-6 bound; now it fails it, and a
+    drift at 0.6 of the bound is within tolerance but marginal."""
+    import numpy as np
+
+    from compare.analysis.trajectory import Trajectory
+    from compare.workflows.extremes import energy_check
+    sc = get_scene("rotor-spinup")
+    t = np.linspace(0, 1, 11)
+
+    def run(drift):
+        ch = {c: np.ones_like(t) for c in sc.channels}
+        ch["energy_balance"] = 1 + drift * t        # energy scale 1: drift = relative drift
+        return Trajectory(sc.name, "mujoco", t, ch,
+                          errors={"energy_balance": 2 * drift * t})
+    ok, value, why = energy_check(sc, run(9.2e-4), 1e-6)
+    assert not ok and value == pytest.approx(9.2e-4, rel=1e-3) and "shrinks" in why
+    ok, value, why = energy_check(sc, run(6e-7), 1e-6)
+    assert ok and "ratio 0.6, marginal" in why

@@ -160,3 +160,18 @@ def test_sail_deployment_time_observable_is_the_payout_closed_form():
     for row, w in zip(rows, (3.5, 7.0)):
         assert row["status"] == "ok"
         assert abs(row["value"] - 0.5 / (0.01 * w)) <= 0.01 + 1e-9     # one output step
+
+
+def test_a_crossing_that_vanishes_at_the_tighter_setting_is_unconfirmed_not_wider():
+    """Two crossings 3.5e-9 apart with error bars of 1e-12: disagree; the same pair where one
+    crossing vanished at its tighter setting (no error bar) is `unconfirmed` — before, its
+    error was 2·span, a window wide enough to agree with anything."""
+    def crossing(x, **more):
+        return {"x": x, "y": None, "from": "capture", "to": "passage",
+                "bracket": [x - 1e-12, x + 1e-12], **more}
+    a = [crossing(2.0, error=1e-12)]
+    far = maps.compare_boundaries({"a": a, "b": [crossing(2.0 + 3.5e-9, error=2e-12)]}, 1e-12)
+    assert far[0]["verdict"] == "disagree"
+    gone = maps.compare_boundaries({"a": a, "b": [crossing(2.0 + 1e-13, error=None,
+                                                           unconfirmed=True)]}, 1e-12)
+    assert gone[0]["verdict"] == "unconfirmed" and "vanishes" in gone[0]["why"][0]

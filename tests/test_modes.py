@@ -124,3 +124,32 @@ def test_reported_critical_speeds_are_crossings_of_the_solver_itself():
         m = solvers.modes(sc, s, {**p, "speed": v})
         f = m.frequencies_hz[m.labels.index(name)]
         assert f == pytest.approx(sc.campbell.excitation_hz(p, v), rel=1e-8), name
+
+
+def test_frequency_verdicts_weigh_the_solvers_error_estimates():
+    """|Δ| = 1e-5 Hz on 10 Hz: beyond a 1e-7 relative allowance (1e-6 Hz), within it plus
+    error estimates of 6e-6 Hz each; without an estimate on one side, the allowance alone."""
+    def m(name, f, err=None):
+        return Modes("x", name, np.array([f]), ["flap 1"],
+                     extra={} if err is None else {"frequency_error_hz": [err]})
+    c, = metrics.frequency_comparisons([m("a", 10.0, 6e-6), m("b", 10.00001, 6e-6)], 1e-7)
+    assert c.verdict == "agree" and c.error_estimate == pytest.approx(1.2e-5)
+    assert c.ratio == pytest.approx(1e-5 / (1.2e-5 + 1.00001e-6), rel=1e-4)
+    assert c.shown == "agree (marginal)"
+    c, = metrics.frequency_comparisons([m("a", 10.0, 4e-6), m("b", 10.00001, 4e-6)], 1e-7)
+    assert c.verdict == "disagree"
+    c, = metrics.frequency_comparisons([m("a", 10.0, 6e-6), m("b", 10.00001)], 1e-7)
+    assert c.verdict == "disagree" and c.error_estimate is None
+
+
+def test_rotor_whirl_estimates_contain_the_closed_form_error():
+    """The euler-vector linearisation's finite-difference estimate contains its distance to
+    the closed form (exact at zero eccentricity), and stays within 1e-12 relative of it."""
+    sc = get_scene("rotor-whirl")
+    for spin in (0.0, 50.0, 140.0):
+        p = sc.resolve({"spin": spin})
+        exact = solvers.modes(sc, solvers.get_solver("closed-form"), p).frequencies_hz
+        ev = solvers.modes(sc, solvers.get_solver("euler-vector"), p)
+        err = metrics.frequency_errors(ev)
+        assert np.all(np.abs(ev.frequencies_hz - exact) <= err)
+        assert np.all(err <= 1e-12 * exact)

@@ -54,3 +54,19 @@ def test_comparison_fields_in_the_json(tmp_path):
     for c in res.as_json()["comparisons"]:
         assert {"deviation", "error_estimate", "allowance", "verdict"} <= set(c)
         assert c["deviation"] <= c["error_estimate"] + c["allowance"]
+
+
+def test_round_off_the_tighter_rerun_cannot_see_is_in_the_bound(tmp_path):
+    """Torque 3.2 → 3.2000001 (t_end 5) moved the custom pair's `potential` to 2.10e-8 J
+    against error estimates 1.2e-8 + allowance 7.2e-9: the rtol-1e-13 rerun's own error
+    (~2e-9 J: the step-size controller's jitter) was taken for zero. With what the rerun
+    cannot see added, every channel agrees and the estimate still explains the deviation
+    (a bound 10× the deviation would say nothing)."""
+    p = SPINUP.resolve({"torque": 3.2000001, "t_end": 5.0})
+    chosen = [solvers.get_solver("euler-vector"), solvers.get_solver("quaternion")]
+    res = runner.run_scene(SPINUP, p, chosen, lambda s: solvers.settings_for(s, SPINUP.name),
+                           tmp_path, record=False, report=False)
+    pot = next(c for c in res.comparisons if c.channel == "potential")
+    assert all(c.verdict == "agree" for c in res.comparisons), [c.decided_by for c in
+                                                                res.comparisons]
+    assert pot.deviation > pot.allowance and pot.ratio > 0.1

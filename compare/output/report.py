@@ -198,10 +198,11 @@ def run_markdown(result, figures):
     out += ["", "## Agreement", "",
             "Verdict per pair and channel: max |Δ| relative to the channel's scale (max |value| "
             "of the pair) against the scene's tolerance.", "",
-            "| a | b | channel | max abs | rms | max rel | tolerance | verdict |",
-            "|---|---|---|---|---|---|---|---|"]
+            "| a | b | channel | max abs | rms | max rel | tolerance | Δ/bound | verdict |",
+            "|---|---|---|---|---|---|---|---|---|"]
     out += [f"| {c.a} | {c.b} | {c.channel} | {_fmt(c.max_abs, '.3e')} | {_fmt(c.rms, '.3e')} | "
-            f"{_fmt(c.max_rel, '.2e')} | {c.tolerance:.0e} | **{c.verdict}** |"
+            f"{_fmt(c.max_rel, '.2e')} | {c.tolerance:.2g} | {metrics.ratio_text(c.ratio)} | "
+            f"**{c.shown}** |"
             for c in result.comparisons]
     out += [""] + [f"![{f}]({f})" for f in figures]
     return "\n".join(out) + "\n"

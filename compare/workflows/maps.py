@@ -334,8 +334,11 @@ def crossing_errors(runner, solver, settings, tight, lines, found, x_axis, width
         bisect_lines(runner, solver, tight, line, x_axis, width, y_name)
         again = [d for d in crossings(line, x_axis, None)
                  if d["from"] == c["from"] and d["to"] == c["to"]]
-        c["error"] = (min(abs(d["x"] - c["x"]) for d in again) if again
-                      else float(2 * span))
+        if again:
+            c["error"] = min(abs(d["x"] - c["x"]) for d in again)
+        else:       # no error bar, never a wider window: the verdict says `unconfirmed`
+            c.update(error=None, unconfirmed=True,
+                     error_by=c["error_by"] + ": the crossing vanishes there")
 
 
 def _settings_text(st):
@@ -346,7 +349,8 @@ def compare_boundaries(boundaries, width):
     """Per solver pair: each crossing of the first matched to the nearest of the second on the
     same row with the same regimes; `agree` when every matched distance is within
     width + both error estimates + both half-brackets, and neither has unmatched crossings
-    inside the region the other mapped."""
+    inside the region the other mapped; `unconfirmed` where a crossing within that vanishes
+    at its solver's tighter setting (it has no error bar)."""
     names = list(boundaries)
     out = []
     for i, a in enumerate(names):
@@ -368,13 +372,19 @@ def compare_boundaries(boundaries, width):
                 bound = (width + (ca.get("error") or 0) + (cb.get("error") or 0)
                          + 0.5 * (np.ptp(ca["bracket"]) + np.ptp(cb["bracket"])))
                 ok = d <= bound * (1 + 1e-9)
+                if ok and (ca.get("unconfirmed") or cb.get("unconfirmed")):
+                    ok = None
+                    lines.append(f"{ca['from']}→{ca['to']}{_row(ca)}: unconfirmed — the "
+                                 f"crossing of {a if ca.get('unconfirmed') else b} vanishes "
+                                 "at its tighter setting")
                 pairs.append(ok)
-                if not ok:
+                if ok is False:
                     lines.append(f"{ca['from']}→{ca['to']}{_row(ca)}: {a} at {ca['x']:.6g} "
                                  f"{_bracket(ca)}, {b} at {cb['x']:.6g} {_bracket(cb)}: "
                                  f"{d:.3g} apart > {bound:.3g} (resolution + error "
                                  f"estimates + half-brackets)")
-            verdict = "agree" if pairs and all(pairs) else ("disagree" if pairs else "no data")
+            verdict = ("no data" if not pairs else "disagree" if False in pairs
+                       else "unconfirmed" if None in pairs else "agree")
             out.append({"a": a, "b": b, "verdict": verdict, "matched": len(pairs),
                         "why": lines or ([f"all {len(pairs)} crossings within resolution + "
                                           f"error estimates + half-brackets"] if pairs

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analysis.metrics import Comparison
+from ..analysis.metrics import Comparison, ratio_text
 from ..atomic import write_json
 from ..errors import BadInput
 from .guard import mark_incomplete
@@ -50,14 +50,15 @@ def _html(header, rows):
 
 
 VERDICT_HEADER = ["a", "b", "channel", "max|Δ|", "error est.", "allowance", "max rel",
-                  "verdict"]
+                  "Δ/bound", "verdict"]
 
 
 def verdict_rows(comparisons: list[Comparison]) -> list[list[str]]:
     """One row per comparison: the deviation against what explains it (both solvers' error
     estimates, the scene's allowance), in SI units, and the verdict."""
     return [[c.a, c.b, c.channel, _num(c.deviation), _num(c.error_estimate),
-             _num(c.allowance), _num(c.max_rel, ".2e"), c.verdict] for c in comparisons]
+             _num(c.allowance), _num(c.max_rel, ".2e"), ratio_text(c.ratio), c.shown]
+            for c in comparisons]
 
 
 def disagreement_message(result, channels=None) -> str | None:

@@ -103,5 +103,8 @@ def modes(params: dict, settings: dict) -> ModesResult:
     return ModesResult(frequencies_hz=np.array([r[0] for r in rows]) / (2 * np.pi),
                        labels=[f"{fam} {i}" for _, fam, i, _ in rows], shapes=np.array(shapes),
                        settings=dict(s, elements=meshes),
+                       # the mesh change (largest relative over the modes) on every mode
+                       extra={"frequency_error_hz": err * np.array([r[0] for r in rows])
+                              / (2 * np.pi)} if s["richardson"] else {},
                        notes=[f"Richardson error estimate {err:.1e} (elements per family "
                               f"{meshes} and twice that)"])

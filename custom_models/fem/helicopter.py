@@ -240,7 +240,7 @@ def modes_for(params, settings, clamped):
                          f"(the mode-shape stations sit on nodes), shaft_elements and "
                          f"tail_elements positive integers; got {mesh}")
     w, shapes, unstable = frequencies(L, spin, mesh, clamped, n_modes)
-    notes = []
+    notes, extra = [], {"unstable": unstable}
     if s["richardson"]:
         w2, shapes, unstable = frequencies(L, spin, tuple(2 * m for m in mesh), clamped,
                                            n_modes)
@@ -249,12 +249,14 @@ def modes_for(params, settings, clamped):
         notes.append(f"meshes {mesh} and twice; Richardson change "
                      f"{np.max(np.abs(ext - w2[:k]) / ext):.1e}")
         w, shapes = ext, shapes[:k]
+        extra["frequency_error_hz"] = np.abs(ext - w2[:k]) / (2 * np.pi)   # the mesh change
     if unstable:
         notes.append(f"divergent (real) eigenvalues {np.round(unstable, 4).tolist()} 1/s")
+    extra["unstable"] = unstable
     from custom_models.mstmm.labels import label_modes
     labels = label_modes(np.array(shapes), w, L, spin)
     return ModesResult(frequencies_hz=w / (2 * np.pi), labels=labels, shapes=np.array(shapes),
-                       settings=s, notes=notes, extra={"unstable": unstable})
+                       settings=s, notes=notes, extra=extra)
 
 
 def modes(params: dict, settings: dict) -> ModesResult:

@@ -62,11 +62,12 @@ def modes(params: dict, settings: dict) -> ModesResult:
     n_el = max(int(s["elements"]), k * int(np.ceil(4 * p["n_modes"] / k)))
     n_el = k * int(np.ceil(n_el / k))
     w, V, n, unstable = solve(p, n_el, spin, p["n_modes"])
-    err = 0.0
+    err, change = 0.0, None
     if s["richardson"]:
         w2, V, n, unstable = solve(p, 2 * n_el, spin, p["n_modes"])
         ext = w2 + (w2 - w) / 15.0
         err = float(np.max(np.abs(ext - w2) / ext))
+        change = np.abs(ext - w2) / (2 * np.pi)     # the mesh change: the error estimate
         w = ext
     step = (2 if s["richardson"] else 1) * n_el // k
     labels, shapes, count = [], [], {"forward whirl": 0, "backward whirl": 0, "whirl": 0}
@@ -94,4 +95,5 @@ def modes(params: dict, settings: dict) -> ModesResult:
         notes.append(f"unstable (divergence) growth rates {np.round(unstable, 6).tolist()} 1/s")
     return ModesResult(frequencies_hz=w / (2 * np.pi), labels=labels, shapes=np.array(shapes),
                        settings=dict(s, elements=n_el), notes=notes,
-                       extra={"omega_star": (w / w0).tolist(), "unstable": unstable})
+                       extra={"omega_star": (w / w0).tolist(), "unstable": unstable,
+                              **({"frequency_error_hz": change} if change is not None else {})})

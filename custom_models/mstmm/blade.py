@@ -12,7 +12,7 @@ from compare.contract import ModesResult, merge_settings
 from compare.physics.mstmm import blade_section_from
 
 from . import elements as el
-from .roots import find_roots
+from .roots import find_roots, root_error_hz
 
 MODES_SETTINGS = {"rtol": 1e-12, "stations": 13}
 FAMILIES = ("flap", "lag", "torsion", "axial")
@@ -132,7 +132,9 @@ def modes(params: dict, settings: dict) -> ModesResult:
     found = blade_modes(b, spin, rh, params["n_modes"], s["rtol"])
     shapes = np.array([shape(b, root_state(b, w, spin, rh, fam), w, spin, rh, s["stations"])
                        for w, fam, _ in found])
-    return ModesResult(frequencies_hz=np.array([w for w, _, _ in found]) / (2 * np.pi),
+    f_hz = np.array([w for w, _, _ in found]) / (2 * np.pi)
+    return ModesResult(frequencies_hz=f_hz, extra={"frequency_error_hz": root_error_hz(
+                           f_hz, s["rtol"])},
                        labels=[f"{fam} {i}" for _, fam, i in found], shapes=shapes,
                        settings=s, notes=["shapes: [u, v, w, φ·chord/2] at "
                                           f"{s['stations']} equal stations root→tip"])

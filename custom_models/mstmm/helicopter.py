@@ -54,7 +54,7 @@ from compare.contract import ModesResult, merge_settings
 from compare.physics.mstmm import helicopter_layout
 
 from . import elements as el
-from .roots import SEARCH_RTOL, find_roots
+from .roots import SEARCH_RTOL, find_roots, root_error_hz
 
 
 def skew(r):
@@ -344,6 +344,8 @@ def modes_for(params: dict, settings: dict, clamped: bool) -> ModesResult:
     shapes = np.array([mode_shape(L, w, spin, rh, clamped) for w in roots])
     return ModesResult(frequencies_hz=np.array(roots) / (2 * np.pi),
                        labels=label_modes(shapes, roots, L, spin), shapes=shapes, settings=s,
+                       extra={"frequency_error_hz": root_error_hz(np.array(roots) / (2 * np.pi),
+                                                                  s["rtol"])},
                        notes=[f"exact reactionless roots at isolated-blade frequencies "
                               f"{np.round(np.array(exact) / (2 * np.pi), 4).tolist()} Hz"])
 

@@ -110,3 +110,10 @@ def _cluster(g, a, b, found, rtol, depth):
     if extra:
         extra += _cluster(g, a, b, found + extra, rtol, depth + 1)
     return extra
+
+
+def root_error_hz(f_hz, rtol: float) -> np.ndarray:
+    """The error estimate of roots located to `rtol` (brentq's xtol = rtol·|ω|, never looser
+    than SEARCH_RTOL) plus their round-off: the transfer matrices are exact, so this is all."""
+    f = np.abs(np.asarray(f_hz, float))
+    return (min(rtol, SEARCH_RTOL) + 4 * np.finfo(float).eps) * f

@@ -25,7 +25,7 @@ from compare.contract import ModesResult, merge_settings
 from compare.physics.mstmm import spinning_shaft_omega0
 
 from .elements import coupled_fourth_order_transfer, orthonormalize, shaft_coupling
-from .roots import find_roots
+from .roots import find_roots, root_error_hz
 
 MODES_SETTINGS = {"rtol": 1e-12, "stations": 13}
 
@@ -124,4 +124,6 @@ def modes(params: dict, settings: dict) -> ModesResult:
         notes.append("anisotropic: modes inside an instability band have no real frequency")
     return ModesResult(frequencies_hz=np.array(roots) / (2 * np.pi), labels=labels,
                        shapes=np.array(shapes), settings=s, notes=notes,
-                       extra={"omega_star": (np.array(roots) / w0).tolist()})
+                       extra={"omega_star": (np.array(roots) / w0).tolist(),
+                              "frequency_error_hz": root_error_hz(np.array(roots) / (2 * np.pi),
+                                                                  s["rtol"])})

@@ -1,0 +1,44 @@
+"""Error bars that bound the error: each solver's own error estimate (the tighter rerun plus
+what it cannot see) contains its true error — the distance to a far tighter run (1000× the
+tolerance, 1/16 of the step; on rotor-spinup the quaternion's, an independent solver of the
+same equations) — in ≥ 95 % of sampled (point, channel) pairs, and is sharp (median
+true/estimate ≥ 0.1). Points near each scene's defaults, short horizons to stay cheap.
+
+Reproduce the table: `python -m pytest tests/test_coverage.py -m slow -s -q`."""
+import pytest
+
+from compare.workflows import coverage
+
+# scene -> (fixed parameters: a short horizon, the reference solver or None for each
+# solver's own far tighter run, the cheap custom solvers of the default run)
+STUDY = {
+    "rotor-spinup": ({"t_end": 2.0}, "quaternion", ("euler-vector", "quaternion")),
+    "press": ({"t_end": 0.02}, None, ("lagrange-exact", "lagrange-partial")),
+    "press-cycle": ({"t_end": 0.03, "lock_after": 0.01, "release_after": 0.02}, None,
+                    ("lagrange-exact", "lagrange-partial")),
+    "sail-deploy": ({"t_end": 2.0}, None, ("thread-spool", "thread-spool-conservative")),
+    "bearing-rotor": ({"t_end": 0.2}, None, ("quaternion",)),
+}
+CONTAINED, SHARP = 0.95, 0.1
+
+
+def _check(result):
+    for solver, o in result.items():
+        assert o["points"] > 0, (solver, o)
+        assert o["contained"] >= CONTAINED, (solver, o)
+        assert o["sharpness"] >= SHARP, (solver, o)
+
+
+@pytest.mark.parametrize("scene", STUDY)
+def test_error_estimates_contain_the_error_at_a_few_points(scene):
+    fixed, reference, cheap = STUDY[scene]
+    _check(coverage.study(scene, 4, seed=1, solver_names=list(cheap), fixed=fixed,
+                          reference=reference if reference in cheap else None))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scene", STUDY)
+def test_error_estimates_contain_the_error_at_100_points(scene):
+    fixed, reference, _ = STUDY[scene]
+    result = coverage.study(scene, 100, seed=2, fixed=fixed, reference=reference, log=print)
+    _check(result)

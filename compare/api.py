@@ -231,6 +231,20 @@ def extremes(scene: str, solvers=None, *, include_slow: bool = False, timeout=No
     return Summary("extremes", obj, Path(obj["report"]).parent, temporary)
 
 
+def power(scene: str, solvers=None, *, parameters=None, timeout=None,
+          params: dict | None = None, log: Callable | None = None, **kw) -> Summary:
+    """Detection power (`xval power`): for each continuous physical parameter and each solver,
+    the smallest relative change ε* reaching that solver only that turns an agreeing verdict
+    into disagree. Returns a `Summary` (`s["power"]`, `s["summary"]`)."""
+    from .workflows.power import run_power
+    overrides = _overrides(params, kw)
+    if timeout is not None:
+        timeout = positive("timeout", timeout)
+    data = run_power(scene, overrides, _names(solvers), list(parameters or []), timeout,
+                     log=log or _quiet)
+    return Summary("power", data, None)
+
+
 def map(scene: str, x: str, y: str | None = None, solvers=None, *,
         resolution: float = 1e-3, coarse=None, observable: str | None = None, level=None,
         engines: str = "boundary", executor: str = "local", scheduler: str | None = None,

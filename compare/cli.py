@@ -20,6 +20,19 @@ class _Parser(argparse.ArgumentParser):
         raise BadInput(message)
 
 
+STRICT = ("exit 1 on any disagree, incomplete (a solver failed or gave no answer), "
+          "unconfirmed or FAILED verdict")
+
+
+def strict_exit(args, problems: list[str]) -> int:
+    """--strict: 1 with one line on stderr naming what failed, else 0 (as `xval diff`)."""
+    if getattr(args, "strict", False) and problems:
+        more = f" (+{len(problems) - 3} more)" if len(problems) > 3 else ""
+        print(f"xval: --strict: {'; '.join(problems[:3])}{more}", file=sys.stderr)
+        return 1
+    return 0
+
+
 def _log(msg):
     print(msg, file=sys.stderr, flush=True)
 
@@ -131,7 +144,7 @@ def build_parser():
     sp.add_argument("--integrator", metavar="NAME",
                     help="integrator of every chosen solver (each must offer it)")
     sp.add_argument("--out", default="logs", metavar="DIR", help=out_help)
-    sp.add_argument("--strict", action="store_true", help="exit 1 when a verdict is disagree")
+    sp.add_argument("--strict", action="store_true", help=STRICT)
     sp.add_argument("--no-record", action="store_true", help="skip the .rrd recording")
     sp.add_argument("--timeout", type=_positive("--timeout"), metavar="S",
                     help="wall-clock limit per solver run: status timeout")
@@ -142,7 +155,7 @@ def build_parser():
                                     "matched mode by mode; Campbell diagram for rotor scenes.")
     common(sp)
     sp.add_argument("--out", default="logs", metavar="DIR", help=out_help)
-    sp.add_argument("--strict", action="store_true", help="exit 1 when a verdict is disagree")
+    sp.add_argument("--strict", action="store_true", help=STRICT)
 
     sp = sub.add_parser("campaign", help="run a campaign file (default: built-in) into a report",
                         description="Run every case of a campaign file (JSON or TOML; "
@@ -171,6 +184,7 @@ def build_parser():
                     help="after the run, diff against this campaign folder or baseline file "
                          "(report in <campaign>/diff/; exit 1 when results moved beyond "
                          "their error bars)")
+    sp.add_argument("--strict", action="store_true", help=STRICT)
     _budget_options(sp)
 
     sp = sub.add_parser("bench", help="speed/accuracy (work-precision) sweep",
@@ -223,6 +237,21 @@ def build_parser():
                                       "(default 100000)")
     sp.add_argument("--no-record", action="store_true", help="skip the .rrd recording")
     sp.add_argument("--out", default="logs", metavar="DIR", help=out_help)
+    sp.add_argument("--strict", action="store_true", help=STRICT)
+
+    sp = sub.add_parser("power", help="detection power: the smallest error of one solver's "
+                        "parameter that a verdict sees",
+                        description="For each physical parameter and each solver in turn, the "
+                                    "smallest relative change of that parameter reaching that "
+                                    "solver only that turns an agreeing verdict into disagree "
+                                    "(finite-difference estimate, one confirming run, bisection "
+                                    "where the response is not linear).")
+    common(sp)
+    sp.add_argument("--parameter", action="append", default=[], metavar="NAME",
+                    help="only this parameter; repeatable (default: every continuous physical "
+                         "parameter of the scene)")
+    sp.add_argument("--timeout", type=_positive("--timeout"), metavar="S",
+                    help="wall-clock limit per solver run: status timeout")
 
     sp = sub.add_parser("extremes", help="numerical stability at the extremes of a scene",
                         description="Run every extreme case of the scene's spec with every "
@@ -235,8 +264,7 @@ def build_parser():
                     help="run this solver; repeat for several (default: every solver)")
     sp.add_argument("--all", action="store_true",
                     help="include the long cases (e.g. a 1000 s horizon)")
-    sp.add_argument("--strict", action="store_true",
-                    help="exit 1 when a case FAILED (ok but the independent check fails)")
+    sp.add_argument("--strict", action="store_true", help=STRICT)
     sp.add_argument("--timeout", type=_positive("--timeout"), metavar="S",
                     help="wall-clock limit per solver run: status timeout")
     sp.add_argument("--out", default="logs", metavar="DIR", help=out_help)
@@ -307,7 +335,9 @@ def cmd_extremes(args):
         emit_json(r.as_json())
     else:
         print(r)
-    return 1 if args.strict and r["n_failed"] else 0
+    return strict_exit(args, [f"{x['case']} {x['solver']}: {x['outcome']}"
+                              for x in r["results"] if x["outcome"].startswith(("FAILED",
+                                                                                "error"))])
 
 
 def cmd_list(args):
@@ -358,9 +388,18 @@ def _finish(args, obj, results, comparisons):
                 print(f"{k}: {obj[k]}")
     if any(r.status == "error" for r in results):
         return 3
-    if args.strict and any(c.verdict == "disagree" for c in comparisons):
-        return 1
-    return 0
+    return strict_exit(args, verdict_problems(results, comparisons))
+
+
+def verdict_problems(results, comparisons) -> list[str]:
+    """What --strict refuses in a run or modes result: a solver without an answer, a
+    disagreement, and a result with nothing compared."""
+    out = [f"{r.solver} {r.status} (incomplete)" for r in results if r.status != "ok"]
+    out += [f"{c.a} vs {c.b} {c.channel}: disagree" for c in comparisons
+            if c.verdict == "disagree"]
+    if not comparisons:
+        out.append("nothing was compared (incomplete)")
+    return out
 
 
 def cmd_modes(args):
@@ -414,7 +453,33 @@ def cmd_campaign(args):
         print(r)                       # the one-line summary and the report's path
     if summary["n_crashed"]:
         return 3
-    return 1 if summary.get("diff", {}).get("any_change") else 0
+    if summary.get("diff", {}).get("any_change"):
+        return 1
+    return strict_exit(args, campaign_problems(summary))
+
+
+def campaign_problems(summary: dict) -> list[str]:
+    """Every case's solver failures and disagreements, and every map's (--strict)."""
+    out = []
+    for c in summary.get("cases", []):
+        if "error" in c:
+            out.append(f"{c['case']}: {c['error']}")
+        out += [f"{c['case']}: {p}" for p in verdict_problems(
+            [_Run(r) for r in c.get("runs", [])], [_Cmp(x) for x in c.get("comparisons", [])])
+            if c.get("runs") or "error" not in c]
+    for m in summary.get("maps", []):
+        out += [f"map {m.get('map')}: {p}" for p in map_problems(m)]
+    return out
+
+
+class _Run:                       # a stored run's JSON read like a result
+    def __init__(self, d):
+        self.solver, self.status = d["solver"], d["status"]
+
+
+class _Cmp:
+    def __init__(self, d):
+        self.a, self.b, self.channel, self.verdict = d["a"], d["b"], d["channel"], d["verdict"]
 
 
 def cmd_bench(args):
@@ -458,12 +523,32 @@ def cmd_map(args):
         emit_json(r.data)
     else:
         print(r)
+    return strict_exit(args, map_problems(r.data))
+
+
+def map_problems(data: dict) -> list[str]:
+    """A map's verdicts --strict refuses: a pair whose boundaries disagree, that one solver
+    could not answer, or whose crossing vanished at the tighter setting."""
+    return [f"{v['a']} vs {v['b']}: {v['verdict']}" for v in data.get("verdicts", [])
+            if v["verdict"] in ("disagree", "incomplete", "unconfirmed")]
+
+
+def cmd_power(args):
+    from . import api
+    with stdout_to_stderr():
+        r = api.power(args.scene, args.solver, parameters=args.parameter,
+                      timeout=args.timeout, params=parse_sets(args.set), log=_log)
+    if args.json:
+        emit_json(r.data)
+    else:
+        print(r)
     return 0
 
 
 COMMANDS = {"list": cmd_list, "show": cmd_show, "run": cmd_run, "modes": cmd_modes,
             "campaign": cmd_campaign, "map": cmd_map, "bench": cmd_bench,
-            "extremes": cmd_extremes, "diff": cmd_diff, "baseline": cmd_baseline}
+            "extremes": cmd_extremes, "diff": cmd_diff, "baseline": cmd_baseline,
+            "power": cmd_power}
 
 
 def main(argv=None):

@@ -11,6 +11,7 @@ from compare.api import (
     extremes,
     map,
     modes,
+    power,
     run,
     scenes,
     show,
@@ -20,6 +21,7 @@ from compare.workflows.results import ModesResult, SceneInfo, Summary, TimeResul
 
 XvalError = BadInput            # one exception type for bad arguments; either name catches it
 
-__all__ = ["run", "modes", "bench", "extremes", "map", "campaign", "diff", "scenes", "show",
+__all__ = ["run", "modes", "bench", "extremes", "map", "campaign", "diff", "power", "scenes",
+           "show",
            "assert_agree", "BadInput", "XvalError", "TimeResult", "ModesResult", "Summary",
            "SceneInfo"]

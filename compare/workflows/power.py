@@ -52,7 +52,8 @@ class _Study:
 
     def __init__(self, scene, params, chosen, timeout_s=None):
         self.sc, self.p, self.chosen, self.timeout_s = scene, params, chosen, timeout_s
-        self.settings = {s.name: solvers.settings_for(s, scene.name) for s in chosen}
+        self.settings = {s.name: solvers.settings_for(s, scene.name) for s in chosen} \
+            if scene.kind == "time" else {}
         self.n_runs = 0
         self.nominal = {s.name: self._run(s, params, estimate=True) for s in chosen}
         self.base = self.compare(self.nominal)

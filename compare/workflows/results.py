@@ -393,6 +393,12 @@ class Summary:
             return ([f"{s['changed']} changed, {s['unchanged']} unchanged, {s['new']} new, "
                      f"{s['gone']} gone (runs); {s['channels_changed']} channels changed"]
                     + list(d["lines"]) + [f"note: {n}" for n in d["notes"][:20]])
+        if self.kind == "power":
+            return [f"{r['parameter']:20s} {r['solver']:26s} "
+                    + (f"ε* {r['epsilon']:.2g}  ({r['pair']}, {r['channel']}; {r['how']})"
+                       if r["epsilon"] is not None else f"—  ({r['how']})")
+                    for r in d["power"]] + [d["summary"], f"{d['runs']} runs, "
+                                                         f"{d['wall_s']:.1f} s"]
         if self.kind == "map":
             out = []
             for s, cs in d["boundaries"].items():

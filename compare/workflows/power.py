@@ -183,7 +183,8 @@ def summary(rows: list[Power]) -> str:
     found = [r for r in rows if r.epsilon is not None]
     blind = sorted({r.parameter for r in rows if r.epsilon is None})
     if not found:
-        return "this run detects no change of any physical parameter up to 100 %"
+        return ("this run detects no change of any physical parameter up to 100 %"
+                + (f"; not verified: {', '.join(blind)}" if blind else ""))
     worst = max(found, key=lambda r: r.epsilon)
     best = min(found, key=lambda r: r.epsilon)
     seen = sorted({r.parameter for r in found} - set(blind))

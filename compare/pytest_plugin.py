@@ -5,8 +5,10 @@
   cached result); the run's trajectories and result.json go to a session temporary folder.
 - `assert_agree(result, channels=...)` (also `xval.assert_agree`): fails with the verdict
   table of the pairs that disagree — deviation, error estimates, allowance, what decided.
-- `assert_matches_baseline(result, baseline)`: fails with the `xval diff` table when the
-  result moved beyond its error bars against a baseline from `xval baseline save`.
+- `assert_matches_baseline(result, baseline, create=False)`: fails with the `xval diff` table
+  when the result moved beyond its error bars against a baseline from `xval baseline save`;
+  fails (never skips) when the baseline is missing, unless `create=True` or the run has
+  `--xval-create-baselines`.
 
 Imported by pytest at start-up in every project of the environment: it imports nothing heavy
 until a test uses it.
@@ -20,17 +22,28 @@ def assert_agree(result, channels=None):
     check(result, channels)
 
 
-def assert_matches_baseline(result, baseline):
+_CREATE = {"baselines": False}     # set by --xval-create-baselines
+
+
+def assert_matches_baseline(result, baseline, create: bool = False):
     """Fails with the diff table when `result` (an `xval.run` result, or a run or campaign
     folder) moved beyond its own error bars against `baseline` (a file written by `xval
     baseline save`, or a folder), as `xval diff BASELINE RESULT` would. A missing baseline
-    file is written from the result and the test skipped: review it and commit it."""
+    fails the test — a check with nothing to check against must not pass or skip — unless
+    told to create it (`create=True` or `pytest --xval-create-baselines`): then it is written
+    from the result and the test fails once more, asking for it to be reviewed."""
+    from pathlib import Path
+
     from .workflows.diff import check_baseline
     __tracebackhide__ = True
+    if not Path(baseline).exists() and not (create or _CREATE["baselines"]):
+        pytest.fail(f"baseline {baseline} is missing: create it with "
+                    "assert_matches_baseline(..., create=True) or pytest "
+                    "--xval-create-baselines, review it and commit it", pytrace=False)
     folder = getattr(getattr(result, "result", None), "out_dir", None) or result
     table, written = check_baseline(folder, baseline)
     if written:
-        pytest.skip(written)
+        pytest.fail(written, pytrace=False)
     if table:
         pytest.fail(f"moved against the baseline {baseline}:\n{table}", pytrace=False)
 
@@ -51,3 +64,13 @@ def xval_run(tmp_path_factory):
             cache[key] = run(scene, solvers, settings, **kw)
         return cache[key]
     return runner
+
+
+def pytest_addoption(parser):
+    parser.addoption("--xval-create-baselines", action="store_true",
+                     help="xval: write a missing baseline of assert_matches_baseline (the test "
+                          "still fails once: review the file and commit it)")
+
+
+def pytest_configure(config):
+    _CREATE["baselines"] = bool(config.getoption("--xval-create-baselines", False))

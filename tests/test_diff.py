@@ -205,8 +205,11 @@ def test_campaign_with_baseline_exits_1_when_results_moved(folders, tmp_path):
 def test_pytest_helper_fails_with_the_diff_table(folders, tmp_path):
     plugin = pytest.importorskip("compare.pytest_plugin")
     base = tmp_path / "base.npz"
-    with pytest.raises(pytest.skip.Exception, match="baseline written"):
-        plugin.assert_matches_baseline(folders["A"], base)      # first time: written
+    with pytest.raises(pytest.fail.Exception, match="is missing"):
+        plugin.assert_matches_baseline(folders["A"], base)      # missing: fails, writes nothing
+    assert not base.exists()
+    with pytest.raises(pytest.fail.Exception, match="baseline written"):
+        plugin.assert_matches_baseline(folders["A"], base, create=True)   # asked: written
     assert base.exists()
     plugin.assert_matches_baseline(folders["B"], base)          # same numbers: passes
     with pytest.raises(pytest.fail.Exception) as e:

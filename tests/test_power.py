@@ -8,10 +8,10 @@ solver moves its frequencies by ε·k/(2 k_eff) and first breaks the frequency a
 import json
 
 import pytest
+from conftest import xval as cli
 
 import xval
 from compare.scenes import get_scene
-from conftest import xval as cli
 
 
 def test_epsilon_star_of_the_whirl_stiffness_is_the_closed_form():

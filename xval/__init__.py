@@ -17,11 +17,11 @@ from compare.api import (
     show,
 )
 from compare.errors import BadInput
+from compare.pytest_plugin import assert_matches_baseline
 from compare.workflows.results import ModesResult, SceneInfo, Summary, TimeResult
 
 XvalError = BadInput            # one exception type for bad arguments; either name catches it
 
 __all__ = ["run", "modes", "bench", "extremes", "map", "campaign", "diff", "power", "scenes",
-           "show",
-           "assert_agree", "BadInput", "XvalError", "TimeResult", "ModesResult", "Summary",
-           "SceneInfo"]
+           "show", "assert_agree", "assert_matches_baseline", "BadInput", "XvalError",
+           "TimeResult", "ModesResult", "Summary", "SceneInfo"]

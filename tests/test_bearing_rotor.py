@@ -354,7 +354,6 @@ def test_too_coarse_a_fixed_step_ends_with_a_clear_status():
     assert np.isnan(res.channels["spin_rate"][-1])
 
 
-@pytest.mark.slow
 def test_norm_drift_over_100_s_with_and_without_projection():
     """100 s with the defect (default settings, 1 ms output). Measured: the first integral
     |q| = 1 drifts to 1.3e-10 unprojected (1.6e-11 before the kernels' arithmetic was reordered:

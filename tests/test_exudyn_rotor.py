@@ -188,7 +188,6 @@ def test_bad_settings():
         rotor.simulate(p, grid(p), {"integrator": "rk4", "dt": 0.2})    # > the horizon
 
 
-@pytest.mark.slow
 def test_integrators_converge_to_same_spin():
     """Fixed-step RK4 and adaptive DOPRI5 land on the probe value as well."""
     for s in ({"integrator": "rk4", "dt": 5e-4}, {"integrator": "dopri5", "rtol": 1e-10}):

@@ -215,7 +215,6 @@ def test_whirl_sweep_campbell():
 
 
 # ---------------------------------------------------------------------------- slow
-@pytest.mark.slow
 def test_dt_convergence_table_fourth_order():
     p = params()
     t = grid(10.0, 0.02)

@@ -261,7 +261,6 @@ QUIET = PRESS.resolve({"slider_stiffness": 1e9, "gravity": 0.0, "gear_ratio": 0.
                        "omega0": 0.0, "rocker_rate0": 0.01})
 
 
-@pytest.mark.slow
 def test_press_linear_acceleration_threshold_from_linearised_modes():
     w, T = press.linearised_modes(QUIET)
     t_min = T[0]
@@ -277,7 +276,6 @@ def test_press_linear_acceleration_threshold_from_linearised_modes():
     assert r.status == "ok"
 
 
-@pytest.mark.slow
 def test_press_cycle_lock_event_and_impact_loss():
     cyc = PRESS_CYCLE.resolve({})
     t = PRESS_CYCLE.output_grid(cyc)
@@ -299,7 +297,6 @@ def test_press_cycle_lock_event_and_impact_loss():
     assert np.allclose(psi, math.radians(cyc["lock_angle"]), atol=1e-7)
 
 
-@pytest.mark.slow
 def test_stiff_slider_1e9_energy():
     r = press_exact.simulate(PRESS.resolve({"slider_stiffness": 1e9}), T_OUT,
                              {"integrator": "rk4", "dt": 1e-6})
@@ -308,7 +305,6 @@ def test_stiff_slider_1e9_energy():
     assert np.max(np.abs(eb - eb[0])) < 1e-6 * r.extra["motor_work"][-1]
 
 
-@pytest.mark.slow
 def test_hundred_crank_revolutions_energy_drift():
     par = PRESS.resolve({"slider_stiffness": 1e8, "slider_damping": 1e5, "t_end": 6.0})
     t = PRESS.output_grid(par)

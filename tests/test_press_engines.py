@@ -163,7 +163,6 @@ def test_bad_settings_raise(engine):
         engine.simulate(p, T_OUT, {"no_such_key": 1.0})
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("params", [{"mass_model": "midpoint"},
                                     {"gear_ratio": 3.4, "rotor_inertia": 0.0033},
                                     {"slider_damping": 2000.0}, {"rocker_rate0": -10.0}])
@@ -178,7 +177,6 @@ def test_variants_engines_agree(params):
         assert np.max(c["loop_violation"]) <= 1e-8
 
 
-@pytest.mark.slow
 def test_step_refinement_converges_to_the_other_engine():
     """Halving Exudyn's step moves it towards MuJoCo at tight settings (2nd order GA)."""
     ref = run(mj, settings={"dt": 2e-5, "solref_factor": 8}).channels["crank_angle"]

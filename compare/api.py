@@ -142,7 +142,7 @@ def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol
                                                      extra=extra[s.name], t_out=t_out)
                        for s in chosen}
     for s in chosen:
-        budget.check_steps(s.name, s.leaf(sc.name), values, chosen_settings[s.name],
+        budget.check_steps(s.name, s.info(sc), values, chosen_settings[s.name],
                            max_steps)
     log = log or _quiet
     if out is None:
@@ -152,7 +152,7 @@ def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol
         out_dir, temporary = runner.new_run_dir(out, sc.name), None
     if rtol is not None:
         for s in chosen:
-            if not getattr(s.leaf(sc.name), "ADAPTIVE", ()):
+            if not s.info(sc).adaptive:
                 log(f"{s.name}: no error-controlled integrator, --rtol ignored (fixed step kept)")
     kept = out is not None                 # the report whenever files are kept, as `xval run`
     try:

@@ -11,7 +11,6 @@ is recorded as `error` and never hides the others).
 from __future__ import annotations
 
 import functools
-import importlib
 import importlib.metadata
 import signal
 import sys
@@ -25,8 +24,9 @@ from types import ModuleType
 import numpy as np
 
 from .analysis.trajectory import Modes, Trajectory
-from .contract import LeafResult, ModesResult, canonical_integrator, merge_settings
+from .contract import LeafResult, ModesResult
 from .errors import BadInput
+from .leafinfo import LeafInfo, leaf_info
 from .scenes import PLUGIN_SOLVERS, SCENES, Scene, get_scene
 from .scenes.base import SpeedRegime
 
@@ -40,8 +40,12 @@ class Solver:
     preset: dict = field(default_factory=dict)   # settings that make this solver a variant
 
     def leaf(self, scene: Scene | str) -> ModuleType:
+        return self.info(scene).module
+
+    def info(self, scene: Scene | str) -> LeafInfo:
+        """The typed view of this solver's leaf for `scene` (built once per leaf module)."""
         sc = get_scene(scene) if isinstance(scene, str) else scene
-        return importlib.import_module(sc.leaves[self.name])
+        return leaf_info(sc.leaves[self.name])
 
     @property
     def leaves(self) -> dict:
@@ -129,51 +133,23 @@ def settings_for(solver: Solver, scene_name: str, dt: float | None = None,
     """The settings one solver runs a scene with — its leaf's defaults, its preset, the knobs —
     checked by the leaf (`check_settings(settings, t_out)` where it has one, else the shared
     merge) before anything runs: bad settings raise BadInput naming the solver."""
-    leaf = solver.leaf(scene_name)
+    info = solver.info(scene_name)
     try:
-        s = resolve_settings(leaf, dt, rtol, integrator, {**solver.preset, **(extra or {})})
-        check_settings(leaf, s, t_out)
+        s = info.resolve(dt, rtol, integrator, {**solver.preset, **(extra or {})})
+        info.check(s, t_out)
     except ValueError as e:
         raise BadInput(f"{solver.name}: {str(e).splitlines()[0]}") from None
     return s
 
 
 def check_settings(leaf: ModuleType, settings: dict, t_out: np.ndarray | None) -> dict:
-    """The leaf's own check where it has one, else the shared merge (unknown keys, integrator)."""
-    if hasattr(leaf, "check_settings"):
-        return leaf.check_settings(settings, t_out)
-    if hasattr(leaf, "DEFAULT_SETTINGS"):
-        return merge_settings(settings, leaf.DEFAULT_SETTINGS, leaf.INTEGRATORS)
-    return merge_settings(settings, getattr(leaf, "MODES_SETTINGS", {}), ())
+    """The leaf's own check where it has one, else the shared merge (`LeafInfo.check`)."""
+    return leaf_info(leaf.__name__).check(settings, t_out)
 
 
-def resolve_settings(leaf, dt=None, rtol=None, integrator=None, extra=None):
-    """The leaf's accurate defaults with the user's knobs applied.
-
-    `dt` moves an adaptive default to the leaf's fixed-step method, `rtol` moves a fixed-step
-    default to its adaptive one; a leaf without the requested kind keeps its own (and the
-    settings actually used say so)."""
-    s = dict(leaf.DEFAULT_SETTINGS)
-    adaptive = tuple(getattr(leaf, "ADAPTIVE", ()))
-    fixed = [i for i in leaf.INTEGRATORS if i not in adaptive]
-    if integrator is not None:
-        offered = [canonical_integrator(i) for i in leaf.INTEGRATORS]
-        if canonical_integrator(integrator) not in offered:
-            raise BadInput(f"integrator: {integrator!r} is not offered by this solver "
-                           f"(choose: {', '.join(offered)})")
-        s["integrator"] = leaf.INTEGRATORS[offered.index(canonical_integrator(integrator))]
-    if dt is not None:
-        s["dt"] = dt
-        if s.get("integrator") in adaptive and integrator is None and fixed:
-            s["integrator"] = "rk4" if "rk4" in fixed else fixed[0]
-    if rtol is not None:
-        if adaptive:
-            s["rtol"] = rtol
-            if s.get("integrator") not in adaptive and integrator is None:
-                s["integrator"] = adaptive[0]
-        # else: no error-controlled integrator; its fixed step stays (the CLI says so)
-    s.update(extra or {})
-    return s
+def resolve_settings(leaf: ModuleType, dt=None, rtol=None, integrator=None, extra=None):
+    """The leaf's accurate defaults with the user's knobs applied (`LeafInfo.resolve`)."""
+    return leaf_info(leaf.__name__).resolve(dt, rtol, integrator, extra)
 
 
 def _first_bad_time(t, channels):
@@ -246,25 +222,13 @@ def _time_limit(seconds):
         signal.signal(signal.SIGALRM, old)
 
 
-def tighter_settings(leaf: ModuleType, settings: dict) -> tuple[dict | None, float, str]:
+def tighter_settings(info: LeafInfo, settings: dict) -> tuple[dict | None, float, str]:
     """Settings for a solver's own error estimate and the factor that turns |y − y_tight| into
     the error of the run: a tolerance 100× tighter (factor 1: the tight run is exact by
     comparison), else half the step (factor 2: an order-p method's error is 2^p/(2^p − 1) ≤ 2
-    times that difference). None where neither knob exists (a stability-bound explicit step)."""
-    s = dict(settings)
-    if s.get("integrator") in getattr(leaf, "ADAPTIVE", ()) and \
-            isinstance(s.get("rtol"), (int, float)):
-        s["rtol"] = s["rtol"] / 100
-        if isinstance(s.get("atol"), (int, float)):
-            s["atol"] = s["atol"] / 100
-        return s, 1.0, f"rtol {s['rtol']:g}"
-    dt = s.get("dt")
-    if dt == "auto":
-        dt = getattr(leaf, "AUTO_DT", {}).get(s.get("integrator"))
-    if isinstance(dt, (int, float)) and dt > 0:
-        s["dt"] = dt / 2
-        return s, 2.0, f"dt {dt / 2:g}"
-    return None, 0.0, "no accuracy knob"
+    times that difference). None where neither knob exists (a stability-bound explicit step).
+    See `compare.leafinfo.Fixed` / `Adaptive`."""
+    return info.tighter(settings)
 
 
 def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
@@ -278,7 +242,7 @@ def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
     the separate compile call (a batch of points warms up once)."""
     tr = _simulate(scene, solver, params, settings, timeout_s, warm_up)
     if estimate_error and tr.status == "ok":
-        tight, factor, how = tighter_settings(solver.leaf(scene), settings)
+        tight, factor, how = tighter_settings(solver.info(scene), settings)
         tr.stats["error_estimate_by"] = how
         if tight is not None:
             ref = _simulate(scene, solver, params, tight, timeout_s)
@@ -349,8 +313,9 @@ def regimes(scene: Scene, solver: Solver, params_list: list[dict], settings: dic
     the run did not end ok by `simulate`'s rules (leaf status, finite output, the one energy
     rule: the caller runs that point alone to report why). None where no batch applies or it
     raised (the caller runs every point alone)."""
-    leaf, reg = solver.leaf(scene), scene.regime
-    if not (isinstance(reg, SpeedRegime) and hasattr(leaf, "regimes") and params_list) or \
+    info, reg = solver.info(scene), scene.regime
+    leaf = info.module
+    if not (isinstance(reg, SpeedRegime) and info.batch_regimes and params_list) or \
             len({(p["t_end"], p["output_dt"]) for p in params_list}) > 1:
         return None
     t_out = scene.output_grid(params_list[0])

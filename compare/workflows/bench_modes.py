@@ -47,11 +47,11 @@ SWITCHES = ("richardson", "extrapolate")                 # accuracy switches of 
 GRID_STEPS = ("step_hz",)
 
 
-def ladders(leaf, preset: dict) -> list[tuple[str, list[dict], int]]:
+def ladders(info, preset: dict) -> list[tuple[str, list[dict], int]]:
     """(label, [settings coarse → fine], index of the default rung) per accuracy knob:
     tolerances first (the finest rung of a solver's first ladder is its tightest run, the
     bench's reference), then meshes, then grid steps."""
-    base = {**getattr(leaf, "MODES_SETTINGS", {}), **preset}
+    base = {**info.modes_defaults, **preset}
     out = []
     for k, values in TOLERANCES.items():
         if isinstance(base.get(k), (int, float)) and not isinstance(base.get(k), bool):
@@ -220,7 +220,7 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
         first_call[s.name] = time.perf_counter() - t0
     refs = ([solvers.get_solver(n) for n in sc.reference_solvers]
             or solvers.solvers_for(sc.name)[:2])
-    ref_settings = ladders(refs[0].leaf(sc), refs[0].preset)[0][1][-1]
+    ref_settings = ladders(refs[0].info(sc), refs[0].preset)[0][1][-1]
     ref = call(refs[0], ref_settings)
     if ref.status != "ok":
         raise RuntimeError(f"reference {refs[0].name} failed: {ref.reason}")
@@ -230,7 +230,7 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
     rows = []
     for s in chosen:
         seen = {}
-        for label, rungs, start in ladders(s.leaf(sc), s.preset):
+        for label, rungs, start in ladders(s.info(sc), s.preset):
             knobs = [k for k in rungs[0] if any(r[k] != rungs[0][k] for r in rungs)]
             kind = "mesh" if any(k.endswith(MESH_SUFFIXES) for k in knobs) else "tolerance"
 

@@ -424,7 +424,7 @@ def plan(camp, src="built-in campaign", timeout_s=None, max_output_gib=None, max
             for s in chosen:
                 extra = c.get("settings", {}).get(s.name)
                 settings = _prefixed(f"{at}.settings.{s.name}", _settings, sc, s, c, extra, params)
-                _prefixed(where, budget.check_steps, s.name, s.leaf(sc.name), params, settings,
+                _prefixed(where, budget.check_steps, s.name, s.info(sc), params, settings,
                           max_steps)
                 jobs.append(Job(pname, sc.name, params, overrides, s.name, (s.name,), settings,
                                 limit, job_digest(sc, params, [s], settings)))
@@ -451,10 +451,10 @@ def plan_maps(camp, src="built-in campaign", max_jobs=None):
 
 
 def _settings(sc, s, c, extra, params):
-    leaf = s.leaf(sc.name)
-    unknown = sorted(set(extra or {}) - set(leaf.DEFAULT_SETTINGS))
+    defaults = s.info(sc).defaults
+    unknown = sorted(set(extra or {}) - set(defaults))
     if unknown:
-        raise BadInput(f"unknown settings {unknown} (known: {sorted(leaf.DEFAULT_SETTINGS)})")
+        raise BadInput(f"unknown settings {unknown} (known: {sorted(defaults)})")
     return solvers.settings_for(s, sc.name, c.get("dt"), c.get("rtol"), c.get("integrator"),
                                 extra, t_out=sc.output_grid(params))
 

@@ -61,10 +61,10 @@ def reference_check(sc: Scene, tr: Trajectory, ref: Trajectory, bound: float):
 def _settings(solver, sc, case, params):
     """The solver's accurate settings with the case's overrides where the solver has the key
     (an integrator it does not offer is left out), checked against the output grid."""
-    leaf = solver.leaf(sc)
-    over = {k: v for k, v in case.settings.items() if k in leaf.DEFAULT_SETTINGS}
+    info = solver.info(sc)
+    over = {k: v for k, v in case.settings.items() if k in info.defaults}
     integrator = over.pop("integrator", None)
-    if integrator is not None and integrator not in leaf.INTEGRATORS:
+    if integrator is not None and integrator not in info.integrator_names:
         integrator = None
     base = solvers.settings_for(solver, sc.name)
     dt = over.get("dt", base.get("dt"))

@@ -102,7 +102,7 @@ def solvers_for(scene_name: str) -> list[Solver]:
 def pick(scene: Scene, names: list[str] | None) -> list[Solver]:
     """Solvers named on the command line (all that serve the scene when none are named)."""
     if not names:
-        return solvers_for(scene.name)
+        return [REGISTRY[n] for n in scene.leaves]
     chosen = [get_solver(n) for n in names]
     for s in chosen:
         if s.name not in scene.leaves:
@@ -127,7 +127,7 @@ def _versions(engine):
     return out
 
 
-def settings_for(solver: Solver, scene_name: str, dt: float | None = None,
+def settings_for(solver: Solver, scene_name: Scene | str, dt: float | None = None,
                  rtol: float | None = None, integrator: str | None = None,
                  extra: dict | None = None, t_out: np.ndarray | None = None) -> dict:
     """The settings one solver runs a scene with — its leaf's defaults, its preset, the knobs —
@@ -233,19 +233,20 @@ def tighter_settings(info: LeafInfo, settings: dict) -> tuple[dict | None, float
 
 def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
              timeout_s: float | None = None, estimate_error: bool = False,
-             warm_up: bool = True) -> Trajectory:
+             warm_up: bool = True, t_out: np.ndarray | None = None) -> Trajectory:
     """Run one solver on one scene; always returns a Trajectory (status tells what happened).
     `timeout_s` bounds the wall time of the run (compile included): status "timeout". Settings
     were checked before (`settings_for`); anything a leaf raises now is recorded as `error`.
     `estimate_error`: rerun at tighter settings and keep factor·|Δ| per channel as the run's
     own numerical error (`Trajectory.errors`), which the verdicts weigh. `warm_up=False` skips
-    the separate compile call (a batch of points warms up once)."""
-    tr = _simulate(scene, solver, params, settings, timeout_s, warm_up)
+    the separate compile call (a batch of points warms up once; the tighter rerun never needs
+    one). `t_out`: the output grid where the caller has built it (a Plan)."""
+    tr = _simulate(scene, solver, params, settings, timeout_s, warm_up, t_out)
     if estimate_error and tr.status == "ok":
         tight, factor, how = tighter_settings(solver.info(scene), settings)
         tr.stats["error_estimate_by"] = how
         if tight is not None:
-            ref = _simulate(scene, solver, params, tight, timeout_s)
+            ref = _simulate(scene, solver, params, tight, timeout_s, False, tr.t)
             tr.stats["error_estimate_s"] = ref.wall_s
             if ref.status == "ok":
                 tr.errors = {c: factor * np.abs(tr.channels[c] - ref.channels[c])
@@ -255,8 +256,8 @@ def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
     return tr
 
 
-def _simulate(scene, solver, params, settings, timeout_s, warm_up=True):
-    t_out = scene.output_grid(params)
+def _simulate(scene, solver, params, settings, timeout_s, warm_up=True, t_out=None):
+    t_out = scene.output_grid(params) if t_out is None else t_out
     nan = {c: np.full(len(t_out), np.nan) for c in scene.channels}
     base = dict(scene=scene.name, solver=solver.name, t=t_out, versions=versions(solver),
                 settings=dict(settings))

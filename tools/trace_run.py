@@ -3,7 +3,7 @@
     python tools/trace_run.py run rotor-spinup --set torque=3.2 --set t_end=1 --out /tmp/x
 
 Prints, for the command given: project files entered, calls of `get_scene`, `Solver.leaf`
-(and `LeafInfo` builds), output-grid builds, settings checks (`merge_settings`, leaves'
+(and `LeafInfo` look-ups and builds), output-grid builds, settings checks (`merge_settings`, leaves'
 `check_settings`) and warm-up calls (a leaf's `simulate` on a two-point grid).
 """
 import collections
@@ -12,7 +12,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 PROJECT = tuple(str(ROOT / d) for d in ("compare", "custom_models", "reference_models", "xval"))
-COUNTED = {"get_scene": "get_scene", "leaf": "Solver.leaf", "leaf_info": "leaf_info (built)",
+COUNTED = {"get_scene": "get_scene", "leaf": "Solver.leaf", "leaf_info": "leaf_info look-ups",
+           "_build": "leaf views built (LeafInfo)",
            "output_grid": "output grid built", "merge_settings": "settings checked (merge)",
            "check_settings": "settings checked (check_settings)"}
 

@@ -25,6 +25,7 @@ from ..output.report import fmt_value
 from ..scenes import get_scene
 from . import budget
 from .bench_modes import run_bench_modes
+from .plan import Limits, plan
 from .work_precision import (
     FLOOR_ERR,
     bench_dir,
@@ -76,17 +77,18 @@ def _tightest(solver, info, dt_out):
     return {**base, "dt": snap(dt0 / 8, dt_out)} if isinstance(dt0, (int, float)) else base
 
 
-def _ladders(sc, solver, overrides, params, dt_out, vary):
+def _ladders(pl, solver, dt_out, vary):
     """(label, [(settings, params) coarse → fine], start) per integrator: the accuracy-knob
     ladders, or with `vary` = (NAME, values) one ladder of the solver's default settings at
     each value of that model parameter (e.g. the paper's advice to lower the thread stiffness
     for design runs), every value run."""
     if vary is None:
-        return [(label, [(st, params) for st in sts], start) for label, sts, start in
-                ladder(solver.info(sc), dt_out, solver.preset, params["t_end"])]
+        return [(label, [(st, pl.params) for st in sts], start) for label, sts, start in
+                ladder(solver.info(pl.scene), dt_out, solver.preset, pl.params["t_end"])]
     name, values = vary
-    st = solvers.settings_for(solver, sc.name)
-    return [(f"{name}={v}", [(st, sc.resolve({**overrides, name: v}))], 0) for v in values]
+    st = pl.settings[solver.name]
+    return [(f"{name}={v}", [(st, pl.scene.resolve({**pl.overrides, name: v}))], 0)
+            for v in values]
 
 
 
@@ -144,12 +146,12 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
             raise BadInput("--vary: frequency scenes are benched along the solvers' own "
                            "accuracy knobs only")
         return run_bench_modes(sc, solver_names, overrides, out, repeats, log, make_out)
-    chosen = solvers.pick(sc, solver_names or list(sc.bench_solvers))
-    budget.check_output(sc, overrides, len(chosen), max_output_gib)
-    params = sc.resolve(overrides)
+    pl = plan(sc, overrides, solver_names or list(sc.bench_solvers),
+              limits=Limits(max_output_gib, max_steps))
+    chosen, params = list(pl.solvers), pl.params
     vary = parse_vary(vary, sc) if vary is not None else None
     for s in chosen:
-        for _, rungs, start in _ladders(sc, s, overrides, params, params["output_dt"], vary):
+        for _, rungs, start in _ladders(pl, s, params["output_dt"], vary):
             st, p = rungs[start]
             budget.check_steps(s.name, s.info(sc), p, st, max_steps)
     if make_out:
@@ -178,7 +180,7 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
     rows = []
     for s in chosen:
         info = s.info(sc)
-        for label, rungs, start in _ladders(sc, s, overrides, params, dt_out, vary):
+        for label, rungs, start in _ladders(pl, s, dt_out, vary):
             ran: set = set()
 
             def run(i, s=s, info=info, label=label, rungs=rungs, ran=ran):

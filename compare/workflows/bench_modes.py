@@ -26,6 +26,7 @@ import numpy as np
 from .. import solvers
 from ..analysis import metrics
 from ..scenes import Scene
+from .plan import plan
 from .work_precision import (
     FLOOR_ERR,
     bench_dir,
@@ -203,8 +204,8 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
                     log=print, make_out=None) -> dict:
     """The frequency bench (see the module doc); everything is checked before the bench
     folder is made."""
-    chosen = solvers.pick(sc, solver_names or list(sc.bench_solvers))
-    params = sc.resolve(overrides)
+    pl = plan(sc, overrides, solver_names or list(sc.bench_solvers))
+    chosen, params = list(pl.solvers), pl.params
     timing_params = [[sc.resolve(case) for case in pt.cases] for pt in sc.published_timings]
     if make_out:
         make_out(out)

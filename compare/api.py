@@ -16,6 +16,8 @@ from pathlib import Path
 
 from .errors import BadInput
 from .workflows.inputs import check_out, make_out, positive, positive_int
+from .workflows.plan import names as _names
+from .workflows.plan import per_solver_settings  # noqa: F401  (the API's documented helper)
 from .workflows.results import (
     ModesResult,
     SceneInfo,
@@ -24,17 +26,6 @@ from .workflows.results import (
     disagreement_message,
     temporary_folder,
 )
-
-
-def _names(solvers) -> list[str]:
-    """None, one name or a list of names."""
-    if solvers is None:
-        return []
-    if isinstance(solvers, str):
-        return [solvers]
-    if not all(isinstance(s, str) for s in solvers):
-        raise BadInput(f"solvers: expected solver names, got {solvers!r}")
-    return list(solvers)
 
 
 def _overrides(params: dict | None, kw: dict) -> dict:
@@ -71,32 +62,6 @@ def _out(out):
     return str(out), None
 
 
-def per_solver_settings(settings: dict | None, chosen) -> dict:
-    """`settings` for every solver alike ({"dt": 1e-3}), or per solver keyed by solver name
-    ({"exudyn": {...}, "mujoco": {...}}, as campaign cases write them); a dict whose keys are
-    all solver names is read per solver."""
-    names = [s.name for s in chosen]
-    if not settings:
-        return {n: {} for n in names}
-    if not isinstance(settings, dict):
-        raise BadInput(f"settings: expected a dict, got {settings!r}")
-    from .solvers import REGISTRY
-    keyed = [k for k in settings if k in REGISTRY]
-    if keyed and len(keyed) < len(settings):
-        raise BadInput(f"settings: mixes solver names ({', '.join(keyed)}) with setting names "
-                       f"({', '.join(k for k in settings if k not in REGISTRY)}); give one "
-                       "dict for all solvers or one per solver")
-    if not keyed:
-        return {n: dict(settings) for n in names}
-    for k, v in settings.items():
-        if k not in names:
-            raise BadInput(f"settings: {k!r} is not among the solvers run "
-                           f"({', '.join(names)})")
-        if not isinstance(v, dict):
-            raise BadInput(f"settings: {k}: expected a dict of settings, got {v!r}")
-    return {n: dict(settings.get(n, {})) for n in names}
-
-
 def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol=None,
         integrator: str | None = None, out=None, record: bool | None = None,
         timeout=None, max_output_gib=None, max_steps=None, estimate_errors: bool = True,
@@ -113,9 +78,9 @@ def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol
     solver (s). `estimate_errors=False` skips the tighter rerun that estimates each solver's
     own error (half the time; the verdicts then weigh the deviation against the scene's
     allowance alone). `log`: a callable for progress lines (default: silent)."""
-    from . import solvers as registry
     from .scenes import get_scene
-    from .workflows import budget, runner
+    from .workflows import runner
+    from .workflows.plan import Knobs, Limits, plan
     sc = get_scene(scene)
     if sc.kind != "time":
         raise BadInput(f"scene {sc.name!r} is a frequency scene: use `xval modes {sc.name}`")
@@ -123,44 +88,27 @@ def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol
         check_out(str(out))
     if record and out is None:
         raise BadInput("record=True needs out=FOLDER (or call .save(path) on the result)")
-    dt, rtol = positive("--dt", dt), positive("--rtol", rtol)
-    if dt is not None and rtol is not None:
-        raise BadInput("--dt and --rtol: give one, not both")
-    timeout = positive("--timeout", timeout)
-    max_output_gib, max_steps = (positive("--max-output-gib", max_output_gib),
-                                 positive("--max-steps", max_steps))
-    overrides = _overrides(params, kw)
-    chosen = registry.pick(sc, _names(solvers))
-    extra = per_solver_settings(settings, chosen)
-    # the size of the work before the grid is built (resolve allocates it)
-    budget.check_output(sc, overrides, len(chosen), max_output_gib)
-    values = sc.resolve(overrides)
-    budget.check_dt(values, dt, max_steps)
-    # settings are resolved (and checked) for every solver before anything runs
-    t_out = sc.output_grid(values)
-    chosen_settings = {s.name: registry.settings_for(s, sc.name, dt, rtol, integrator,
-                                                     extra=extra[s.name], t_out=t_out)
-                       for s in chosen}
-    for s in chosen:
-        budget.check_steps(s.name, s.leaf(sc.name), values, chosen_settings[s.name],
-                           max_steps)
+    knobs = Knobs(positive("--dt", dt), positive("--rtol", rtol), integrator)
+    limits = Limits(positive("--max-output-gib", max_output_gib),
+                    positive("--max-steps", max_steps))
+    # everything checked (solvers, budgets, parameters, settings) before anything runs
+    pl = plan(sc, _overrides(params, kw), _names(solvers), settings, knobs, limits,
+              timeout_s=positive("--timeout", timeout), estimate_errors=estimate_errors)
     log = log or _quiet
     if out is None:
         out_dir = temporary = temporary_folder()
     else:
         make_out(str(out))
         out_dir, temporary = runner.new_run_dir(out, sc.name), None
-    if rtol is not None:
-        for s in chosen:
-            if not getattr(s.leaf(sc.name), "ADAPTIVE", ()):
+    if knobs.rtol is not None:
+        for s in pl.solvers:
+            if not s.info(sc).adaptive:
                 log(f"{s.name}: no error-controlled integrator, --rtol ignored (fixed step kept)")
     kept = out is not None                 # the report whenever files are kept, as `xval run`
     try:
         with _removed_on_error(temporary):
-            res = runner.run_scene(sc, values, chosen, lambda s: chosen_settings[s.name],
-                                   out_dir, record=kept if record is None else record,
-                                   report=kept, log=log,
-                                   timeout_s=timeout, estimate_errors=estimate_errors)
+            res = runner.execute(pl, out_dir, record=kept if record is None else record,
+                                 report=kept, log=log)
     except OSError as e:                 # disk full / read-only: one line, folder stays marked
         from .workflows.guard import write_failure
         if write_failure(e) is None:
@@ -267,8 +215,10 @@ def map(scene: str, x: str, y: str | None = None, solvers=None, *,
     out, temporary = _out(out)
     make_out(str(out))
     with _removed_on_error(temporary):
+        # points stored under the folder by the digest of their inputs: a stopped map resumes
         obj = map_to_folder(plan, out, executor=executor, scheduler=scheduler,
-                            workers=workers, record=record, log=log or _quiet)
+                            workers=workers, record=record, log=log or _quiet,
+                            store=Path(out) / "maps" / "points")
     obj["report"] = obj["files"]["report"]
     return Summary("map", obj, Path(obj["folder"]), temporary)
 
@@ -295,33 +245,21 @@ def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | Non
         check_out(str(out))
     if scheduler and executor != "dask":
         raise BadInput("--scheduler needs --executor dask")
-    source = path_or_dict
     if isinstance(path_or_dict, dict):
         camp.check_shape(path_or_dict, "campaign")
-    # everything is validated before the output folder is made or anything runs
+    # everything is validated before the output folder is made or anything runs; planned once
     with checking("checking the campaign, loading the models, planning the jobs …"):
-        loaded = path_or_dict if isinstance(path_or_dict, dict) else \
-            camp.load_campaign(path_or_dict)
-        where = ("campaign" if isinstance(path_or_dict, dict)
-                 else (path_or_dict or "built-in campaign"))
-        max_jobs = positive_int("--max-jobs", max_jobs)
-        camp.plan(loaded, where, timeout, max_output_gib, max_steps, max_jobs)
-        camp.plan_maps(loaded, where, max_jobs)
+        prepared = camp.prepare(path_or_dict, timeout, max_output_gib, max_steps,
+                                positive_int("--max-jobs", max_jobs))
     if scheduler:                      # reachable before anything is written
         with checking(f"connecting to {scheduler} …"):
             camp.connect(scheduler).close()
     out, temporary = _out(out)
     make_out(str(out))
-    if isinstance(path_or_dict, dict):     # the run reads a file: the dict, written beside
-        from .atomic import write_json
-        source = Path(out) / f"{path_or_dict.get('name', 'campaign')}.campaign.json"
-        write_json(source, path_or_dict)
-        source = str(source)
     with _removed_on_error(temporary), (progress or contextlib.nullcontext)() as view:
-        summary = camp.run_campaign(source, out, executor=executor, scheduler=scheduler,
-                                    workers=workers, timeout_s=timeout, verbose=verbose,
-                                    max_output_gib=max_output_gib, max_steps=max_steps,
-                                    max_jobs=max_jobs, view=view)
+        summary = camp.run_campaign(None, out, executor=executor, scheduler=scheduler,
+                                    workers=workers, verbose=verbose, view=view,
+                                    prepared=prepared)
     return Summary("campaign", summary, Path(summary["report"]).parent, temporary)
 
 

@@ -508,17 +508,26 @@ def _coarse(text):
 
 
 def cmd_map(args):
+    import shlex
+
     from . import api
+    from .workflows.executors import Interrupted
     check_out(args.out)
     coarse = _coarse(args.coarse) if args.coarse else None
     if coarse and not args.y:
         coarse = (coarse[0], 1)
-    with stdout_to_stderr():
-        r = api.map(args.scene, args.x, args.y, args.solver, resolution=args.resolution,
-                    coarse=coarse, observable=args.observable, level=args.level,
-                    engines=args.engines, executor=args.executor, scheduler=args.scheduler,
-                    workers=args.workers, max_jobs=args.max_jobs, record=not args.no_record,
-                    out=args.out, params=parse_sets(args.set), log=_log)
+    try:
+        with stdout_to_stderr():
+            r = api.map(args.scene, args.x, args.y, args.solver, resolution=args.resolution,
+                        coarse=coarse, observable=args.observable, level=args.level,
+                        engines=args.engines, executor=args.executor,
+                        scheduler=args.scheduler, workers=args.workers,
+                        max_jobs=args.max_jobs, record=not args.no_record, out=args.out,
+                        params=parse_sets(args.set), log=_log)
+    except Interrupted as e:             # Ctrl-C / SIGTERM: workers stopped, points kept
+        print(f"xval: interrupted: {e}; resume with: {shlex.join(['xval', *args.argv])}",
+              file=sys.stderr)
+        return 130
     if args.json:
         emit_json(r.data)
     else:
@@ -558,6 +567,7 @@ def main(argv=None):
     warnings.filterwarnings("ignore", module=r"numba(\.|$)")
     try:
         args = build_parser().parse_args(argv)
+        args.argv = list(sys.argv[1:] if argv is None else argv)
         return COMMANDS[args.command](args)
     except BadInput as e:
         print(f"xval: error: {e}", file=sys.stderr)

@@ -11,7 +11,6 @@ is recorded as `error` and never hides the others).
 from __future__ import annotations
 
 import functools
-import importlib
 import importlib.metadata
 import signal
 import sys
@@ -25,8 +24,9 @@ from types import ModuleType
 import numpy as np
 
 from .analysis.trajectory import Modes, Trajectory
-from .contract import LeafResult, ModesResult, canonical_integrator, merge_settings
+from .contract import LeafResult, ModesResult
 from .errors import BadInput
+from .leafinfo import LeafInfo, leaf_info
 from .scenes import PLUGIN_SOLVERS, SCENES, Scene, get_scene
 from .scenes.base import SpeedRegime
 
@@ -40,8 +40,12 @@ class Solver:
     preset: dict = field(default_factory=dict)   # settings that make this solver a variant
 
     def leaf(self, scene: Scene | str) -> ModuleType:
+        return self.info(scene).module
+
+    def info(self, scene: Scene | str) -> LeafInfo:
+        """The typed view of this solver's leaf for `scene` (built once per leaf module)."""
         sc = get_scene(scene) if isinstance(scene, str) else scene
-        return importlib.import_module(sc.leaves[self.name])
+        return leaf_info(sc.leaves[self.name])
 
     @property
     def leaves(self) -> dict:
@@ -98,7 +102,7 @@ def solvers_for(scene_name: str) -> list[Solver]:
 def pick(scene: Scene, names: list[str] | None) -> list[Solver]:
     """Solvers named on the command line (all that serve the scene when none are named)."""
     if not names:
-        return solvers_for(scene.name)
+        return [REGISTRY[n] for n in scene.leaves]
     chosen = [get_solver(n) for n in names]
     for s in chosen:
         if s.name not in scene.leaves:
@@ -123,57 +127,29 @@ def _versions(engine):
     return out
 
 
-def settings_for(solver: Solver, scene_name: str, dt: float | None = None,
+def settings_for(solver: Solver, scene_name: Scene | str, dt: float | None = None,
                  rtol: float | None = None, integrator: str | None = None,
                  extra: dict | None = None, t_out: np.ndarray | None = None) -> dict:
     """The settings one solver runs a scene with — its leaf's defaults, its preset, the knobs —
     checked by the leaf (`check_settings(settings, t_out)` where it has one, else the shared
     merge) before anything runs: bad settings raise BadInput naming the solver."""
-    leaf = solver.leaf(scene_name)
+    info = solver.info(scene_name)
     try:
-        s = resolve_settings(leaf, dt, rtol, integrator, {**solver.preset, **(extra or {})})
-        check_settings(leaf, s, t_out)
+        s = info.resolve(dt, rtol, integrator, {**solver.preset, **(extra or {})})
+        info.check(s, t_out)
     except ValueError as e:
         raise BadInput(f"{solver.name}: {str(e).splitlines()[0]}") from None
     return s
 
 
 def check_settings(leaf: ModuleType, settings: dict, t_out: np.ndarray | None) -> dict:
-    """The leaf's own check where it has one, else the shared merge (unknown keys, integrator)."""
-    if hasattr(leaf, "check_settings"):
-        return leaf.check_settings(settings, t_out)
-    if hasattr(leaf, "DEFAULT_SETTINGS"):
-        return merge_settings(settings, leaf.DEFAULT_SETTINGS, leaf.INTEGRATORS)
-    return merge_settings(settings, getattr(leaf, "MODES_SETTINGS", {}), ())
+    """The leaf's own check where it has one, else the shared merge (`LeafInfo.check`)."""
+    return leaf_info(leaf.__name__).check(settings, t_out)
 
 
-def resolve_settings(leaf, dt=None, rtol=None, integrator=None, extra=None):
-    """The leaf's accurate defaults with the user's knobs applied.
-
-    `dt` moves an adaptive default to the leaf's fixed-step method, `rtol` moves a fixed-step
-    default to its adaptive one; a leaf without the requested kind keeps its own (and the
-    settings actually used say so)."""
-    s = dict(leaf.DEFAULT_SETTINGS)
-    adaptive = tuple(getattr(leaf, "ADAPTIVE", ()))
-    fixed = [i for i in leaf.INTEGRATORS if i not in adaptive]
-    if integrator is not None:
-        offered = [canonical_integrator(i) for i in leaf.INTEGRATORS]
-        if canonical_integrator(integrator) not in offered:
-            raise BadInput(f"integrator: {integrator!r} is not offered by this solver "
-                           f"(choose: {', '.join(offered)})")
-        s["integrator"] = leaf.INTEGRATORS[offered.index(canonical_integrator(integrator))]
-    if dt is not None:
-        s["dt"] = dt
-        if s.get("integrator") in adaptive and integrator is None and fixed:
-            s["integrator"] = "rk4" if "rk4" in fixed else fixed[0]
-    if rtol is not None:
-        if adaptive:
-            s["rtol"] = rtol
-            if s.get("integrator") not in adaptive and integrator is None:
-                s["integrator"] = adaptive[0]
-        # else: no error-controlled integrator; its fixed step stays (the CLI says so)
-    s.update(extra or {})
-    return s
+def resolve_settings(leaf: ModuleType, dt=None, rtol=None, integrator=None, extra=None):
+    """The leaf's accurate defaults with the user's knobs applied (`LeafInfo.resolve`)."""
+    return leaf_info(leaf.__name__).resolve(dt, rtol, integrator, extra)
 
 
 def _first_bad_time(t, channels):
@@ -246,46 +222,32 @@ def _time_limit(seconds):
         signal.signal(signal.SIGALRM, old)
 
 
-def tighter_settings(leaf: ModuleType, settings: dict) -> tuple[dict | None, float, str]:
+def tighter_settings(info: LeafInfo, settings: dict) -> tuple[dict | None, float, str]:
     """Settings for a solver's own error estimate and the factor that turns |y − y_tight| into
-    the error of the run: a tolerance 100× tighter (factor 10/9: an error-controlled order-p
-    method's error goes as tol^(p/(p+1)), so the tight run keeps up to 100^(-1/2) = 1/10 of
-    the run's error, which |Δ| then misses; factor 1 fell 0.4 % short on the quaternion rotor's
-    tilt against a 1000× tighter run), else half the step (factor 2: an order-p method's error
-    is 2^p/(2^p − 1) ≤ 2 times that difference). None where neither knob exists (a
-    stability-bound explicit step)."""
-    s = dict(settings)
-    if s.get("integrator") in getattr(leaf, "ADAPTIVE", ()) and \
-            isinstance(s.get("rtol"), (int, float)):
-        s["rtol"] = s["rtol"] / 100
-        if isinstance(s.get("atol"), (int, float)):
-            s["atol"] = s["atol"] / 100
-        return s, 10 / 9, f"rtol {s['rtol']:g}"
-    dt = s.get("dt")
-    if dt == "auto":
-        dt = getattr(leaf, "AUTO_DT", {}).get(s.get("integrator"))
-    if isinstance(dt, (int, float)) and dt > 0:
-        s["dt"] = dt / 2
-        return s, 2.0, f"dt {dt / 2:g}"
-    return None, 0.0, "no accuracy knob"
+    the error of the run: a tolerance 100× tighter (factor 10/9: the tight run keeps up to a
+    tenth of the run's error), else half the step (factor 2: an order-p method's error is
+    2^p/(2^p − 1) ≤ 2 times that difference). None where neither knob exists (a
+    stability-bound explicit step). See `compare.leafinfo.Fixed` / `Adaptive`."""
+    return info.tighter(settings)
 
 
 def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
              timeout_s: float | None = None, estimate_error: bool = False,
-             warm_up: bool = True) -> Trajectory:
+             warm_up: bool = True, t_out: np.ndarray | None = None) -> Trajectory:
     """Run one solver on one scene; always returns a Trajectory (status tells what happened).
     `timeout_s` bounds the wall time of the run (compile included): status "timeout". Settings
     were checked before (`settings_for`); anything a leaf raises now is recorded as `error`.
     `estimate_error`: the run's own numerical error per channel (`Trajectory.errors`), which the
     verdicts weigh: factor·|Δ| against a tighter rerun, plus what that rerun cannot see
     (`_unseen_error`). `warm_up=False` skips the separate compile call (a batch of points warms
-    up once)."""
-    tr = _simulate(scene, solver, params, settings, timeout_s, warm_up)
+    up once; the tighter rerun never needs one). `t_out`: the output grid where the caller has
+    built it (a Plan)."""
+    tr = _simulate(scene, solver, params, settings, timeout_s, warm_up, t_out)
     if estimate_error and tr.status == "ok":
-        tight, factor, how = tighter_settings(solver.leaf(scene), settings)
+        tight, factor, how = tighter_settings(solver.info(scene), settings)
         tr.stats["error_estimate_by"] = how
         if tight is not None:
-            ref = _simulate(scene, solver, params, tight, timeout_s)
+            ref = _simulate(scene, solver, params, tight, timeout_s, False, tr.t)
             tr.stats["error_estimate_s"] = ref.wall_s
             if ref.status == "ok":
                 unseen = _unseen_error(scene, solver, params, settings, tr, ref, tight,
@@ -328,7 +290,7 @@ def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) ->
         half = {**tight, "rtol": tight["rtol"] / 2}
         if isinstance(tight.get("atol"), (int, float)):
             half["atol"] = tight["atol"] / 2
-        ref2 = _simulate(scene, solver, params, half, timeout_s, warm_up=False)
+        ref2 = _simulate(scene, solver, params, half, timeout_s, False, tr.t)
         tr.stats["error_estimate_s"] = tr.stats.get("error_estimate_s", 0.0) + ref2.wall_s
         if ref2.status == "ok":
             jitter = {c: np.maximum.accumulate(np.abs(ref.channels[c] - ref2.channels[c]))
@@ -336,8 +298,8 @@ def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) ->
     return {c: floor[c] + jitter[c] for c in scene.channels}
 
 
-def _simulate(scene, solver, params, settings, timeout_s, warm_up=True):
-    t_out = scene.output_grid(params)
+def _simulate(scene, solver, params, settings, timeout_s, warm_up=True, t_out=None):
+    t_out = scene.output_grid(params) if t_out is None else t_out
     nan = {c: np.full(len(t_out), np.nan) for c in scene.channels}
     base = dict(scene=scene.name, solver=solver.name, t=t_out, versions=versions(solver),
                 settings=dict(settings))
@@ -394,8 +356,9 @@ def regimes(scene: Scene, solver: Solver, params_list: list[dict], settings: dic
     the run did not end ok by `simulate`'s rules (leaf status, finite output, the one energy
     rule: the caller runs that point alone to report why). None where no batch applies or it
     raised (the caller runs every point alone)."""
-    leaf, reg = solver.leaf(scene), scene.regime
-    if not (isinstance(reg, SpeedRegime) and hasattr(leaf, "regimes") and params_list) or \
+    info, reg = solver.info(scene), scene.regime
+    leaf = info.module
+    if not (isinstance(reg, SpeedRegime) and info.batch_regimes and params_list) or \
             len({(p["t_end"], p["output_dt"]) for p in params_list}) > 1:
         return None
     t_out = scene.output_grid(params_list[0])

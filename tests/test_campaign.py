@@ -148,7 +148,7 @@ def test_the_code_digest_follows_a_model_and_what_it_imports_only(tmp_path, monk
     import hashlib
     import shutil
 
-    from compare.workflows import campaign
+    from compare.workflows import digest as campaign  # the store's digest (the planner's)
     for pkg in campaign.PROJECT_PACKAGES:
         shutil.copytree(campaign.ROOT / pkg, tmp_path / pkg,
                         ignore=shutil.ignore_patterns("__pycache__"))

@@ -19,7 +19,7 @@ LEAF_ALLOWED = ("compare.contract", "compare.physics")
 # compare/'s rooms, lowest first (ARCHITECTURE.md): a module may import its own layer and below
 LAYERS = (("shared", ("compare.contract", "compare.errors", "compare.atomic", "compare.physics")),
           ("values", ("compare.analysis",)),
-          ("scenes and registry", ("compare.scenes", "compare.solvers")),
+          ("scenes and registry", ("compare.scenes", "compare.solvers", "compare.leafinfo")),
           ("output", ("compare.output",)),
           ("orchestration", ("compare.workflows",)),
           ("front door", ("compare.cli", "compare.api", "compare.pytest_plugin",

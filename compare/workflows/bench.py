@@ -20,10 +20,12 @@ from .. import solvers
 from ..analysis import metrics
 from ..atomic import write_json, write_text
 from ..errors import BadInput
+from ..leafinfo import ORDERS, Adaptive, Fixed, snap  # noqa: F401  (ORDERS: the tests' table)
 from ..output.report import fmt_value
 from ..scenes import get_scene
 from . import budget
 from .bench_modes import run_bench_modes
+from .plan import Limits, plan
 from .work_precision import (
     FLOOR_ERR,
     bench_dir,
@@ -36,86 +38,57 @@ from .work_precision import (
     write_outputs,
 )
 
-RTOLS = tuple(10.0 ** -k for k in range(1, 14))     # 1e-1 … 1e-13, walked from START_RTOL
-START_RTOL = 1e-6
-MAX_DOUBLINGS = 7          # a fixed step goes at most 2^7 coarser or finer than the default
-# the order a fixed-step method should show (its observed order is flagged when lower)
-ORDERS = {"euler": 1, "explicit_euler": 1, "midpoint": 2, "linacc": 2, "rk4": 4, "rk44": 4,
-          "rk67": 6, "generalized_alpha": 2, "trapezoidal": 2, "imr": 2, "implicitfast": 1,
-          "implicit": 1}
 
-
-def _snap(dt, dt_out):
-    """Largest step ≤ dt that divides the output step into whole steps."""
-    return dt_out / max(1, int(np.ceil(dt_out / dt - 1e-9)))
-
-
-def _fixed_steps(dt0, dt_out, t_end):
-    """Candidate steps coarse → fine around dt0 (factors of ~2: up to the output step snapped
-    to its divisors, above it multiples 2^m of it that divide the horizon) and dt0's index."""
-    coarse = {dt_out}
-    for j in range(1, MAX_DOUBLINGS + 1):
-        c = dt0 * 2 ** j
-        if c <= dt_out * (1 + 1e-9):
-            coarse.add(_snap(c, dt_out))
-        else:
-            c = dt_out * 2 ** round(np.log2(c / dt_out))
-            if c <= t_end / 8 and abs(t_end / c - round(t_end / c)) < 1e-9:
-                coarse.add(c)
-    coarse = sorted((c for c in coarse if c > dt0 * (1 + 1e-9)), reverse=True)
-    fine = list(dict.fromkeys(_snap(dt0 / 2 ** j, dt_out) if dt0 <= dt_out else dt0 / 2 ** j
-                              for j in range(MAX_DOUBLINGS + 1)))
-    return coarse + fine, len(coarse)
-
-
-def ladder(leaf, dt_out, preset=None, t_end=None):
-    """Per integrator: (label, [settings coarse → fine], index of the starting rung)."""
-    base = {**leaf.DEFAULT_SETTINGS, **(preset or {})}
-    adaptive = tuple(getattr(leaf, "ADAPTIVE", ()))
+def ladder(info, dt_out, preset=None, t_end=None):
+    """Per integrator: (label, [settings coarse → fine], index of the starting rung), along
+    the knob's own ladder (`Adaptive.ladder`, `Fixed.ladder`)."""
+    base = {**info.defaults, **(preset or {})}
+    adaptive = info.adaptive
     t_end = t_end or 1e3 * dt_out
     out = []
     if base.get("integrator") in adaptive:
         # the default error-controlled method, and dopri5 where offered (fewer stages: cheaper
         # at loose tolerances)
+        knobs, start = Adaptive.ladder()
         for name in dict.fromkeys([base["integrator"]] + [a for a in adaptive if a == "dopri5"]):
-            out.append((name, [{**base, "integrator": name, "rtol": r} for r in RTOLS],
-                        RTOLS.index(START_RTOL)))
-        fixed = "rk4" if "rk4" in leaf.INTEGRATORS else None
+            out.append((name, [{**base, "integrator": name, "rtol": k.rtol} for k in knobs],
+                        start))
+        fixed = "rk4" if "rk4" in info.integrator_names else None
         dt0 = 1e-3
     else:
         fixed, dt0 = base.get("integrator"), base.get("dt") or 1e-3
         if dt0 == "auto":      # a fixed number behind "auto" can be laddered; a stability-bound
-            dt0 = getattr(leaf, "AUTO_DT", {}).get(fixed, dt0)   # explicit step cannot
+            dt0 = info.auto_dt.get(fixed, dt0)                  # explicit step cannot
     if fixed and not isinstance(dt0, (int, float)):     # e.g. "auto": the leaf picks its step
         out.append((fixed, [base], 0))
     elif fixed:
-        steps, start = _fixed_steps(dt0, dt_out, t_end)
-        out.append((fixed, [{**base, "integrator": fixed, "dt": dt} for dt in steps], start))
+        steps, start = Fixed(dt0).ladder(dt_out, t_end)
+        out.append((fixed, [{**base, "integrator": fixed, "dt": k.dt} for k in steps], start))
     return out
 
 
-def _tightest(solver, scene_name, dt_out):
-    leaf = solver.leaf(scene_name)
-    base = {**leaf.DEFAULT_SETTINGS, **solver.preset}
-    if base.get("integrator") in getattr(leaf, "ADAPTIVE", ()):
+def _tightest(solver, info, dt_out):
+    base = {**info.defaults, **solver.preset}
+    if base.get("integrator") in info.adaptive:
         return {**base, "rtol": 1e-13}
     dt0 = base.get("dt")
     if dt0 == "auto":
-        dt0 = getattr(leaf, "AUTO_DT", {}).get(base.get("integrator"), dt0)
-    return {**base, "dt": _snap(dt0 / 8, dt_out)} if isinstance(dt0, (int, float)) else base
+        dt0 = info.auto_dt.get(base.get("integrator"), dt0)
+    return {**base, "dt": snap(dt0 / 8, dt_out)} if isinstance(dt0, (int, float)) else base
 
 
-def _ladders(sc, solver, overrides, params, dt_out, vary):
+def _ladders(pl, solver, dt_out, vary):
     """(label, [(settings, params) coarse → fine], start) per integrator: the accuracy-knob
     ladders, or with `vary` = (NAME, values) one ladder of the solver's default settings at
     each value of that model parameter (e.g. the paper's advice to lower the thread stiffness
     for design runs), every value run."""
     if vary is None:
-        return [(label, [(st, params) for st in sts], start) for label, sts, start in
-                ladder(solver.leaf(sc.name), dt_out, solver.preset, params["t_end"])]
+        return [(label, [(st, pl.params) for st in sts], start) for label, sts, start in
+                ladder(solver.info(pl.scene), dt_out, solver.preset, pl.params["t_end"])]
     name, values = vary
-    st = solvers.settings_for(solver, sc.name)
-    return [(f"{name}={v}", [(st, sc.resolve({**overrides, name: v}))], 0) for v in values]
+    st = pl.settings[solver.name]
+    return [(f"{name}={v}", [(st, pl.scene.resolve({**pl.overrides, name: v}))], 0)
+            for v in values]
 
 
 
@@ -173,14 +146,14 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
             raise BadInput("--vary: frequency scenes are benched along the solvers' own "
                            "accuracy knobs only")
         return run_bench_modes(sc, solver_names, overrides, out, repeats, log, make_out)
-    chosen = solvers.pick(sc, solver_names or list(sc.bench_solvers))
-    budget.check_output(sc, overrides, len(chosen), max_output_gib)
-    params = sc.resolve(overrides)
+    pl = plan(sc, overrides, solver_names or list(sc.bench_solvers),
+              limits=Limits(max_output_gib, max_steps))
+    chosen, params = list(pl.solvers), pl.params
     vary = parse_vary(vary, sc) if vary is not None else None
     for s in chosen:
-        for _, rungs, start in _ladders(sc, s, overrides, params, params["output_dt"], vary):
+        for _, rungs, start in _ladders(pl, s, params["output_dt"], vary):
             st, p = rungs[start]
-            budget.check_steps(s.name, s.leaf(sc.name), p, st, max_steps)
+            budget.check_steps(s.name, s.info(sc), p, st, max_steps)
     if make_out:
         make_out(out)
     dt_out = params["output_dt"]
@@ -194,7 +167,7 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
     out_dir = bench_dir(out, sc.name)
     ref_runs, done = [], {}
     for s in refs:
-        st = _tightest(s, sc.name, dt_out)
+        st = _tightest(s, s.info(sc), dt_out)
         tr = solvers.simulate(sc, s, params, st)
         tr.save(out_dir / f"reference-{s.name}.npz")
         ref_runs.append(tr)
@@ -206,18 +179,18 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
 
     rows = []
     for s in chosen:
-        leaf = s.leaf(sc.name)
-        for label, rungs, start in _ladders(sc, s, overrides, params, dt_out, vary):
+        info = s.info(sc)
+        for label, rungs, start in _ladders(pl, s, dt_out, vary):
             ran: set = set()
 
-            def run(i, s=s, leaf=leaf, label=label, rungs=rungs, ran=ran):
+            def run(i, s=s, info=info, label=label, rungs=rungs, ran=ran):
                 st, p = rungs[i]
                 try:
-                    solvers.check_settings(leaf, st, sc.output_grid(p))
-                    budget.check_steps(s.name, leaf, p, st, max_steps)
+                    info.check(st, sc.output_grid(p))
+                    budget.check_steps(s.name, info, p, st, max_steps)
                 except (ValueError, BadInput):
                     return None
-                row = _run_rung(sc, s, leaf, label, st, p, params, done, repeats, ref, key,
+                row = _run_rung(sc, s, info, label, st, p, params, done, repeats, ref, key,
                                 out_dir, f"{s.name}-{label}-{i}", vary, log)
                 # a leaf that clamped the knob (an engine's step ≤ the output interval) to what
                 # an earlier rung ran: the walk goes no coarser instead of repeating it
@@ -230,9 +203,10 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
                 return row
             rows += walk(rungs, start, run, exhaustive=vary is not None)
 
+    infos = {s.name: s.info(sc) for s in chosen}
     summary, lines = summarise(rows, [s.name for s in chosen], f"on final {key}")
     orders = convergence_orders(rows, 100 * max(FLOOR_ERR, ref_check or 0.0), _fixed_dt,
-                                lambda r: ORDERS.get(r["method"]))
+                                lambda r: infos[r["solver"]].order(r["method"]))
     lines += order_lines(orders, "dt", " s")
     plot(out_dir / "work_precision.png", rows, sc.name, f"relative error of final {key}",
          summary)
@@ -264,7 +238,7 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
 
 
 
-def _run_rung(sc, solver, leaf, label, st, p, params, done, repeats, ref, key, out_dir, name,
+def _run_rung(sc, solver, info, label, st, p, params, done, repeats, ref, key, out_dir, name,
               vary, log):
     """One rung: timed runs (a run slower than RUNG_WALL_S is not repeated; one faster than
     SHORT_RUN_S is repeated SHORT_REPEATS × as often: one scheduler hiccup is its whole time),
@@ -286,7 +260,7 @@ def _run_rung(sc, solver, leaf, label, st, p, params, done, repeats, ref, key, o
            "ns_per_rhs": 1e9 * t_int / evals if evals and t_int and evals > 0 and t_int > 0
            else None,
            **({"vary": {vary[0]: p[vary[0]]}} if vary else {})}
-    knob = st.get("rtol") if label in getattr(leaf, "ADAPTIVE", ()) else st.get("dt")
+    knob = st.get("rtol") if label in info.adaptive else st.get("dt")
     log(f"  {solver.name} {label} {knob}: err {err if err is None else f'{err:.2e}'} "
         f"wall {row['wall_s']:.3g} s"
         + (f", {row['ns_per_rhs']:.0f} ns/RHS" if row["ns_per_rhs"] else ""))

@@ -26,6 +26,7 @@ import numpy as np
 from .. import solvers
 from ..analysis import metrics
 from ..scenes import Scene
+from .plan import plan
 from .work_precision import (
     FLOOR_ERR,
     bench_dir,
@@ -47,11 +48,11 @@ SWITCHES = ("richardson", "extrapolate")                 # accuracy switches of 
 GRID_STEPS = ("step_hz",)
 
 
-def ladders(leaf, preset: dict) -> list[tuple[str, list[dict], int]]:
+def ladders(info, preset: dict) -> list[tuple[str, list[dict], int]]:
     """(label, [settings coarse → fine], index of the default rung) per accuracy knob:
     tolerances first (the finest rung of a solver's first ladder is its tightest run, the
     bench's reference), then meshes, then grid steps."""
-    base = {**getattr(leaf, "MODES_SETTINGS", {}), **preset}
+    base = {**info.modes_defaults, **preset}
     out = []
     for k, values in TOLERANCES.items():
         if isinstance(base.get(k), (int, float)) and not isinstance(base.get(k), bool):
@@ -203,8 +204,8 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
                     log=print, make_out=None) -> dict:
     """The frequency bench (see the module doc); everything is checked before the bench
     folder is made."""
-    chosen = solvers.pick(sc, solver_names or list(sc.bench_solvers))
-    params = sc.resolve(overrides)
+    pl = plan(sc, overrides, solver_names or list(sc.bench_solvers))
+    chosen, params = list(pl.solvers), pl.params
     timing_params = [[sc.resolve(case) for case in pt.cases] for pt in sc.published_timings]
     if make_out:
         make_out(out)
@@ -220,7 +221,7 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
         first_call[s.name] = time.perf_counter() - t0
     refs = ([solvers.get_solver(n) for n in sc.reference_solvers]
             or solvers.solvers_for(sc.name)[:2])
-    ref_settings = ladders(refs[0].leaf(sc), refs[0].preset)[0][1][-1]
+    ref_settings = ladders(refs[0].info(sc), refs[0].preset)[0][1][-1]
     ref = call(refs[0], ref_settings)
     if ref.status != "ok":
         raise RuntimeError(f"reference {refs[0].name} failed: {ref.reason}")
@@ -230,7 +231,7 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
     rows = []
     for s in chosen:
         seen = {}
-        for label, rungs, start in ladders(s.leaf(sc), s.preset):
+        for label, rungs, start in ladders(s.info(sc), s.preset):
             knobs = [k for k in rungs[0] if any(r[k] != rungs[0][k] for r in rungs)]
             kind = "mesh" if any(k.endswith(MESH_SUFFIXES) for k in knobs) else "tolerance"
 

@@ -45,23 +45,11 @@ def check_output(scene, overrides, n_solvers, max_gib=None, where=""):
                        f"--max-output-gib")
 
 
-def estimated_steps(leaf, params, settings):
-    """(steps, dt) of one run: t_end / dt for a fixed step (the leaf's `AUTO_DT` stands in
-    for "auto"), None for an error-controlled method (its steps are not known in advance; the
-    output grid bounds its memory, not its steps)."""
-    if settings.get("integrator") in tuple(getattr(leaf, "ADAPTIVE", ())):
-        return None
-    dt = settings.get("dt")
-    if dt == "auto":
-        dt = getattr(leaf, "AUTO_DT", {}).get(settings.get("integrator"))
-    if not isinstance(dt, (int, float)) or dt <= 0:
-        return None
-    return params["t_end"] / dt, dt
-
-
-def check_steps(solver_name, leaf, params, settings, max_steps=None, where=""):
+def check_steps(solver_name, info, params, settings, max_steps=None, where=""):
+    """BadInput when one run's fixed steps (`LeafInfo.steps`: t_end / dt, the leaf's `AUTO_DT`
+    for "auto"; an error-controlled method's are not known in advance) exceed the budget."""
     max_steps = MAX_STEPS if max_steps is None else max_steps
-    est = estimated_steps(leaf, params, settings)
+    est = info.steps(settings, params["t_end"])
     if est is not None and est[0] > max_steps:
         n, dt = est
         raise BadInput(f"{where}{solver_name}: {n:.3g} steps of dt = {dt:g} s over "

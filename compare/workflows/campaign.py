@@ -29,17 +29,14 @@ One campaign at a time per folder: `.lock` holds the owner's pid and host (guard
 taken over. Ctrl-C stops the workers (they ignore SIGINT; this process ends them), keeps every
 stored result and raises `Interrupted` (the CLI prints one line and exits 130).
 """
-import ast
 import hashlib
-import importlib.util
 import itertools
 import json
 import signal
-import sys
 import threading
 import time
 import tomllib
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, wait
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -53,10 +50,17 @@ from ..errors import BadInput
 from ..output.joblog import captured, distinct_lines
 from ..output.progress import PlainProgress
 from ..scenes import get_scene
-from . import budget, guard, runner
-from .executors import connect, make_executor  # noqa: F401  (connect: the API's check)
+from . import guard, runner
+from . import plan as planner
+from .digest import _scene_module, job_code
+from .executors import (  # noqa: F401  (connect: the API's check)
+    Interrupted,
+    connect,
+    make_executor,
+    stop,
+    terminated_as_interrupt,
+)
 
-STORE_VERSION = 1          # bump when the stored result format changes: everything reruns
 TOP_KEYS = ("name", "cases", "maps", "max_output_gib", "max_steps", "max_jobs")
 MAP_KEYS = ("name", "scene", "x", "y", "set", "solvers", "resolution", "coarse", "observable",
             "level", "engines")
@@ -248,120 +252,9 @@ class Job:
         return self.digest[:24]
 
 
-def _canon(x):
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    if isinstance(x, np.generic):
-        return x.item()
-    return str(x)
-
-
-PROJECT_PACKAGES = ("compare", "custom_models", "reference_models")
-
-
-ROOT = Path(__file__).resolve().parents[2]          # the checkout: compare/ sits in it
-
-
-def _source(module_name):
-    """(file, is_package) of a project module, or (None, False)."""
-    base = ROOT.joinpath(*module_name.split("."))
-    if (base / "__init__.py").is_file():
-        return base / "__init__.py", True
-    if base.with_suffix(".py").is_file():
-        return base.with_suffix(".py"), False
-    if module_name.split(".")[0] not in PROJECT_PACKAGES:   # a plug-in package's module
-        try:
-            spec = importlib.util.find_spec(module_name)
-        except (ImportError, ValueError):
-            spec = None
-        if spec is not None and spec.origin and spec.origin.endswith(".py"):
-            return Path(spec.origin), spec.submodule_search_locations is not None
-    return None, False
-
-
-def _imports(module_name):
-    """(source file, project modules it imports), read from the source (nothing imported)."""
-    path, is_pkg = _source(module_name)
-    if path is None:
-        return None, []
-    tree = ast.parse(path.read_text())
-    package = module_name if is_pkg else module_name.rpartition(".")[0]
-    found = []
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            found += [a.name for a in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                parts = package.split(".")
-                parts = parts[:len(parts) - node.level + 1]
-                base = ".".join(parts + ([base] if base else []))
-            found.append(base)
-            found += [f"{base}.{a.name}" for a in node.names]   # `from pkg import submodule`
-    own = PROJECT_PACKAGES + (module_name.split(".")[0],)    # a plug-in follows its own too
-    return path, [m for m in found if m.split(".")[0] in own]
-
-
-_CODE = {}
-
-
-def code_digest(module_names):
-    """sha256 over the source of the given modules and every project module they import,
-    transitively: a fix in a model reruns its jobs, an edit of an unrelated model does not.
-    Scene modules count only when named (the job's own scene), not through the registry the
-    adapter imports, so adding a scene leaves other results valid."""
-    key = tuple(sorted(module_names))
-    if key not in _CODE:
-        seen, todo, files = set(), list(key), {}
-        while todo:
-            name = todo.pop()
-            if name in seen or (name.startswith("compare.scenes") and name not in key):
-                continue
-            seen.add(name)
-            path, deps = _imports(name)
-            if path is not None:
-                files[name] = path.read_bytes()
-                todo += deps
-        h = hashlib.sha256()
-        for name in sorted(files):
-            h.update(name.encode() + b"\0" + files[name])
-        _CODE[key] = h.hexdigest()
-    return _CODE[key]
-
-
-def _scene_module(scene):
-    from ..scenes import ORIGIN
-    if scene.name in ORIGIN:                   # a plug-in's scene: the module it came from
-        return ORIGIN[scene.name][1]
-    for name, mod in list(sys.modules.items()):
-        if name.startswith("compare.scenes.") and any(v is scene for v in vars(mod).values()):
-            return name
-    return "compare.scenes"
-
-
-def job_digest(scene, params, chosen, settings):
-    """Digest of everything a result depends on: scene, resolved parameters, solver names,
-    settings, package versions, and the source of the models, of everything of ours they
-    import and of the adapter."""
-    blob = json.dumps({"store": STORE_VERSION, "scene": scene.name, "params": params,
-                       "solvers": [s.name for s in chosen], "settings": settings,
-                       "versions": {s.name: solvers.versions(s) for s in chosen},
-                       "code": job_code(scene, chosen)}, sort_keys=True, default=_canon)
-    return hashlib.sha256(blob.encode()).hexdigest()
-
-
-def job_code(scene, chosen):
-    """Digest of the code behind a job (its models, the adapter, the scene); stored with the
-    result so that `xval diff` can say the model code changed."""
-    code = {"compare.solvers", "compare.analysis.trajectory", "compare.scenes.base",
-            _scene_module(scene)}
-    code |= {s.leaves[scene.name] for s in chosen}
-    return code_digest(code)
-
-
-def _prefixed(where, fn, *args):
+def _prefixed(where, fn, *args, **kw):
     try:
-        return fn(*args)
+        return fn(*args, **kw)
     except BadInput as e:
         raise BadInput(f"{where}: {e}") from None
 
@@ -395,7 +288,7 @@ def plan(camp, src="built-in campaign", timeout_s=None, max_output_gib=None, max
         if name in names:
             raise BadInput(f"{at}.name: duplicate case name {name!r}")
         names.add(name)
-        chosen = _prefixed(f"{at}.solvers", solvers.pick, sc, c.get("solvers"))
+        _prefixed(f"{at}.solvers", solvers.pick, sc, c.get("solvers"))
         sweep = c.get("sweep", {})
         for pname, spec in sweep.items():           # names and values, one by one
             param = _prefixed(f"{at}.sweep", sc.param, pname)
@@ -405,29 +298,27 @@ def plan(camp, src="built-in campaign", timeout_s=None, max_output_gib=None, max
             param = _prefixed(f"{at}.set", sc.param, pname)
             _prefixed(f"{at}.set.{pname}", param.parse, v)
         grids = [sweep_values(sweep[k], "") for k in sweep]
+        runs = c.get("solvers") or list(sc.leaves)      # settings for others are ignored
+        knobs = _prefixed(at, planner.Knobs, c.get("dt"), c.get("rtol"), c.get("integrator"))
+        limits = planner.Limits(max_output_gib, max_steps)
         for combo in itertools.product(*grids) if sweep else [()]:
             point = dict(zip(sweep, combo))
             pname = name + ("/" + ",".join(f"{k}={value_text(v)}" for k, v in point.items())
                             if point else "")
             where = f"{at}" + (f" sweep point {pname}" if point else "")
             overrides = {**c.get("set", {}), **point}
-            _prefixed(where, budget.check_output, sc, overrides, len(chosen), max_output_gib)
-            params = _prefixed(where, sc.resolve, overrides)
-            case = Case(pname, sc, params, chosen, name if point else None, point)
-            cases.append(case)
-            limit = c.get("timeout_s", timeout_s)
-            if sc.kind != "time":
-                jobs.append(Job(pname, sc.name, params, overrides, None,
-                                tuple(s.name for s in chosen), {}, limit,
-                                job_digest(sc, params, chosen, {})))
+            pl = _prefixed(where, planner.plan, sc, overrides, c.get("solvers"),
+                           {k: v for k, v in c.get("settings", {}).items() if k in runs},
+                           knobs, limits, timeout_s=c.get("timeout_s", timeout_s))
+            cases.append(Case(pname, sc, pl.params, list(pl.solvers), name if point else None,
+                              point))
+            if pl.t_out is None:                  # a frequency case: one job, all its solvers
+                jobs.append(Job(pname, sc.name, pl.params, overrides, None, tuple(pl.names), {},
+                                pl.timeout_s, pl.digest()))
                 continue
-            for s in chosen:
-                extra = c.get("settings", {}).get(s.name)
-                settings = _prefixed(f"{at}.settings.{s.name}", _settings, sc, s, c, extra, params)
-                _prefixed(where, budget.check_steps, s.name, s.leaf(sc.name), params, settings,
-                          max_steps)
-                jobs.append(Job(pname, sc.name, params, overrides, s.name, (s.name,), settings,
-                                limit, job_digest(sc, params, [s], settings)))
+            for s in pl.solvers:
+                jobs.append(Job(pname, sc.name, pl.params, overrides, s.name, (s.name,),
+                                pl.settings[s.name], pl.timeout_s, pl.only(s).digest()))
     return cases, jobs
 
 
@@ -448,15 +339,6 @@ def plan_maps(camp, src="built-in campaign", max_jobs=None):
                        m.get("engines", "boundary"), max_jobs or camp.get("max_jobs"))
         out.append((name, pl))
     return out
-
-
-def _settings(sc, s, c, extra, params):
-    leaf = s.leaf(sc.name)
-    unknown = sorted(set(extra or {}) - set(leaf.DEFAULT_SETTINGS))
-    if unknown:
-        raise BadInput(f"unknown settings {unknown} (known: {sorted(leaf.DEFAULT_SETTINGS)})")
-    return solvers.settings_for(s, sc.name, c.get("dt"), c.get("rtol"), c.get("integrator"),
-                                extra, t_out=sc.output_grid(params))
 
 
 # --- the jobs -------------------------------------------------------------------------------
@@ -518,38 +400,47 @@ def _sigint_ignored():
         signal.signal(signal.SIGINT, old)
 
 
-class Interrupted(Exception):
-    """Ctrl-C in a campaign: the workers were stopped; the message says what is kept."""
-
-
 def _stop_workers(ex, store):
     """Cancel what is queued and end the running jobs now. Their results are written under a
     temporary name and renamed when complete, so a stopped job leaves no result file; its
     temporary file (a dot-name) is removed here, under the folder's lock."""
-    procs = list((getattr(ex, "_processes", None) or {}).values())   # shutdown forgets them
-    if isinstance(ex, ProcessPoolExecutor):
-        ex.shutdown(wait=False, cancel_futures=True)
-    else:                              # Dask's executor: wait=False cancels its futures
-        ex.shutdown(wait=False)
-    for p in procs:
-        p.terminate()
-    for p in procs:
-        p.join(10)
+    stop(ex)
     for f in store.glob(".*"):
         f.unlink(missing_ok=True)
 
 
-def run_campaign(path, out, executor="local", scheduler=None, workers=None, timeout_s=None,
-                 verbose=False, max_output_gib=None, max_steps=None, view=None, max_jobs=None):
-    """Plan (everything validated), run what is not stored yet, report each case as its jobs
-    come in, then the campaign report. Returns the summary (also in summary.json)."""
-    camp = load_campaign(path)
-    src = str(path) if path else "built-in campaign"
+@dataclass
+class Prepared:
+    """A campaign planned: its cases' jobs and its maps, everything validated."""
+    camp: dict
+    cases: list
+    jobs: list
+    maps: list
+
+
+def prepare(source, timeout_s=None, max_output_gib=None, max_steps=None, max_jobs=None):
+    """The campaign (a file, a built-in name, None for the default, or the dict itself)
+    loaded and planned once: bad input raises BadInput before anything runs."""
+    if isinstance(source, dict):
+        check_shape(source, "campaign")
+        camp, src = source, "campaign"
+    else:
+        camp, src = load_campaign(source), str(source) if source else "built-in campaign"
     cases, jobs = plan(camp, src, timeout_s, max_output_gib, max_steps, max_jobs)
-    maps = plan_maps(camp, src, max_jobs)
+    return Prepared(camp, cases, jobs, plan_maps(camp, src, max_jobs))
+
+
+def run_campaign(path, out, executor="local", scheduler=None, workers=None, timeout_s=None,
+                 verbose=False, max_output_gib=None, max_steps=None, view=None, max_jobs=None,
+                 prepared=None):
+    """Plan (everything validated; `prepared`: planned already), run what is not stored yet,
+    report each case as its jobs come in, then the campaign report. Returns the summary (also
+    in summary.json)."""
+    p = prepared or prepare(path, timeout_s, max_output_gib, max_steps, max_jobs)
+    camp, cases, jobs, maps = p.camp, p.cases, p.jobs, p.maps
     view = view or PlainProgress()
     out_dir = Path(out) / "campaign" / camp.get("name", "campaign")
-    with guard.folder_lock(out_dir, "xval campaign", view.log):
+    with terminated_as_interrupt(), guard.folder_lock(out_dir, "xval campaign", view.log):
         try:
             return _run_locked(camp, cases, jobs, out_dir, view, executor, scheduler, workers,
                                verbose, maps)
@@ -626,13 +517,10 @@ def _run_map(name, pl, out_dir, executor, scheduler, workers, view):
     parameters, solver, settings, package versions, the models' code), so a rerun reuses
     them as it reuses cases."""
     from .maps import map_to_folder
-    sc = pl["scene"]
-    salt = {"store": STORE_VERSION, "code": job_code(sc, pl["chosen"]),
-            "versions": {s.name: solvers.versions(s) for s in pl["chosen"]}}
     view.note(f"map {name}: ~{pl['estimate']['runs']} runs")
     res = map_to_folder(pl, None, executor=executor, scheduler=scheduler, workers=workers,
                         store=out_dir / "jobs" / "map-points", log=view.log,
-                        out_dir=out_dir / "maps" / name, salt=salt)
+                        out_dir=out_dir / "maps" / name)
     res["name"] = name
     view.log(f"map {name}: {sum(res['runs'].values())} runs, {res['reused']} reused")
     return res

@@ -1,10 +1,27 @@
 """Where jobs run: a local process pool (embedded, nothing to start) or Dask distributed (a
-LocalCluster, or a running scheduler's address); campaigns and maps use the same two."""
+LocalCluster, or a running scheduler's address); campaigns and maps use the same two.
+
+The pool's workers die with the process that started them: each sets the kernel's parent-death
+signal (Linux `prctl(PR_SET_PDEATHSIG, SIGKILL)`) and watches its parent from a thread (any
+POSIX system; a worker busy inside a compiled kernel sees it when the kernel returns), so a
+`kill -9` of `xval campaign` / `xval map` leaves no worker behind, and the resource tracker,
+whose pipe the workers held, ends with them. `terminated_as_interrupt()` turns SIGTERM into
+the Ctrl-C path (finished jobs kept, one line saying how to resume, the lock released).
+"""
+import ctypes
 import multiprocessing
+import os
 import signal
+import sys
+import threading
+import time
 from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
 
 from ..errors import BadInput
+
+PR_SET_PDEATHSIG = 1
+WATCH_S = 1.0              # how often a worker looks for its parent
 
 
 def connect(scheduler, timeout_s=10):
@@ -20,6 +37,26 @@ def connect(scheduler, timeout_s=10):
         raise BadInput(f"--scheduler {scheduler}: no Dask scheduler answers there "
                        f"({type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''})"
                        ) from None
+
+
+def _worker_init(parent, ignore_sigint):
+    """In each pool worker: die with `parent` (the kernel's signal where there is one, and a
+    thread that polls `getppid`); a campaign's workers also ignore SIGINT."""
+    if ignore_sigint:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        except (OSError, AttributeError):
+            pass
+    if os.getppid() != parent:         # the parent died before the signal was armed
+        os._exit(1)
+
+    def watch():
+        while os.getppid() == parent:
+            time.sleep(WATCH_S)
+        os._exit(1)
+    threading.Thread(target=watch, daemon=True, name="xval-parent-watch").start()
 
 
 def make_executor(kind, scheduler, workers, ignore_sigint=False):
@@ -40,7 +77,42 @@ def make_executor(kind, scheduler, workers, ignore_sigint=False):
     # a campaign's workers ignore SIGINT: Ctrl-C reaches the whole process group, and only the
     # main process decides what happens (stop the workers, keep what is stored, say how to
     # resume); other callers keep the default (a worker's KeyboardInterrupt ends its job)
-    quiet = dict(initializer=signal.signal, initargs=(signal.SIGINT, signal.SIG_IGN)) \
-        if ignore_sigint else {}
     return ProcessPoolExecutor(max_workers=workers or 2,
-                               mp_context=multiprocessing.get_context("spawn"), **quiet), None
+                               mp_context=multiprocessing.get_context("spawn"),
+                               initializer=_worker_init,
+                               initargs=(os.getpid(), ignore_sigint)), None
+
+
+class Interrupted(Exception):
+    """Ctrl-C or SIGTERM in a campaign or map: the workers were stopped; the message says what
+    is kept."""
+
+
+def stop(ex):
+    """Cancel what is queued and end the running jobs now (Ctrl-C, SIGTERM)."""
+    procs = list((getattr(ex, "_processes", None) or {}).values())   # shutdown forgets them
+    if isinstance(ex, ProcessPoolExecutor):
+        ex.shutdown(wait=False, cancel_futures=True)
+    else:                              # Dask's executor: wait=False cancels its futures
+        ex.shutdown(wait=False)
+    for p in procs:
+        p.terminate()
+    for p in procs:
+        p.join(10)
+
+
+@contextmanager
+def terminated_as_interrupt():
+    """SIGTERM raises KeyboardInterrupt in the main thread while the block runs, so that a
+    `kill` takes the Ctrl-C path (workers stopped, finished jobs kept, lock released)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def on_term(signum, frame):
+        raise KeyboardInterrupt()
+    old = signal.signal(signal.SIGTERM, on_term)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)

@@ -27,6 +27,7 @@ from ..analysis.trajectory import Trajectory
 from ..atomic import write_json, write_text
 from ..errors import BadInput
 from ..scenes import Extreme, Scene, get_scene
+from .plan import Knobs, plan
 
 HONEST = ("diverged", "unstable", "singular", "timeout")
 
@@ -70,20 +71,26 @@ def reference_check(sc: Scene, tr: Trajectory, ref: Trajectory, bound: float):
                    (_own_error(tr, k) + _own_error(ref, k)) / scale)
 
 
-def _settings(solver, sc, case, params):
-    """The solver's accurate settings with the case's overrides where the solver has the key
-    (an integrator it does not offer is left out), checked against the output grid."""
-    leaf = solver.leaf(sc)
-    over = {k: v for k, v in case.settings.items() if k in leaf.DEFAULT_SETTINGS}
+def _plan(solver, sc, case, params, timeout_s):
+    """One solver's plan of the case: its accurate settings with the case's overrides where the
+    solver has the key (an integrator it does not offer is left out), checked against the
+    output grid and the budgets."""
+    info = solver.info(sc)
+    over = {k: v for k, v in case.settings.items() if k in info.defaults}
     integrator = over.pop("integrator", None)
-    if integrator is not None and integrator not in leaf.INTEGRATORS:
+    if integrator is not None and integrator not in info.integrator_names:
         integrator = None
-    base = solvers.settings_for(solver, sc.name)
-    dt = over.get("dt", base.get("dt"))
+    dt = over.get("dt", {**info.defaults, **solver.preset}.get("dt"))
     if isinstance(dt, float) and dt > params["output_dt"] and "dt" not in case.settings:
         over["dt"] = params["output_dt"]      # a fine output grid: its default step must fit
-    return solvers.settings_for(solver, sc.name, integrator=integrator, extra=over,
-                                t_out=sc.output_grid(params))
+    return plan(sc, case.set, [solver.name], over, Knobs(integrator=integrator),
+                timeout_s=timeout_s)
+
+
+def _run(pl):
+    (s,) = pl.solvers
+    return solvers.simulate(pl.scene, s, pl.params, pl.settings[s.name], pl.timeout_s,
+                            estimate_error=True, t_out=pl.t_out)
 
 
 def run_case(sc: Scene, case: Extreme, chosen, timeout_s=None, log=print) -> list[dict]:
@@ -91,19 +98,18 @@ def run_case(sc: Scene, case: Extreme, chosen, timeout_s=None, log=print) -> lis
     names = [s for s in chosen if not case.solvers or s.name in case.solvers]
     ref = None
     if case.check == "reference":
-        rs = solvers.get_solver(sc.reference_solvers[0])
-        ref = solvers.simulate(sc, rs, params, solvers.settings_for(rs, sc.name), timeout_s,
-                               estimate_error=True)
+        ref = _run(plan(sc, case.set, [sc.reference_solvers[0]], timeout_s=timeout_s))
     rows = []
     for s in names:
         try:
-            st = _settings(s, sc, case, params)
+            pl = _plan(s, sc, case, params, timeout_s)
         except BadInput as e:
             rows.append({"case": case.name, "solver": s.name, "outcome": "not applicable",
                          "value": None, "detail": str(e)})
             log(f"{sc.name} {case.name} {s.name}: not applicable — {e}")
             continue
-        tr = solvers.simulate(sc, s, params, st, timeout_s, estimate_error=True)
+        st = pl.settings[s.name]
+        tr = _run(pl)
         row = {"case": case.name, "solver": s.name, "status": tr.status, "t_fail": tr.t_fail,
                "wall_s": tr.wall_s, "settings": {k: st.get(k) for k in case.settings}}
         if tr.status == "ok":

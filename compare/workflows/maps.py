@@ -31,8 +31,9 @@ from .. import solvers
 from ..atomic import write_json
 from ..errors import BadInput
 from ..scenes import get_scene
-from . import budget
-from .executors import make_executor
+from . import plan as planner
+from .digest import STORE_VERSION, job_code
+from .executors import Interrupted, make_executor, stop, terminated_as_interrupt
 
 NONE = "none"                     # an observable's label where its event did not happen
 MAX_JOBS = 100_000                # runs a map may plan before it is refused (--max-jobs)
@@ -447,7 +448,6 @@ def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolutio
     for a in (x_axis, y_axis):
         if a and a.name in overrides:
             raise BadInput(f"--set {a.name}: it is an axis of the map")
-    chosen = solvers.pick(sc, solver_names)
     coarse = tuple(coarse) if isinstance(coarse, (list, tuple)) else (
         (coarse,) if coarse else ())
     if not all(isinstance(n, int) and not isinstance(n, bool) for n in coarse) \
@@ -458,9 +458,11 @@ def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolutio
         coarse = (coarse[0], 1)
     if coarse[0] < 2 or (y_axis and coarse[1] < 2):
         raise BadInput("coarse grid: at least 2 points along each axis")
-    budget.check_output(sc, overrides, 1)
-    params = sc.resolve({**overrides, x_axis.name: x_axis.lo,
-                         **({y_axis.name: y_axis.lo} if y_axis else {})})
+    # every solver's settings checked at the low corner; a run holds one solver's output
+    pl = planner.plan(sc, {**overrides, x_axis.name: x_axis.lo,
+                           **({y_axis.name: y_axis.lo} if y_axis else {})}, solver_names,
+                      limits=planner.Limits(together=False))
+    params, chosen = pl.params, list(pl.solvers)
     for corner in (x_axis.hi,):
         sc.resolve({**overrides, x_axis.name: corner})
     runs, secs = estimate(sc, x_axis, y_axis, chosen, resolution, coarse, engines, params)
@@ -471,7 +473,8 @@ def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolutio
                        f"pass --max-jobs")
     return {"scene": sc, "x": x_axis, "y": y_axis, "overrides": overrides, "chosen": chosen,
             "resolution": resolution, "coarse": coarse, "observable": observable,
-            "level": level, "engines": engines, "estimate": {"runs": runs, "seconds": secs}}
+            "level": level, "engines": engines, "estimate": {"runs": runs, "seconds": secs},
+            "settings": pl.settings}
 
 
 def is_engine(s):
@@ -493,9 +496,7 @@ def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=N
     ys = np.linspace(ya.lo, ya.hi, ny) if ya else [None]
     coarse_step = xs[1] - xs[0]
     runner = Runner(sc, plan["overrides"], what, executor, workers, store, log, salt)
-    t_out = sc.output_grid(sc.resolve(plan["overrides"]))
-    settings = {s.name: (settings_for(s) if settings_for
-                         else solvers.settings_for(s, sc.name, t_out=t_out))
+    settings = {s.name: (settings_for(s) if settings_for else plan["settings"][s.name])
                 for s in plan["chosen"]}
     customs = [s for s in plan["chosen"] if not is_engine(s)]
     engines = [s for s in plan["chosen"] if is_engine(s)]
@@ -537,7 +538,7 @@ def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=N
         found[s.name] = (crossings(lines[s.name], xa, ya) if what is None
                          else level_crossings(lines[s.name], level))
         if what is None and found[s.name]:
-            tight, _, _ = solvers.tighter_settings(s.leaf(sc), settings[s.name])
+            tight, _, _ = solvers.tighter_settings(s.info(sc), settings[s.name])
             crossing_errors(runner, s.name, settings[s.name], tight, lines[s.name],
                             found[s.name], xa, width, y_name)
     wall = time.perf_counter() - t0
@@ -618,11 +619,24 @@ def map_to_folder(plan, out, settings_for=None, executor="local", scheduler=None
     out_dir = Path(out_dir) if out_dir else map_dir(out, plan["scene"].name)
     out_dir.mkdir(parents=True, exist_ok=True)
     workers = workers or 2
+    if store is not None and salt is None:       # stored points are valid while these hold
+        sc = plan["scene"]
+        salt = {"store": STORE_VERSION, "code": job_code(sc, plan["chosen"]),
+                "versions": {s.name: solvers.versions(s) for s in plan["chosen"]}}
     pool, client = make_executor(executor, scheduler, workers)
+    stopped = False
     try:
-        result = run_map(plan, settings_for, pool, workers, store, log, salt)
+        with terminated_as_interrupt():
+            result = run_map(plan, settings_for, pool, workers, store, log, salt)
+    except KeyboardInterrupt:
+        stopped = True
+        stop(pool)
+        n = len(list(Path(store).glob("*.json"))) if store else 0
+        raise Interrupted(f"{n} map points are stored in {store} and will be reused"
+                          if store else "map stopped") from None
     finally:
-        pool.shutdown(wait=True)
+        if not stopped:
+            pool.shutdown(wait=True)
         if client is not None:
             client.close()
     result["files"] = write_map_outputs(out_dir, result, record)
@@ -636,7 +650,6 @@ def throughput(scene_name, solver_names, overrides, n_points, workers=2, log=Non
     (a grid over its axes), through the map's own batch path: the worker pool warmed up first
     (models loaded and compiled in every worker), then the points timed, one solver at a
     time (`xval bench SCENE --points N`)."""
-    from .executors import make_executor
     sc = get_scene(scene_name)
     if not sc.maps:
         raise BadInput(f"--points: scene {sc.name!r} declares no map to take points from")
@@ -650,12 +663,11 @@ def throughput(scene_name, solver_names, overrides, n_points, workers=2, log=Non
     ys = np.linspace(ya.lo, ya.hi, ny) if ya else [None]
     pts = [_pt(xa.name, x, ya.name if ya else None, y)
            for y in ys for x in np.linspace(xa.lo, xa.hi, nx)][:n_points]
-    t_out = sc.output_grid(sc.resolve(base))
     pool, client = make_executor("local", None, workers)
     rows = []
     try:
         for s in plan["chosen"]:
-            st = solvers.settings_for(s, sc.name, t_out=t_out)
+            st = plan["settings"][s.name]
             runner = Runner(sc, base, spec.observable, pool, workers)
             runner.run([(s.name, st, p) for p in pts[:2 * workers]])        # warm-up
             runner = Runner(sc, base, spec.observable, pool, workers)

@@ -21,6 +21,7 @@ from ..atomic import atomic_path, write_json, write_text
 from ..errors import BadInput
 from ..output import mode_shapes
 from ..scenes import Scene, get_scene
+from .plan import plan
 from .runner import new_run_dir
 
 
@@ -273,8 +274,8 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
     sc = get_scene(scene_name)
     if sc.kind != "modes":
         raise BadInput(f"scene {sc.name!r} is a time-domain scene: use `xval run {sc.name}`")
-    params = sc.resolve(overrides)
-    chosen = solvers.pick(sc, solver_names)
+    pl = plan(sc, overrides, solver_names)
+    params, chosen = pl.params, list(pl.solvers)
     out_dir = Path(out_dir or new_run_dir(out, sc.name))
     out_dir.mkdir(parents=True, exist_ok=True)
     results = []

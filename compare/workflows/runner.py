@@ -61,13 +61,22 @@ def new_run_dir(out: str | Path, scene_name: str) -> Path:
     return Path(out) / "runs" / f"{scene_name}-{stamp}-{os.getpid()}"
 
 
+def execute(plan, out_dir: str | Path, record: bool = True, report: bool = True,
+            log: Callable | None = None) -> RunResult:
+    """Run a time scene's `Plan` (compare/workflows/plan.py): every solver at its planned
+    settings on the planned grid, compared, recorded and reported."""
+    return run_scene(plan.scene, plan.params, list(plan.solvers),
+                     lambda s: plan.settings[s.name], out_dir, record, report, log,
+                     plan.timeout_s, plan.estimate_errors, plan.t_out)
+
+
 def run_scene(scene: Scene, params: dict, chosen: list[Solver], settings_for: Callable,
               out_dir: str | Path, record: bool = True, report: bool = True,
               log: Callable | None = None, timeout_s: float | None = None,
-              estimate_errors: bool = True) -> RunResult:
+              estimate_errors: bool = True, t_out=None) -> RunResult:
     """Simulate `scene` with each solver in `chosen`; `settings_for(solver)` gives settings;
     `timeout_s` bounds each solver's wall time; `estimate_errors` reruns each solver tighter
-    (where the scene allows) so the verdicts weigh its own error."""
+    (where the scene allows) so the verdicts weigh its own error; `t_out`: the planned grid."""
     out_dir = Path(out_dir)
     marker = guard.mark_incomplete(out_dir)      # removed after result.json, the last file
     trajectories, files = [], {}
@@ -75,7 +84,7 @@ def run_scene(scene: Scene, params: dict, chosen: list[Solver], settings_for: Ca
         if log:
             log(f"{scene.name}: running {s.name} …")
         tr = solvers.simulate(scene, s, params, settings_for(s), timeout_s,
-                              estimate_errors and scene.error_estimate)
+                              estimate_errors and scene.error_estimate, t_out=t_out)
         files[s.name] = tr.save(out_dir / f"{s.name}.npz")
         if log:
             log(f"{scene.name}: {s.name} {tr.status} in {tr.wall_s:.3g} s"

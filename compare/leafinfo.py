@@ -1,0 +1,230 @@
+"""A leaf as the rest of xval sees it — read once per leaf module, the only place that reads a
+leaf's attributes (`DEFAULT_SETTINGS`, `INTEGRATORS`, `ADAPTIVE`, `AUTO_DT`, `MODES_SETTINGS`,
+`ORDERS`, `check_settings`, `regimes`) — and the accuracy knobs as types: `Fixed(dt)` or
+`Adaptive(rtol, atol)`, each with its tighter setting, its step count and its ladder (the
+shape of scipy's `OdeSolver`, which carries its own order, and diffrax's step-size controllers).
+"""
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from types import ModuleType
+
+import numpy as np
+
+from .contract import canonical_integrator, merge_settings
+from .errors import BadInput
+
+# the order a method should show (a leaf may declare its own `ORDERS`); the bench flags an
+# observed convergence order below it
+ORDERS = {"euler": 1, "explicit_euler": 1, "midpoint": 2, "linacc": 2, "rk4": 4, "rk44": 4,
+          "rk67": 6, "generalized_alpha": 2, "trapezoidal": 2, "imr": 2, "implicitfast": 1,
+          "implicit": 1}
+RTOLS = tuple(10.0 ** -k for k in range(1, 14))     # the tolerance ladder, 1e-1 … 1e-13
+START_RTOL = 1e-6
+MAX_DOUBLINGS = 7          # a fixed step goes at most 2^7 coarser or finer than the default
+
+
+def _number(x):
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+
+def snap(dt, dt_out):
+    """Largest step ≤ dt that divides the output step into whole steps."""
+    return dt_out / max(1, int(np.ceil(dt_out / dt - 1e-9)))
+
+
+@dataclass(frozen=True)
+class Fixed:
+    """A fixed step: halving it is the tighter run; an order-p method's error is
+    2^p/(2^p − 1) ≤ 2 times |y − y_half|."""
+    dt: float
+    error_factor = 2.0
+
+    def tighter(self) -> Fixed:
+        return Fixed(self.dt / 2)
+
+    def steps(self, t_end: float) -> float:
+        return t_end / self.dt
+
+    def apply(self, settings: dict) -> dict:
+        return {**settings, "dt": self.dt}
+
+    def text(self) -> str:
+        return f"dt {self.dt:g}"
+
+    def ladder(self, dt_out: float, t_end: float) -> tuple[list[Fixed], int]:
+        """Steps coarse → fine around this one (factors of ~2: up to the output step snapped
+        to its divisors, above it multiples 2^m of it that divide the horizon) and this
+        step's index."""
+        dt0, coarse = self.dt, {dt_out}
+        for j in range(1, MAX_DOUBLINGS + 1):
+            c = dt0 * 2 ** j
+            if c <= dt_out * (1 + 1e-9):
+                coarse.add(snap(c, dt_out))
+            else:
+                c = dt_out * 2 ** round(np.log2(c / dt_out))
+                if c <= t_end / 8 and abs(t_end / c - round(t_end / c)) < 1e-9:
+                    coarse.add(c)
+        coarse = sorted((c for c in coarse if c > dt0 * (1 + 1e-9)), reverse=True)
+        fine = list(dict.fromkeys(snap(dt0 / 2 ** j, dt_out) if dt0 <= dt_out
+                                  else dt0 / 2 ** j for j in range(MAX_DOUBLINGS + 1)))
+        return [Fixed(d) for d in coarse + fine], len(coarse)
+
+
+@dataclass(frozen=True)
+class Adaptive:
+    """An error-controlled method: a tolerance 100× tighter is the tighter run (exact by
+    comparison: factor 1); its steps are not known in advance."""
+    rtol: float
+    atol: float | None = None
+    # an error-controlled order-p method's error goes as tol^(p/(p+1)): the 100× tighter rerun
+    # keeps up to 100^(-1/2) = 1/10 of the run's error, which |Δ| misses (factor 1 fell 0.4 %
+    # short on the quaternion rotor's tilt against a 1000× tighter run)
+    error_factor = 10 / 9
+
+    def tighter(self) -> Adaptive:
+        return Adaptive(self.rtol / 100, None if self.atol is None else self.atol / 100)
+
+    def steps(self, t_end: float) -> None:
+        return None
+
+    def apply(self, settings: dict) -> dict:
+        return {**settings, "rtol": self.rtol,
+                **({} if self.atol is None else {"atol": self.atol})}
+
+    def text(self) -> str:
+        return f"rtol {self.rtol:g}"
+
+    @staticmethod
+    def ladder() -> tuple[list[Adaptive], int]:
+        return [Adaptive(r) for r in RTOLS], RTOLS.index(START_RTOL)
+
+
+@dataclass(frozen=True)
+class Integrator:
+    name: str
+    order: int | None
+    adaptive: bool
+
+
+@dataclass(frozen=True)
+class LeafInfo:
+    """What xval knows of one leaf module (`leaf_info(module_name)`, built once)."""
+    module: ModuleType
+    defaults: dict | None          # DEFAULT_SETTINGS (time leaves; None: a frequency leaf)
+    modes_defaults: dict           # MODES_SETTINGS (frequency leaves)
+    integrators: tuple             # Integrator records, in the leaf's order
+    auto_dt: dict                  # integrator -> the number behind dt="auto"
+    own_check: bool                # the leaf checks settings against the grid itself
+    batch_regimes: bool            # the leaf classifies many runs in one compiled call
+
+    @property
+    def name(self) -> str:
+        return self.module.__name__
+
+    @property
+    def adaptive(self) -> tuple[str, ...]:
+        return tuple(i.name for i in self.integrators if i.adaptive)
+
+    @property
+    def fixed(self) -> tuple[str, ...]:
+        return tuple(i.name for i in self.integrators if not i.adaptive)
+
+    @property
+    def integrator_names(self) -> tuple[str, ...]:
+        return tuple(i.name for i in self.integrators)
+
+    def order(self, integrator: str) -> int | None:
+        return next((i.order for i in self.integrators if i.name == integrator), None)
+
+    def resolve(self, dt=None, rtol=None, integrator=None, extra=None) -> dict:
+        """The leaf's accurate defaults with the user's knobs applied.
+
+        `dt` moves an adaptive default to the leaf's fixed-step method, `rtol` moves a
+        fixed-step default to its adaptive one; a leaf without the requested kind keeps its
+        own (and the settings actually used say so)."""
+        s = dict(self.defaults or {})
+        adaptive, fixed, names = self.adaptive, self.fixed, self.integrator_names
+        if integrator is not None:
+            offered = [canonical_integrator(i) for i in names]
+            if canonical_integrator(integrator) not in offered:
+                raise BadInput(f"integrator: {integrator!r} is not offered by this solver "
+                               f"(choose: {', '.join(offered)})")
+            s["integrator"] = names[offered.index(canonical_integrator(integrator))]
+        if dt is not None:
+            s["dt"] = dt
+            if s.get("integrator") in adaptive and integrator is None and fixed:
+                s["integrator"] = "rk4" if "rk4" in fixed else fixed[0]
+        if rtol is not None:
+            if adaptive:
+                s["rtol"] = rtol
+                if s.get("integrator") not in adaptive and integrator is None:
+                    s["integrator"] = adaptive[0]
+            # else: no error-controlled integrator; its fixed step stays (the CLI says so)
+        s.update(extra or {})
+        return s
+
+    def check(self, settings: dict, t_out: np.ndarray | None = None) -> dict:
+        """The leaf's own check where it has one, else the shared merge (unknown keys,
+        integrator); ValueError with one line."""
+        if self.own_check:
+            return self.module.check_settings(settings, t_out)
+        if self.defaults is not None:
+            return merge_settings(settings, self.defaults, self.integrator_names)
+        return merge_settings(settings, self.modes_defaults, ())
+
+    def knob(self, settings: dict) -> Fixed | Adaptive | None:
+        """The accuracy knob `settings` turn: a tolerance for an error-controlled method, else
+        a step ("auto" read as the leaf's `AUTO_DT`); None where neither is a number (a
+        stability-bound explicit step)."""
+        if settings.get("integrator") in self.adaptive and _number(settings.get("rtol")):
+            atol = settings.get("atol")
+            return Adaptive(settings["rtol"], atol if _number(atol) else None)
+        dt = settings.get("dt")
+        if dt == "auto":
+            dt = self.auto_dt.get(settings.get("integrator"))
+        return Fixed(dt) if _number(dt) and dt > 0 else None
+
+    def steps(self, settings: dict, t_end: float) -> tuple[float, float] | None:
+        """(steps, dt) of one run with a fixed step; None for an error-controlled method (its
+        steps are not known in advance; the output grid bounds its memory)."""
+        if settings.get("integrator") in self.adaptive:
+            return None
+        k = self.knob(settings)
+        return None if k is None else (k.steps(t_end), k.dt)
+
+    def tighter(self, settings: dict) -> tuple[dict | None, float, str]:
+        """Settings for the run's own error estimate, the factor that turns |y − y_tight| into
+        the error of the run, and how (see `Fixed`, `Adaptive`)."""
+        k = self.knob(settings)
+        if k is None:
+            return None, 0.0, "no accuracy knob"
+        tight = k.tighter()
+        return tight.apply(settings), k.error_factor, tight.text()
+
+
+_INFO: dict = {}
+
+
+def leaf_info(module_name: str) -> LeafInfo:
+    """The leaf module's view, built once (again only where the module object changed: a
+    test that puts a stand-in under the same name)."""
+    leaf = importlib.import_module(module_name)       # a dict look-up once imported
+    info = _INFO.get(module_name)
+    if info is None or info.module is not leaf:
+        info = _INFO[module_name] = _build(leaf)
+    return info
+
+
+def _build(leaf: ModuleType) -> LeafInfo:
+    adaptive = tuple(getattr(leaf, "ADAPTIVE", ()))
+    orders = {**ORDERS, **getattr(leaf, "ORDERS", {})}
+    integrators = tuple(Integrator(n, orders.get(n), n in adaptive)
+                        for n in getattr(leaf, "INTEGRATORS", ()))
+    defaults = getattr(leaf, "DEFAULT_SETTINGS", None)
+    return LeafInfo(module=leaf, defaults=None if defaults is None else dict(defaults),
+                    modes_defaults=dict(getattr(leaf, "MODES_SETTINGS", {})),
+                    integrators=integrators, auto_dt=dict(getattr(leaf, "AUTO_DT", {})),
+                    own_check=hasattr(leaf, "check_settings"),
+                    batch_regimes=hasattr(leaf, "regimes"))

@@ -22,7 +22,7 @@ import numpy as np
 from .. import solvers
 from ..analysis import metrics
 from ..errors import BadInput
-from ..scenes import get_scene
+from .plan import plan
 
 H = 1e-4            # the finite-difference step, relative
 EPS_MAX = 1.0       # a change of 100 % that flips nothing: the parameter is not verified
@@ -47,24 +47,22 @@ def _scaled(value, factor):
 
 
 class _Study:
-    """One scene at one set of parameters: the nominal runs (with error estimates) and
-    verdicts, and the runs of one solver with one parameter changed."""
+    """One plan: the nominal runs (with error estimates) and verdicts, and the runs of one
+    solver with one parameter changed (the plan's settings and grid, other parameters)."""
 
-    def __init__(self, scene, params, chosen, timeout_s=None):
-        self.sc, self.p, self.chosen, self.timeout_s = scene, params, chosen, timeout_s
-        self.settings = {s.name: solvers.settings_for(s, scene.name) for s in chosen} \
-            if scene.kind == "time" else {}
+    def __init__(self, pl):
+        self.pl, self.sc, self.p, self.chosen = pl, pl.scene, pl.params, pl.solvers
         self.n_runs = 0
-        self.nominal = {s.name: self._run(s, params, estimate=True) for s in chosen}
+        self.nominal = {s.name: self._run(s, self.p, estimate=True) for s in self.chosen}
         self.base = self.compare(self.nominal)
 
     def _run(self, solver, params, estimate=False):
         self.n_runs += 1 + bool(estimate and self.sc.error_estimate)
         if self.sc.kind == "modes":
             return solvers.modes(self.sc, solver, params)
-        return solvers.simulate(self.sc, solver, params, self.settings[solver.name],
-                                self.timeout_s, estimate and self.sc.error_estimate,
-                                warm_up=False)
+        return solvers.simulate(self.sc, solver, params, self.pl.settings[solver.name],
+                                self.pl.timeout_s, estimate and self.sc.error_estimate,
+                                warm_up=False, t_out=self.pl.t_out)
 
     def compare(self, runs: dict) -> list:
         rs = [runs[s.name] for s in self.chosen]
@@ -202,16 +200,15 @@ def run_power(scene_name: str, overrides: dict, names: list[str],
               log: Callable = print) -> dict:
     """`xval power`: the table parameter × solver → ε*, with the summary line and the cost."""
     t0 = time.perf_counter()
-    sc = get_scene(scene_name)
-    p = sc.resolve(overrides)
-    chosen = solvers.pick(sc, names)
+    pl = plan(scene_name, overrides, names, timeout_s=timeout_s)
+    sc, chosen = pl.scene, pl.solvers
     physical = [q.name for q in sc.params if q.continuous_physical]
     for name in parameters or []:
         if name not in physical:
             sc.param(name)                    # unknown: BadInput with the list
             raise BadInput(f"{name}: not a continuous physical parameter of {sc.name} "
                            f"(those are: {', '.join(physical)})")
-    study = _Study(sc, p, chosen, timeout_s)
+    study = _Study(pl)
     rows = []
     for name in parameters or physical:
         for s in chosen:

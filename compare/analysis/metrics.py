@@ -74,20 +74,26 @@ def allowance_si(allowance: float | tuple, scale: float) -> float:
     return allowance[1] * scale + allowance[2]
 
 
+def allowance(tolerances: dict, a: str, b: str, channel: str):
+    """The modelling allowance of the pair (a, b) on `channel`: the pair's own ("by_pair",
+    keyed "a|b" in either order), else that of the first of its solvers with one ("by_solver":
+    e.g. the paper's own, non-conservative model), else the channel's."""
+    pairs, solvers = tolerances.get("by_pair", {}), tolerances.get("by_solver", {})
+    found = [pairs.get(k, {}).get(channel) for k in (f"{a}|{b}", f"{b}|{a}")]
+    found += [solvers.get(s, {}).get(channel) for s in (a, b)]
+    return next((x for x in found if x is not None), tolerances[channel])
+
+
 def pairwise(trajectories: list[Trajectory], tolerances: dict) -> list[Comparison]:
-    """Every pair on every channel of `tolerances` (channel -> allowance). An optional entry
-    "by_solver": {solver: {channel: allowance}} is a larger modelling allowance for the pairs
-    that involve that solver (e.g. the paper's own, non-conservative model)."""
-    by_solver = tolerances.get("by_solver", {})
+    """Every pair on every channel of `tolerances` (channel -> allowance; `allowance` reads
+    the pair's own from "by_pair" / "by_solver")."""
     out = []
     for i, a in enumerate(trajectories):
         for b in trajectories[i + 1:]:
-            for ch, allow in tolerances.items():
-                if ch == "by_solver":
-                    continue
-                extra = [by_solver.get(s, {}).get(ch) for s in (a.solver, b.solver)]
-                extra = [x for x in extra if x is not None]
-                out.append(deviation(a, b, ch, extra[0] if extra else allow))
+            for ch in tolerances:
+                if not ch.startswith("by_"):
+                    out.append(deviation(a, b, ch, allowance(tolerances, a.solver, b.solver,
+                                                             ch)))
     return out
 
 
@@ -164,17 +170,27 @@ def match_modes(fa: list, la: list, fb: list, lb: list) -> list[tuple[int, int]]
     return sorted(pairs)
 
 
-def frequency_comparisons(results: list[Modes], tolerance: float,
-                          by_solver: dict | None = None) -> list[Comparison]:
-    """Every pair of solvers, mode by mode, as Comparisons (channel = the mode's label).
-    `tolerance`: relative allowance between solvers of one model; `by_solver`: a larger
-    modelling allowance for a pair that involves that solver (e.g. a rigid-segment chain whose
-    sections carry rotary inertia the Euler–Bernoulli model has not)."""
+def frequency_allowance(tolerances: dict, a: str, b: str) -> float:
+    """The relative allowance of the pair (a, b) on frequencies: the pair's own
+    ("frequency_by_pair", "a|b" in either order), else the larger of "frequency" and a
+    "frequency_by_solver" entry of its solvers (e.g. a rigid-segment chain whose sections
+    carry rotary inertia the Euler–Bernoulli model has not)."""
+    pairs = tolerances.get("frequency_by_pair", {})
+    for k in (f"{a}|{b}", f"{b}|{a}"):
+        if k in pairs:
+            return pairs[k]
+    by_solver = tolerances.get("frequency_by_solver", {})
+    return max([tolerances["frequency"]] + [by_solver.get(s, 0.0) for s in (a, b)])
+
+
+def frequency_comparisons(results: list[Modes], tolerances: dict) -> list[Comparison]:
+    """Every pair of solvers, mode by mode, as Comparisons (channel = the mode's label), each
+    pair against its `frequency_allowance` from the scene's `tolerances`."""
     out = []
     ok = [r for r in results if r.status == "ok"]
     for i, a in enumerate(ok):
         for b in ok[i + 1:]:
-            tol = max([tolerance] + [(by_solver or {}).get(s, 0.0) for s in (a.solver, b.solver)])
+            tol = frequency_allowance(tolerances, a.solver, b.solver)
             for ia, ib in match_modes(list(a.frequencies_hz), a.labels,
                                       list(b.frequencies_hz), b.labels):
                 fa, fb = a.frequencies_hz[ia], b.frequencies_hz[ib]

@@ -48,7 +48,8 @@ def kind(a, b):
 
 
 def channels(scene):
-    return [c for c in scene.tolerances if not c.startswith(("by_", "frequency_"))]
+    from compare.analysis.metrics import allowance_channels
+    return allowance_channels(scene.tolerances)
 
 
 def measure_time(scene, params, trajectories):

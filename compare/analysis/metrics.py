@@ -84,17 +84,18 @@ def allowance(tolerances: dict, a: str, b: str, channel: str):
     return next((x for x in found if x is not None), tolerances[channel])
 
 
+def allowance_channels(tolerances: dict) -> list[str]:
+    """The channels `tolerances` gives allowances for (not its "by_pair", "by_solver",
+    "frequency_by_…" tables, nor "wider": pair -> the scene's reason for a wider one)."""
+    return [c for c in tolerances if not c.startswith(("by_", "frequency_by_", "wider"))]
+
+
 def pairwise(trajectories: list[Trajectory], tolerances: dict) -> list[Comparison]:
     """Every pair on every channel of `tolerances` (channel -> allowance; `allowance` reads
     the pair's own from "by_pair" / "by_solver")."""
-    out = []
-    for i, a in enumerate(trajectories):
-        for b in trajectories[i + 1:]:
-            for ch in tolerances:
-                if not ch.startswith("by_"):
-                    out.append(deviation(a, b, ch, allowance(tolerances, a.solver, b.solver,
-                                                             ch)))
-    return out
+    return [deviation(a, b, ch, allowance(tolerances, a.solver, b.solver, ch))
+            for i, a in enumerate(trajectories) for b in trajectories[i + 1:]
+            for ch in allowance_channels(tolerances)]
 
 
 def energy_residual(traj: Trajectory, channel: str = "energy_balance") -> float | None:

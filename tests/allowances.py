@@ -1,7 +1,7 @@
 """What each pair of solvers was measured to deviate by, per scene and case: the numbers every
 modelling allowance is set from (issue 26, item 5).
 
-`python -m tests.allowances [SCENE …]` reruns the cases and rewrites tests/allowances.json
+`python -m tests.allowances [SCENE …] [--case=NAME …]` reruns the cases and rewrites tests/allowances.json
 (minutes; the engines' full sail deployment, `--long`, about 10 min more). tests/
 test_allowances.py reads the table, checks every allowance against it (≤ 10 × measured, or a
 documented exception) and reruns one cheap case per scene to check the table is what the
@@ -12,12 +12,14 @@ own error estimate max(err_a + err_b) where both estimate one, and the deviation
 it, max(0, max|Δ| − err). Frequencies: max relative difference over the paired modes (no
 error estimates)."""
 import json
+import os
 import sys
 from pathlib import Path
 
 import numpy as np
 
-TABLE = Path(__file__).with_name("allowances.json")
+TABLE = Path(os.environ.get("XVAL_ALLOWANCES_TABLE",
+                          Path(__file__).with_name("allowances.json")))
 ENGINES = ("exudyn", "mujoco")
 
 # (case name, parameter overrides, solvers (None: all of the scene's)); the campaign's cases,
@@ -184,13 +186,16 @@ def main(argv):
         return 0
     long = "--long" in argv
     names = [a for a in argv if not a.startswith("--")]
-    table = json.loads(TABLE.read_text()) if TABLE.exists() else {}
+    only = [a.split("=", 1)[1] for a in argv if a.startswith("--case=")]
     for scene, cases in CASES.items():
         if names and scene not in names:
             continue
         for case, overrides, solver_names in cases + (LONG.get(scene, []) if long else []):
+            if only and case not in only:
+                continue
             print(f"{scene} {case} …", flush=True)
             rows, status = run_case(scene, overrides, solver_names)
+            table = json.loads(TABLE.read_text()) if TABLE.exists() else {}
             table.setdefault(scene, {})[case] = {"set": overrides, "status": status,
                                                  "rows": rows}
             TABLE.write_text(json.dumps(table, indent=1, sort_keys=True) + "\n")

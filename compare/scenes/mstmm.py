@@ -41,7 +41,10 @@ SHAFT_TOLERANCES = {"frequency": 1e-8, "frequency_by_solver": {"exudyn": 3e-6, "
 # rest ≤ 1.34e-3 (lag differential 1)
 CLAMPED_TOLERANCES = {"frequency": 5e-6, "frequency_by_solver": BLADE_ENGINE_ALLOWANCE,
                       "frequency_by_pair": {"exudyn|mujoco": 5e-7}}
-HOVER_TOLERANCES = {"frequency": 1e-4, "frequency_by_solver": BLADE_ENGINE_ALLOWANCE}
+# helicopter-hover (8 modes), same cases: mstmm–fem ≤ 4.2e-5 (fuselage 1 at speed), exudyn–mujoco
+# ≤ 6.0e-7, custom–engine at rest ≤ 1.62e-4 (flap cyclic 2)
+HOVER_TOLERANCES = {"frequency": 1e-4, "frequency_by_solver": {"exudyn": 5e-4, "mujoco": 5e-4},
+                    "frequency_by_pair": {"exudyn|mujoco": 3e-6}}
 
 
 # The paper's computing times (mean of 3 runs): Table 1, the five modes at 0, 20 and 40 rad/s,

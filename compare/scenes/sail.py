@@ -164,22 +164,24 @@ SAIL = Scene(
                                     "thread-spool-conservative|exudyn",
                                     "thread-spool-conservative|mujoco", "exudyn|mujoco")}},
     # a run of ≤ 2 s (the campaign's sail-deploy-2s) is not a full deployment: its own
-    # allowances, measured at 2 s (case 2s), left beyond the estimates (relative; tip in rad):
-    # conservative–Exudyn hub 7.7e-8, tip 2.8e-6 rad, length 1.4e-8, angular momentum 1.7e-11;
-    # conservative–MuJoCo 2.8e-8, 2.8e-6 rad, 2.6e-9, 2.6e-14; Exudyn–MuJoCo 8.1e-8, 3.4e-10
-    # rad, 1.4e-8, 1.7e-11; the paper's model against each: hub 1.7e-5, tip ≤ 2.5e-6 rad
-    # (1.2e-6 against conservative, inside its estimates), angular momentum 1.7e-5, length as
-    # the other solver's (1.7e-12 against conservative, inside the estimates)
+    # allowances, measured at 2 s and 0.2 s (cases 2s, 0.2s), left beyond the estimates
+    # (relative; tip in rad, length in m): conservative–Exudyn hub 7.7e-8, tip 2.8e-6 rad,
+    # length 1.0e-9 m, angular momentum 1.7e-11; conservative–MuJoCo 2.8e-8, 2.8e-6 rad,
+    # 1.8e-10 m, 2.6e-14; Exudyn–MuJoCo 8.1e-8, 3.4e-10 rad, 1.0e-9 m, 1.7e-11; the paper's
+    # model against each: hub 1.7e-5, tip ≤ 2.5e-6 rad (1.2e-6 against conservative, inside
+    # its estimates), angular momentum 1.7e-5, length as the other solver's (1.2e-13 m against
+    # conservative, inside the estimates); the length's deviation is a fixed offset in metres
     allowance_cases=(AllowanceCase("t_end ≤ 2 s", lambda p: p["t_end"] <= 2.0, {
-        "hub_rate": 3e-7, "tip_angle": ("abs", 1e-5), "deployed_length": 5e-8,
+        "hub_rate": 3e-7, "tip_angle": ("abs", 1e-5), "deployed_length": ("abs", 3e-9),
         "angular_momentum": 5e-11,
         "by_solver": {"thread-spool": {"hub_rate": 5e-5, "tip_angle": ("abs", 5e-6),
                                        "angular_momentum": 5e-5}},
         "by_pair": {"thread-spool-conservative|mujoco": {"hub_rate": 1e-7,
-                                                         "deployed_length": 1e-8,
+                                                         "deployed_length": ("abs", 5e-10),
                                                          "angular_momentum": 1e-13},
-                    "thread-spool|mujoco": {"deployed_length": 1e-8},
-                    "thread-spool|thread-spool-conservative": {"deployed_length": 1e-11},
+                    "thread-spool|mujoco": {"deployed_length": ("abs", 5e-10)},
+                    "thread-spool|thread-spool-conservative": {"deployed_length": ("abs",
+                                                                                   1e-12)},
                     "exudyn|mujoco": {"tip_angle": ("abs", 1e-9)}}}),),
     key_channel="tip_angle",
     reference_solvers=("thread-spool-conservative", "exudyn"),

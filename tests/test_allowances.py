@@ -50,12 +50,16 @@ def _close(new, old):
 @pytest.mark.parametrize("scene", sorted(CHEAP))
 def test_stored_measurements_are_what_the_solvers_give_today(scene):
     case = TABLE[scene][CHEAP[scene]]
-    rows, status = allowances.run_case(scene, case["set"], list(case["status"]))
+    names = [n for n in SCENES[scene].leaves if n in case["status"]]   # the scene's order
+    rows, status = allowances.run_case(scene, case["set"], names)
     assert status == case["status"]
-    stored = {(r["a"], r["b"], r["channel"]): r for r in case["rows"]}
-    assert {(r["a"], r["b"], r["channel"]) for r in rows} == set(stored)
+
+    def key(r):
+        return frozenset((r["a"], r["b"])), r["channel"]
+    stored = {key(r): r for r in case["rows"]}
+    assert {key(r) for r in rows} == set(stored)
     for r in rows:
-        s = stored[(r["a"], r["b"], r["channel"])]
+        s = stored[key(r)]
         for k in ("max_abs", "left"):
             assert _close(r[k] / r["scale"], s[k] / s["scale"]), (r["a"], r["b"], r["channel"],
                                                                   k, r[k], s[k])

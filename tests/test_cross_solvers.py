@@ -48,9 +48,8 @@ def verdicts(scene_name, custom, change=None):
                                          estimate_error=sc.error_estimate))
     assert all(r.status == "ok" for r in runs), [(r.solver, r.status, r.reason) for r in runs]
     if sc.kind == "modes":
-        return metrics.frequency_comparisons(runs, sc.tolerances["frequency"],
-                                             sc.tolerances.get("frequency_by_solver"))
-    return metrics.pairwise(runs, sc.tolerances)
+        return metrics.frequency_comparisons(runs, sc.tolerances_for(p))
+    return metrics.pairwise(runs, sc.tolerances_for(p))
 
 
 @pytest.mark.parametrize("scene_name, custom", PAIRS, ids=lambda x: x)

@@ -95,21 +95,28 @@ def allowance_si(allowance: float | tuple, scale: float) -> float:
     return allowance[1] * scale + allowance[2]
 
 
+def allowance(tolerances: dict, a: str, b: str, channel: str):
+    """The modelling allowance of the pair (a, b) on `channel`: the pair's own ("by_pair",
+    keyed "a|b" in either order), else that of the first of its solvers with one ("by_solver":
+    e.g. the paper's own, non-conservative model), else the channel's."""
+    pairs, solvers = tolerances.get("by_pair", {}), tolerances.get("by_solver", {})
+    found = [pairs.get(k, {}).get(channel) for k in (f"{a}|{b}", f"{b}|{a}")]
+    found += [solvers.get(s, {}).get(channel) for s in (a, b)]
+    return next((x for x in found if x is not None), tolerances[channel])
+
+
+def allowance_channels(tolerances: dict) -> list[str]:
+    """The channels `tolerances` gives allowances for (not its "by_pair", "by_solver",
+    "frequency_by_…" tables, nor "wider": pair -> the scene's reason for a wider one)."""
+    return [c for c in tolerances if not c.startswith(("by_", "frequency_by_", "wider"))]
+
+
 def pairwise(trajectories: list[Trajectory], tolerances: dict) -> list[Comparison]:
-    """Every pair on every channel of `tolerances` (channel -> allowance). An optional entry
-    "by_solver": {solver: {channel: allowance}} is a larger modelling allowance for the pairs
-    that involve that solver (e.g. the paper's own, non-conservative model)."""
-    by_solver = tolerances.get("by_solver", {})
-    out = []
-    for i, a in enumerate(trajectories):
-        for b in trajectories[i + 1:]:
-            for ch, allow in tolerances.items():
-                if ch == "by_solver":
-                    continue
-                extra = [by_solver.get(s, {}).get(ch) for s in (a.solver, b.solver)]
-                extra = [x for x in extra if x is not None]
-                out.append(deviation(a, b, ch, extra[0] if extra else allow))
-    return out
+    """Every pair on every channel of `tolerances` (channel -> allowance; `allowance` reads
+    the pair's own from "by_pair" / "by_solver")."""
+    return [deviation(a, b, ch, allowance(tolerances, a.solver, b.solver, ch))
+            for i, a in enumerate(trajectories) for b in trajectories[i + 1:]
+            for ch in allowance_channels(tolerances)]
 
 
 def energy_residual(traj: Trajectory, channel: str = "energy_balance") -> float | None:
@@ -196,19 +203,29 @@ def frequency_errors(m: Modes) -> np.ndarray | None:
     return e if e.shape == np.shape(m.frequencies_hz) else None
 
 
-def frequency_comparisons(results: list[Modes], tolerance: float,
-                          by_solver: dict | None = None) -> list[Comparison]:
-    """Every pair of solvers, mode by mode, as Comparisons (channel = the mode's label).
-    `tolerance`: relative allowance between solvers of one model; `by_solver`: a larger
-    modelling allowance for a pair that involves that solver (e.g. a rigid-segment chain whose
-    sections carry rotary inertia the Euler–Bernoulli model has not). As for time channels,
-    the verdict is |Δ| ≤ allowance + both solvers' error estimates (`frequency_errors`),
-    where both give one."""
+def frequency_allowance(tolerances: dict, a: str, b: str) -> float:
+    """The relative allowance of the pair (a, b) on frequencies: the pair's own
+    ("frequency_by_pair", "a|b" in either order), else the larger of "frequency" and a
+    "frequency_by_solver" entry of its solvers (e.g. a rigid-segment chain whose sections
+    carry rotary inertia the Euler–Bernoulli model has not)."""
+    pairs = tolerances.get("frequency_by_pair", {})
+    for k in (f"{a}|{b}", f"{b}|{a}"):
+        if k in pairs:
+            return pairs[k]
+    by_solver = tolerances.get("frequency_by_solver", {})
+    return max([tolerances["frequency"]] + [by_solver.get(s, 0.0) for s in (a, b)])
+
+
+def frequency_comparisons(results: list[Modes], tolerances: dict) -> list[Comparison]:
+    """Every pair of solvers, mode by mode, as Comparisons (channel = the mode's label), each
+    pair against its `frequency_allowance` from the scene's `tolerances`. As for time
+    channels, the verdict is |Δ| ≤ allowance + both solvers' error estimates
+    (`frequency_errors`), where both give one."""
     out = []
     ok = [r for r in results if r.status == "ok"]
     for i, a in enumerate(ok):
         for b in ok[i + 1:]:
-            tol = max([tolerance] + [(by_solver or {}).get(s, 0.0) for s in (a.solver, b.solver)])
+            tol = frequency_allowance(tolerances, a.solver, b.solver)
             for ia, ib in match_modes(list(a.frequencies_hz), a.labels,
                                       list(b.frequencies_hz), b.labels):
                 fa, fb = a.frequencies_hz[ia], b.frequencies_hz[ib]

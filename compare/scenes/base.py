@@ -107,6 +107,17 @@ class PublishedTiming:
 
 
 @dataclass(frozen=True)
+class AllowanceCase:
+    """The allowances of a regime of the scene's parameters that its default allowances were
+    not measured in (a 2-s sail run is not a full deployment): where `when(params)` holds, the
+    run's verdicts use `tolerances` (a whole `Scene.tolerances` dict) instead. `name` says
+    which regime; the measurement behind it sits next to it in the scene file."""
+    name: str
+    when: Callable
+    tolerances: dict
+
+
+@dataclass(frozen=True)
 class Scene:
     name: str
     title: str
@@ -118,8 +129,14 @@ class Scene:
     channels: tuple[str, ...] = ()
     # per-channel modelling allowance, relative to the channel's scale (max |value| of the
     # pair) or ("abs", SI): what the models may differ by beyond the solvers' own errors —
-    # each set from a measured deviation, with the reason, in the scene file
+    # each set from a measured deviation, with the reason, in the scene file, ≤ 10 × it
+    # (tests/test_allowances.py). "by_pair" {"a|b": {channel: allowance}} gives a pair its
+    # own (engine–engine: both engines share one model), "by_solver" {solver: {…}} every pair
+    # with that solver; modes scenes: "frequency", "frequency_by_pair", "frequency_by_solver"
+    # (compare.analysis.metrics.allowance / frequency_allowance)
     tolerances: dict = field(default_factory=dict)
+    # regimes with allowances of their own (AllowanceCase, first match wins; `tolerances_for`)
+    allowance_cases: tuple = ()
     key_channel: str = ""           # the channel whose final value the benchmark measures
     energy_channel: str | None = "energy_balance"
     # a run whose energy balance drifts by more than this fraction of the energy scale is
@@ -194,6 +211,12 @@ class Scene:
         if self.kind == "time":
             self.output_grid(values)               # the grid must fit before anything runs
         return values
+
+    def tolerances_for(self, params):
+        """The allowances a run at `params` is judged by: the first allowance case that holds,
+        else the scene's."""
+        return next((c.tolerances for c in self.allowance_cases if c.when(params)),
+                    self.tolerances)
 
     def output_grid(self, params):
         t_end, dt = params["t_end"], params["output_dt"]

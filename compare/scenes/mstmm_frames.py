@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..analysis.metrics import frequency_allowance
+
 ENGINES = ("exudyn", "mujoco")
 
 
@@ -23,7 +25,6 @@ def explain(params, comparisons, modes_at, tolerances):
         return [], []
     rest = {n: modes_at(n, {**params, "speed": 0.0})
             for n in sorted({c.a for c in bad} | {c.b for c in bad})}
-    allow = tolerances.get("frequency_by_solver", {})
 
     def at_rest(a, b):
         """Largest relative difference of the two at rest, mode by mode in frequency
@@ -37,7 +38,7 @@ def explain(params, comparisons, modes_at, tolerances):
                     "compared mode by mode in frequency order):", ""]
     for c in bad:
         r = at_rest(c.a, c.b)
-        tol = max(allow.get(c.a, 0.0), allow.get(c.b, 0.0), tolerances["frequency"])
+        tol = frequency_allowance(tolerances, c.a, c.b)
         frame = r <= tol
         if not frame:
             why = f"not the frame alone: the pair differs at rest too ({r:.2e})"

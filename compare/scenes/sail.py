@@ -3,7 +3,7 @@ spec scene-sail.md)."""
 import numpy as np
 
 from ..physics import sail as phys
-from .base import Extreme, Finding, MapSpec, Scene
+from .base import AllowanceCase, Extreme, Finding, MapSpec, Scene
 from .params import Param, positive
 
 SOURCE = "seed 004 (constant-dimension spring–mass thread unwinding from a spool)"
@@ -146,18 +146,43 @@ SAIL = Scene(
         positive("output_dt", 0.05, "s", "output grid"),
     ),
     channels=phys.CHANNELS,     # each built once, by compare.physics.sail.channels
-    # Modelling allowances. The engines step at their explicit stability limit (no accuracy
-    # knob, so no error estimate): their allowance carries what they were measured to deviate
-    # from the conservative custom model. Measured: 2 s (`xval run sail-deploy --set t_end=2`):
-    # hub_rate ≤ 4.9e-7 rad/s (8e-8 of scale), tip 1e-5 of scale, deployed length 1e-9 m,
-    # angular momentum 4e-13; full deployment (previous session, n = 20): hub_rate ≤ 5.9e-5
-    # rad/s before the spool stops and 5e-4 rad/s (8e-5 of scale) in its transient, tip
-    # 1.3e-5 rad. The paper's model (`thread-spool`) differs by its non-conservative release:
-    # hub_rate 3.2e-3 of scale, tip 6.2e-4 rad, angular momentum 3.0e-3 (full deployment).
+    # Modelling allowances, whole deployment (t_end > 2 s; the short runs': SHORT_RUN below).
+    # The engines step at their explicit stability limit (no accuracy knob, so no error
+    # estimate): their allowance carries what they deviate from the conservative custom model.
+    # The paper's model (`thread-spool`) differs by its non-conservative release, left beyond
+    # the estimates against thread-spool-conservative (`python -m tests.allowances
+    # sail-deploy`, case full; tests/allowances.json): hub_rate 9.2e-4 of scale, tip 5.9e-4
+    # rad, angular momentum 3.0e-3; deployed length 3.9e-8 of scale (inside the estimates).
     tolerances={"hub_rate": 2e-4, "tip_angle": ("abs", 5e-5), "deployed_length": 1e-7,
                 "angular_momentum": 1e-10,
                 "by_solver": {"thread-spool": {"hub_rate": 5e-3, "tip_angle": ("abs", 1e-3),
-                                               "angular_momentum": 5e-3}}},
+                                               "angular_momentum": 5e-3}},
+                "wider": {p: "not in the default table: the engines' whole deployment runs "
+                          "in `xval campaign long` (earlier: hub_rate 8e-5 of scale, tip "
+                          "1.3e-5 rad)"
+                          for p in ("thread-spool|exudyn", "thread-spool|mujoco",
+                                    "thread-spool-conservative|exudyn",
+                                    "thread-spool-conservative|mujoco", "exudyn|mujoco")}},
+    # a run of ≤ 2 s (the campaign's sail-deploy-2s) is not a full deployment: its own
+    # allowances, measured at 2 s and 0.2 s (cases 2s, 0.2s), left beyond the estimates
+    # (relative; tip in rad, length in m): conservative–Exudyn hub 7.7e-8, tip 2.8e-6 rad,
+    # length 1.0e-9 m, angular momentum 1.7e-11; conservative–MuJoCo 2.8e-8, 2.8e-6 rad,
+    # 1.8e-10 m, 2.6e-14; Exudyn–MuJoCo 8.1e-8, 3.4e-10 rad, 1.0e-9 m, 1.7e-11; the paper's
+    # model against each: hub 1.7e-5, tip ≤ 2.5e-6 rad (1.2e-6 against conservative, inside
+    # its estimates), angular momentum 1.7e-5, length as the other solver's (1.2e-13 m against
+    # conservative, inside the estimates); the length's deviation is a fixed offset in metres
+    allowance_cases=(AllowanceCase("t_end ≤ 2 s", lambda p: p["t_end"] <= 2.0, {
+        "hub_rate": 3e-7, "tip_angle": ("abs", 1e-5), "deployed_length": ("abs", 3e-9),
+        "angular_momentum": 5e-11,
+        "by_solver": {"thread-spool": {"hub_rate": 5e-5, "tip_angle": ("abs", 5e-6),
+                                       "angular_momentum": 5e-5}},
+        "by_pair": {"thread-spool-conservative|mujoco": {"hub_rate": 1e-7,
+                                                         "deployed_length": ("abs", 5e-10),
+                                                         "angular_momentum": 1e-13},
+                    "thread-spool|mujoco": {"deployed_length": ("abs", 5e-10)},
+                    "thread-spool|thread-spool-conservative": {"deployed_length": ("abs",
+                                                                                   1e-12)},
+                    "exudyn|mujoco": {"tip_angle": ("abs", 1e-9)}}}),),
     key_channel="tip_angle",
     reference_solvers=("thread-spool-conservative", "exudyn"),
     invariant_channels=("angular_momentum",),

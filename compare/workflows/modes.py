@@ -282,8 +282,7 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
     for s in chosen:
         log(f"{sc.name}: {s.name} …")
         results.append(solvers.modes(sc, s, params))
-    comparisons = metrics.frequency_comparisons(results, sc.tolerances["frequency"],
-                                                sc.tolerances.get("frequency_by_solver"))
+    comparisons = metrics.frequency_comparisons(results, sc.tolerances_for(params))
     obj = {"scene": sc.name, "params": params,
            "runs": [{"solver": r.solver, "status": r.status, "wall_s": round(r.wall_s, 6),
                      "frequencies_hz": list(r.frequencies_hz), "labels": r.labels,
@@ -308,7 +307,7 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
     if sc.explain_frequencies and any(c.verdict == "disagree" for c in comparisons):
         rows, lines_md = sc.explain_frequencies(
             params, comparisons, lambda n, p: solvers.modes(sc, solvers.get_solver(n), p),
-            sc.tolerances)
+            sc.tolerances_for(params))
         obj["explanations"] = rows
         md += [""] + lines_md
     if sc.campbell and campbell_sweep and any(

@@ -67,9 +67,8 @@ class _Study:
     def compare(self, runs: dict) -> list:
         rs = [runs[s.name] for s in self.chosen]
         if self.sc.kind == "modes":
-            return metrics.frequency_comparisons(rs, self.sc.tolerances["frequency"],
-                                                 self.sc.tolerances.get("frequency_by_solver"))
-        return metrics.pairwise(rs, self.sc.tolerances)
+            return metrics.frequency_comparisons(rs, self.sc.tolerances_for(self.p))
+        return metrics.pairwise(rs, self.sc.tolerances_for(self.p))
 
     def perturbed(self, solver, name, eps):
         """The run of `solver` with parameter `name` × (1 + eps), its nominal error bars."""

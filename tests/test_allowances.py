@@ -1,0 +1,69 @@
+"""Every modelling allowance against what its pair was measured to deviate by (issue 26, item
+5): no wider than 10 × the measured deviation unless the scene file says why, and never
+narrower than it (the measured cases agree). The measurements are tests/allowances.json
+(`python -m tests.allowances` regenerates them); one cheap case per scene is rerun here to
+check the table is what the solvers produce today."""
+import json
+
+import numpy as np
+import pytest
+
+from compare.scenes import ORIGIN, SCENES
+from tests import allowances
+
+TABLE = json.loads(allowances.TABLE.read_text())
+ROWS = allowances.allowance_table(TABLE)
+
+# one cheap case per scene, rerun against the stored table (a few seconds each; the
+# helicopters' ~2 min each on a loaded 2-core machine: slow)
+CHEAP = {"rotor-spinup": "1.5Nm-1s", "rotor-whirl": "spin0", "bearing-rotor": "0.5s",
+         "press": "default", "press-cycle": "default", "sail-deploy": "0.2s",
+         "rotating-beam": "speed0", "spinning-shaft": "spin0",
+         "helicopter-clamped": "speed0", "helicopter-hover": "speed0"}
+
+
+def test_the_allowance_table(capsys):
+    with capsys.disabled():
+        print("\n" + allowances.markdown(ROWS))
+    assert {r["scene"] for r in ROWS} == {n for n in SCENES if n not in ORIGIN}
+
+
+@pytest.mark.parametrize("row", ROWS, ids=lambda r: f"{r['scene']}:{r['regime']}:{r['pair']}:"
+                                                   f"{r['channel']}")
+def test_every_allowance_is_measured_and_within_10x(row):
+    if row["ratio"] is None:
+        assert row["wider"], "no measured case judges this allowance and the scene file " \
+                             "gives no reason"
+        return
+    assert row["covers"], "a measured case deviates beyond its allowance (+ estimates)"
+    assert row["ratio"] <= 10 or row["wider"], (
+        f"allowance {allowances.fmt_allowance(row['allowance'])} is {row['ratio']:.3g} × the "
+        f"measured {row['measured']:.2e} ({row['cases']}) with no documented reason")
+
+
+def _close(new, old):
+    """Equal to 1e-6 of the deviation, or both at round-off (≤ 1e-13 of scale) within 10×."""
+    if abs(new - old) <= 1e-6 * max(abs(old), 1e-300):
+        return True
+    return max(new, old) <= 1e-13 and new <= 10 * old + 1e-300 and old <= 10 * new + 1e-300
+
+
+@pytest.mark.parametrize("scene", [pytest.param(s, marks=pytest.mark.slow)
+                                   if s.startswith("helicopter") else s for s in sorted(CHEAP)])
+def test_stored_measurements_are_what_the_solvers_give_today(scene):
+    case = TABLE[scene][CHEAP[scene]]
+    names = [n for n in SCENES[scene].leaves if n in case["status"]]   # the scene's order
+    rows, status = allowances.run_case(scene, case["set"], names)
+    assert status == case["status"]
+
+    def key(r):
+        return frozenset((r["a"], r["b"])), r["channel"]
+    stored = {key(r): r for r in case["rows"]}
+    assert {key(r) for r in rows} == set(stored)
+    for r in rows:
+        s = stored[key(r)]
+        for k in ("max_abs", "left"):
+            assert _close(r[k] / r["scale"], s[k] / s["scale"]), (r["a"], r["b"], r["channel"],
+                                                                  k, r[k], s[k])
+        assert (r["error_estimate"] is None) == (s["error_estimate"] is None)
+        assert np.isclose(r["scale"], s["scale"], rtol=1e-6)

@@ -132,13 +132,14 @@ def test_frequency_verdicts_weigh_the_solvers_error_estimates():
     def m(name, f, err=None):
         return Modes("x", name, np.array([f]), ["flap 1"],
                      extra={} if err is None else {"frequency_error_hz": [err]})
-    c, = metrics.frequency_comparisons([m("a", 10.0, 6e-6), m("b", 10.00001, 6e-6)], {"frequency": 1e-7})
+    TOL = {"frequency": 1e-7}
+    c, = metrics.frequency_comparisons([m("a", 10.0, 6e-6), m("b", 10.00001, 6e-6)], TOL)
     assert c.verdict == "agree" and c.error_estimate == pytest.approx(1.2e-5)
     assert c.ratio == pytest.approx(1e-5 / (1.2e-5 + 1.00001e-6), rel=1e-4)
     assert c.shown == "agree (marginal)"
-    c, = metrics.frequency_comparisons([m("a", 10.0, 4e-6), m("b", 10.00001, 4e-6)], {"frequency": 1e-7})
+    c, = metrics.frequency_comparisons([m("a", 10.0, 4e-6), m("b", 10.00001, 4e-6)], TOL)
     assert c.verdict == "disagree"
-    c, = metrics.frequency_comparisons([m("a", 10.0, 6e-6), m("b", 10.00001)], {"frequency": 1e-7})
+    c, = metrics.frequency_comparisons([m("a", 10.0, 6e-6), m("b", 10.00001)], TOL)
     assert c.verdict == "disagree" and c.error_estimate is None
 
 

@@ -351,7 +351,9 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
         if rows:
             obj["identified_from_free_response"] = rows
             md += [""] + lines_md
-    obj["incomplete"] += (obj.get("campbell") or {}).get("incomplete", [])
+    failed = {m["solver"] for m in obj["incomplete"]}
+    obj["incomplete"] += [m for m in (obj.get("campbell") or {}).get("incomplete", [])
+                          if m["solver"] not in failed]
     obj["status"], obj["summary"] = modes_status(comparisons, obj)
     md[1:1] = ["", f"**{obj['summary']}**"]
     write_text(out_dir / "report.md", "\n".join(md) + "\n")

@@ -113,13 +113,22 @@ def test_reported_critical_speeds_are_crossings_of_the_solver_itself():
     reported for the hovering helicopter (mstmm) satisfies that definition when the solver is
     run again at that speed, to 1e-8 of the frequency; a crossing the solver cannot confirm is
     not reported (the 'fuselage' lines pass between differently named modes below 10 rad/s,
-    where a parabola extrapolated a root to 4.98 rad/s from points at 4.54)."""
+    where a parabola extrapolated a root to 4.98 rad/s from points at 4.54): it is listed as
+    unconfirmed with why, and the solver run again at the lines' estimate indeed has no mode
+    of that name."""
     sc = get_scene("helicopter-hover")
     s = solvers.get_solver("mstmm")
     p = sc.resolve()
     values = sc.campbell.values(p)
-    crit = critical_speeds(sc, s, p, values, track(sweep(sc, s, p, values)))
+    unconfirmed = []
+    crit = critical_speeds(sc, s, p, values, track(sweep(sc, s, p, values)),
+                           unconfirmed=unconfirmed)
     assert crit
+    assert sorted(u["name"] for u in unconfirmed) == ["fuselage 1", "fuselage 2"]
+    for u in unconfirmed:
+        assert u["name"] not in crit and u["step"][0] < u["lines_estimate"] < u["step"][1]
+        assert f"no mode {u['name']!r}" in u["reason"]
+        assert u["name"] not in solvers.modes(sc, s, {**p, "speed": u["lines_estimate"]}).labels
     for name, v in crit.items():
         m = solvers.modes(sc, s, {**p, "speed": v})
         f = m.frequencies_hz[m.labels.index(name)]

@@ -391,8 +391,11 @@ def _unmatched(c, a, b, seen):
     bad = [r for r in (left, right) if r[2] != "ok"]
     if bad:
         return "incomplete", f"{what}: {b}'s run failed there ({_failed(bad[0])})"
+    same = {r[1] for r in rb} == {left[1]}
     return False, (f"{what} has no counterpart in {b}: {b} reads {left[1]} at "
-                   f"{left[0]:.6g} and {right[1]} at {right[0]:.6g}")
+                   f"{left[0]:.6g} and {right[1]} at {right[0]:.6g}"
+                   + (f" (and at all its {len(rb)} runs on the row, {rb[0][0]:.6g} to "
+                      f"{rb[-1][0]:.6g})" if same else ""))
 
 
 def _no_crossings(a, b, seen):

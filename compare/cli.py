@@ -383,6 +383,8 @@ def _finish(args, obj, results, comparisons):
                               if v is not None))
         for c in comparisons:
             print(f"{c.a} vs {c.b} {c.channel}: max rel {c.max_rel:.2e} → {c.verdict}")
+        if obj.get("summary"):             # a modes run: incomplete, unpaired, unconfirmed
+            print(obj["summary"])
         for k in ("recording", "report"):
             if obj.get(k):
                 print(f"{k}: {obj[k]}")

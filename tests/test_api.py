@@ -239,3 +239,36 @@ def test_bench_measures_rk4s_order():
     rk4 = next(o for o in s["orders"] if o["method"] == "rk4")
     assert abs(rk4["observed"] - 4) < 0.3
     assert str(s).splitlines()[-1] == f"report: {s.report}" and s.out_dir is None
+
+
+def test_a_failing_modes_solver_is_incomplete_and_assert_agree_fails(monkeypatch, tmp_path,
+                                                                     capsys):
+    """MuJoCo's linearisation raising (its leaf's `modes` replaced here): the run is
+    `incomplete` in the JSON, the report and the printed line, and `assert_agree` fails on it
+    although the two solvers left agree — before, it printed "2 of 2 agree" and passed. The
+    same two solvers alone agree and pass (the control); one solver alone compares nothing,
+    and that fails too."""
+    import reference_models.mujoco.rotor as leaf
+    both = ["closed-form", "euler-vector"]
+    ok = xval.modes("rotor-whirl", both, spin=41.3)
+    assert ok.status == "agree" and len(ok.comparisons) == 2
+    xval.assert_agree(ok)
+
+    def boom(params, settings):
+        raise RuntimeError("injected")
+    monkeypatch.setattr(leaf, "modes", boom)
+    r = xval.modes("rotor-whirl", both + ["mujoco"], spin=41.3)
+    why = "incomplete: mujoco error (RuntimeError: injected)"
+    obj = r.as_json()
+    assert obj["status"] == "incomplete" and obj["incomplete"][0]["solver"] == "mujoco"
+    assert obj["summary"] == f"2 of 2 comparisons agree; {why}"
+    assert why in Path(obj["report"]).read_text() and why in str(r)
+    with pytest.raises(AssertionError, match=why.replace("(", r"\(").replace(")", r"\)")):
+        xval.assert_agree(r)
+    main(["modes", "rotor-whirl", *[f"--solver={s}" for s in both + ["mujoco"]],
+          "--set", "spin=41.3", "--out", str(tmp_path)])
+    assert f"2 of 2 comparisons agree; {why}" in capsys.readouterr().out
+    one = xval.modes("rotor-whirl", ["closed-form"], spin=41.3)
+    assert one.status == "incomplete"
+    with pytest.raises(AssertionError, match="nothing was compared"):
+        xval.assert_agree(one)

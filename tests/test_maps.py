@@ -175,3 +175,58 @@ def test_a_crossing_that_vanishes_at_the_tighter_setting_is_unconfirmed_not_wide
     gone = maps.compare_boundaries({"a": a, "b": [crossing(2.0 + 1e-13, error=None,
                                                            unconfirmed=True)]}, 1e-12)
     assert gone[0]["verdict"] == "unconfirmed" and "vanishes" in gone[0]["why"][0]
+
+
+def _quaternion_and_mujoco(monkeypatch, mujoco_points=None):
+    """rotor-spinup over torque 2.5–3.5 by quaternion and MuJoCo, run in this process (so a
+    test can change what MuJoCo is given): the map's result and its printed summary."""
+    from compare.workflows.results import Summary
+    if mujoco_points:                  # MuJoCo given other parameters, through the scene's own
+        orig = maps.evaluate_chunk
+
+        def chunk(scene, solver, base, points, settings, what):
+            return orig(scene, solver, base, [mujoco_points(p) for p in points]
+                        if solver == "mujoco" else points, settings, what)
+        monkeypatch.setattr(maps, "evaluate_chunk", chunk)
+    plan = maps.plan_map("rotor-spinup", "torque=2.5:3.5", overrides=BASE,
+                         solver_names=["quaternion", "mujoco"], resolution=0.05, coarse=(3, 1))
+    res = maps.run_map(plan)
+    return res, str(Summary("map", res, None))
+
+
+def test_a_crossing_the_other_solver_does_not_find_is_disagree_never_dropped(monkeypatch):
+    """MuJoCo given half the torque (1.25–1.75 N·m, all below the passage at ~3.05 N·m) finds
+    no crossing where quaternion finds capture → passage: the pair disagrees, MuJoCo's own
+    runs around quaternion's crossing say why, and the map's status counts it. Unchanged, the
+    same map agrees (the control: the verdict can go both ways)."""
+    res, text = _quaternion_and_mujoco(monkeypatch)
+    (v,) = res["verdicts"]
+    assert v["verdict"] == "agree" and res["status"]["status"] == "agree", v
+    res, text = _quaternion_and_mujoco(monkeypatch, lambda p: {**p, "torque": 0.5 * p["torque"]})
+    assert res["boundaries"]["mujoco"] == [] and len(res["boundaries"]["quaternion"]) == 1
+    (v,) = res["verdicts"]
+    assert v["verdict"] == "disagree" and "no counterpart in mujoco" in v["why"][0], v
+    assert "mujoco reads capture" in v["why"][0]
+    assert v["unmatched"] == [{"solver": "quaternion", "x": res["boundaries"]["quaternion"][0]
+                               ["x"], "y": None, "outcome": "disagree"}]
+    assert res["status"] == {"status": "disagree", "pairs": 1, "disagree": 1, "incomplete": 0,
+                             "unconfirmed": 0, "no data": 0, "agree": 0}
+    assert "quaternion vs mujoco: disagree" in text
+    assert "0 of 1 solver pairs agree; 1 disagree (status: disagree)" in text
+    from compare.output.map_plot import markdown
+    assert "| quaternion ~ mujoco | disagree |" in "\n".join(markdown(res))
+
+
+def test_a_solver_that_fails_makes_the_map_incomplete(monkeypatch):
+    """Every MuJoCo run raising: its runs around quaternion's crossing failed, so the pair is
+    `incomplete` (never agree, never left out), with the reason."""
+    import reference_models.mujoco.rotor as leaf
+
+    def boom(params, t_out, settings):
+        raise RuntimeError("injected")
+    monkeypatch.setattr(leaf, "simulate", boom)
+    res, text = _quaternion_and_mujoco(monkeypatch)
+    (v,) = res["verdicts"]
+    assert v["verdict"] == "incomplete" and "RuntimeError: injected" in v["why"][0], v
+    assert res["status"]["status"] == "incomplete" and res["status"]["incomplete"] == 1
+    assert "quaternion vs mujoco: incomplete" in text

@@ -167,10 +167,12 @@ def observed_order(steps, errors) -> float:
 
 # --- frequencies ---------------------------------------------------------------------------
 
-def match_modes(fa: list, la: list, fb: list, lb: list) -> list[tuple[int, int]]:
+def match_modes(fa: list, la: list, fb: list, lb: list, why: dict | None = None
+                ) -> list[tuple[int, int]]:
     """Pair the modes of two solvers: by label where both name a mode uniquely, else by nearest
     value — accepted only when it is nearer than half the gap to any other candidate, so two
-    close modes are never both paired with one. Returns [(i, j)] index pairs."""
+    close modes are never both paired with one. Returns [(i, j)] index pairs. `why`, if given,
+    receives for each mode left unpaired ("a", i) / ("b", j) the reason, in words."""
     pairs, used_a, used_b = [], set(), set()
     for i, name in enumerate(la):
         if la.count(name) == 1 and lb.count(name) == 1 and name:
@@ -180,16 +182,60 @@ def match_modes(fa: list, la: list, fb: list, lb: list) -> list[tuple[int, int]]
             used_b.add(j)
     cand = sorted((abs(fa[i] - fb[j]), i, j) for i in range(len(fa)) for j in range(len(fb))
                   if i not in used_a and j not in used_b)
+    refused = {}                      # the first (nearest) candidate refused, per mode
     for d, i, j in cand:
         if i in used_a or j in used_b:
             continue
-        others = [abs(fa[i] - fb[k]) for k in range(len(fb)) if k != j and k not in used_b]
-        others += [abs(fa[k] - fb[j]) for k in range(len(fa)) if k != i and k not in used_a]
-        if all(d < 0.5 * o for o in others):
+        others = [(abs(fa[i] - fb[k]), "b", k) for k in range(len(fb))
+                  if k != j and k not in used_b]
+        others += [(abs(fa[k] - fb[j]), "a", k) for k in range(len(fa))
+                   if k != i and k not in used_a]
+        if all(d < 0.5 * o for o, _, _ in others):
             pairs.append((i, j))
             used_a.add(i)
             used_b.add(j)
+        else:
+            o, side, k = min(others)
+            rival = f"{_mode(lb if side == 'b' else la, k)} of {side} at " \
+                    f"{fb[k] if side == 'b' else fa[k]:.10g} Hz"
+            text = (f"nearest by frequency: {{}} ({d:.2g} Hz away), but {rival} is "
+                    f"{o:.2g} Hz from the pair (pairing needs under half of it)")
+            refused.setdefault(("a", i), text.format(f"{_mode(lb, j)} of b at {fb[j]:.10g} Hz"))
+            refused.setdefault(("b", j), text.format(f"{_mode(la, i)} of a at {fa[i]:.10g} Hz"))
+    if why is not None:
+        for side, mine, theirs, f in (("a", la, lb, fb), ("b", lb, la, fa)):
+            used = used_a if side == "a" else used_b
+            for i in sorted(set(range(len(mine))) - used):
+                name = mine[i] if i < len(mine) else ""
+                label = ("" if not name else f"label {name!r} not among the other's; "
+                         if name not in theirs else f"label {name!r} not unique; ")
+                why[(side, i)] = label + (refused.get((side, i)) or (
+                    "no counterpart: every mode of the other solver is paired closer"
+                    if len(f) else "the other solver returned no modes"))
     return sorted(pairs)
+
+
+def _mode(labels, i):
+    return repr(labels[i]) if i < len(labels) and labels[i] else f"mode {i + 1}"
+
+
+def unpaired_modes(results: list[Modes]) -> list[dict]:
+    """Per pair of solvers that ran, each mode `match_modes` leaves unpaired, with why: listed,
+    never silently dropped from the comparison."""
+    out = []
+    ok = [r for r in results if r.status == "ok"]
+    for n, a in enumerate(ok):
+        for b in ok[n + 1:]:
+            why: dict = {}
+            match_modes(list(a.frequencies_hz), a.labels, list(b.frequencies_hz), b.labels,
+                        why)
+            for (side, i), reason in sorted(why.items()):
+                m = a if side == "a" else b
+                lab = m.labels[i] if i < len(m.labels) else ""
+                out.append({"a": a.solver, "b": b.solver, "solver": m.solver,
+                            "mode": lab or f"mode {i + 1}",
+                            "frequency_hz": float(m.frequencies_hz[i]), "reason": reason})
+    return out
 
 
 def frequency_errors(m: Modes) -> np.ndarray | None:

@@ -208,7 +208,8 @@ def write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed, 
                      for line in map_markdown(m)]]
         summary["maps"].append({"map": m["name"], "scene": m["scene"], "folder": str(rel),
                                 "runs": m["runs"], "reused": m["reused"],
-                                "boundaries": m["boundaries"], "verdicts": m["verdicts"]})
+                                "boundaries": m["boundaries"], "verdicts": m["verdicts"],
+                                "status": m.get("status")})
     report = out_dir / "report.md"
     write_text(report, "\n".join(md) + "\n")
     summary["report"] = str(report)

@@ -23,6 +23,17 @@ def _hex(c):
     return c if isinstance(c, str) else "#" + "".join(f"{int(v):02x}" for v in c[:3])
 
 
+def status_line(result) -> str:
+    """The map's verdicts in one line: how many solver pairs agree, every other verdict
+    counted (a `--strict` run fails on any of them)."""
+    st = result.get("status") or {}
+    others = [f"{st[k]} {k}" for k in ("disagree", "incomplete", "unconfirmed", "no data")
+              if st.get(k)]
+    return (f"map {result['scene']}: {st.get('agree', 0)} of {st.get('pairs', 0)} solver "
+            "pairs agree" + (f"; {', '.join(others)}" if others else "")
+            + f" (status: {st.get('status', '—')})")
+
+
 def plot_map(path, result):
     plt = plot_style()
     x, y = result["x"], result["y"]
@@ -58,12 +69,23 @@ def plot_map(path, result):
             ax.plot(bx, by, "o" if y else "|", ls="-" if i == 0 else "--",
                     ms=max(3, 10 - 2.5 * i), mew=2, lw=max(0.8, 2.5 - 0.6 * i), color=col,
                     label=f"{s} boundary", zorder=3 + i)
+        else:                       # in the legend all the same: a missing boundary shows
+            ax.plot([], [], "|", color=col, label=f"{s}: no crossing")
+    # crossings without a counterpart in another solver: a disagreement or a gap, never hidden
+    for outcome, mark, col in (("disagree", "X", "#d62728"), ("incomplete", "X", "#ff7f0e")):
+        miss = [u for v in result.get("verdicts", []) for u in v.get("unmatched", [])
+                if u["outcome"] == outcome]
+        if miss:
+            ax.plot([u["x"] for u in miss], [u["y"] if y else 0.0 for u in miss], mark,
+                    ms=11, color=col, mec="k", ls="none", zorder=10,
+                    label=f"no counterpart ({outcome})")
     ax.set_xlabel(f"{x['name']} [{x['unit']}]")
     ax.set_ylabel(f"{y['name']} [{y['unit']}]" if y else "")
     if not y:
         ax.set_yticks([])
     ax.set_title(f"map: {result['scene']}"
-                 + (f" — {result['observable']}" if result["observable"] else " — regimes"))
+                 + (f" — {result['observable']}" if result["observable"] else " — regimes")
+                 + (f"\n{status_line(result)}" if result.get("status") else ""), fontsize=9)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=7, loc="best")
     ax.grid(alpha=0.3)
@@ -101,9 +123,10 @@ def markdown(result):
                       f"{c['from']} → {c['to']} | {c['x']:.6g} | [{c['bracket'][0]:.6g}, "
                       f"{c['bracket'][1]:.6g}] | {'—' if e is None else f'{e:.2g}'} | "
                       f"{ {True: 'yes', False: 'no', None: '—'}[c.get('holds')] } |")
-    verdicts = [v for v in result["verdicts"] if v["verdict"] != "no data"]
+    verdicts = result["verdicts"]
     if verdicts:
-        md += ["", "| pair | verdict | why |", "|---|---|---|"]
+        md += ["", f"**{status_line(result)}**", "", "| pair | verdict | why |",
+               "|---|---|---|"]
         for v in verdicts:
             md.append(f"| {v['a']} ~ {v['b']} | {v['verdict']} | {'; '.join(v['why'])} |")
     md += ["", "![map](map.png)", ""]

@@ -346,51 +346,154 @@ def _settings_text(st):
     return ", ".join(f"{k}={v}" for k, v in st.items() if k in ("rtol", "dt", "integrator"))
 
 
-def compare_boundaries(boundaries, width):
+def readings(points, x_name, y_name, level=None):
+    """Every run of the map as {solver: {row: [(x, label, status, reason)] sorted by x}}: what
+    each solver read where, so a crossing without a counterpart can be judged against the other
+    solver's own runs around it."""
+    out = {}
+    for p in points:
+        if "regime" in p:
+            label = p["regime"]
+        else:
+            v = p["value"]
+            label = NONE if v is None else ("value" if level is None else
+                                            "above" if v >= level else "below")
+        row = p["params"].get(y_name) if y_name else None
+        out.setdefault(p["solver"], {}).setdefault(row, []).append(
+            (p["params"][x_name], label, p["status"], p.get("reason")))
+    for rows in out.values():
+        for r in rows.values():
+            r.sort(key=lambda t: t[0])
+    return out
+
+
+def _failed(r):
+    return f"{r[2]} at x = {r[0]:.6g}" + (f" ({r[3]})" if r[3] else "")
+
+
+def _unmatched(c, a, b, seen):
+    """A crossing of `a` with no crossing of the same regimes in `b` on its row: False
+    (disagree: b's own runs around it read no such crossing), "incomplete" (a run on either
+    side failed, or b ran nothing), or "outside" (b did not map there: not compared); with
+    the line that says why."""
+    what = f"{a}'s crossing {c['from']}→{c['to']} at x = {c['x']:.6g}{_row(c)}"
+    if seen is None:                      # nothing known of the runs: b's rows are mapped
+        return False, f"{what} has no counterpart in {b}"
+    mine = [r for r in seen.get(a, {}).get(c["y"], []) if r[0] in c["bracket"] and r[2] != "ok"]
+    if mine:
+        return "incomplete", f"{what}: a failed run of {a}, no regime ({_failed(mine[0])})"
+    if not seen.get(b):
+        return "incomplete", f"{what}: {b} ran no points"
+    rb = seen[b].get(c["y"], [])
+    if not rb or not rb[0][0] <= c["x"] <= rb[-1][0]:
+        return "outside", f"{what}: outside the region {b} mapped (not compared)"
+    left = [r for r in rb if r[0] <= c["x"]][-1]
+    right = next(r for r in rb if r[0] >= c["x"])
+    bad = [r for r in (left, right) if r[2] != "ok"]
+    if bad:
+        return "incomplete", f"{what}: {b}'s run failed there ({_failed(bad[0])})"
+    same = {r[1] for r in rb} == {left[1]}
+    return False, (f"{what} has no counterpart in {b}: {b} reads {left[1]} at "
+                   f"{left[0]:.6g} and {right[1]} at {right[0]:.6g}"
+                   + (f" (and at all its {len(rb)} runs on the row, {rb[0][0]:.6g} to "
+                      f"{rb[-1][0]:.6g})" if same else ""))
+
+
+def _no_crossings(a, b, seen):
+    """Neither solver finds a crossing: their regimes at the points both ran."""
+    if seen is None:
+        return None, "no crossing on a common row"
+    for s in (a, b):
+        if not seen.get(s):
+            return "incomplete", f"{s} ran no points"
+    ra = {(y, r[0]): r for y, rs in seen[a].items() for r in rs}
+    common = [(ra[k], r) for y, rs in seen[b].items() for r in rs if (k := (y, r[0])) in ra]
+    if not common:
+        return "incomplete", f"neither finds a crossing, and {a} and {b} ran no common point"
+    for p, q in common:
+        for s, r in ((a, p), (b, q)):
+            if r[2] != "ok":
+                return "incomplete", f"{s}'s run failed ({_failed(r)})"
+    diff = [(p, q) for p, q in common if p[1] != q[1]]
+    if diff:
+        p, q = diff[0]
+        return False, (f"neither finds a crossing, but at x = {p[0]:.6g} {a} reads {p[1]} and "
+                       f"{b} reads {q[1]} ({len(diff)} of {len(common)} common points differ)")
+    labels = ", ".join(sorted({p[1] for p, _ in common}))
+    return True, f"neither finds a crossing; both read {labels} at all {len(common)} common points"
+
+
+def compare_boundaries(boundaries, width, seen=None):
     """Per solver pair: each crossing of the first matched to the nearest of the second on the
     same row with the same regimes; `agree` when every matched distance is within
-    width + both error estimates + both half-brackets, and neither has unmatched crossings
-    inside the region the other mapped; `unconfirmed` where a crossing within that vanishes
-    at its solver's tighter setting (it has no error bar)."""
+    width + both error estimates + both half-brackets; `unconfirmed` where a crossing within
+    that vanishes at its solver's tighter setting (it has no error bar). A crossing of either
+    with no counterpart is judged against the other's own runs around it (`seen`, from
+    `readings`): `disagree` where they read no such crossing, `incomplete` where a run there
+    failed or the other ran nothing; where neither finds a crossing, their regimes at the
+    points both ran decide. Never silently dropped: every such crossing is in `why` and in
+    `unmatched`. Worst first: disagree, incomplete, unconfirmed, agree; `no data` only where
+    nothing could be compared (crossings outside the region the other mapped)."""
     names = list(boundaries)
     out = []
     for i, a in enumerate(names):
         for b in names[i + 1:]:
-            rows_b = {c["y"] for c in boundaries[b]}
-            pairs, lines = [], []
-            for ca in boundaries[a]:
-                if ca["y"] not in rows_b:
-                    continue
-                cands = [cb for cb in boundaries[b] if cb["y"] == ca["y"]
-                         and cb["from"] == ca["from"] and cb["to"] == ca["to"]]
-                if not cands:
-                    pairs.append(False)
-                    lines.append(f"{a}'s crossing {ca['from']}→{ca['to']} at x = "
-                                 f"{ca['x']:.6g}{_row(ca)} has no counterpart in {b}")
-                    continue
-                cb = min(cands, key=lambda c: abs(c["x"] - ca["x"]))
-                d = abs(cb["x"] - ca["x"])
-                bound = (width + (ca.get("error") or 0) + (cb.get("error") or 0)
-                         + 0.5 * (np.ptp(ca["bracket"]) + np.ptp(cb["bracket"])))
-                ok = d <= bound * (1 + 1e-9)
-                if ok and (ca.get("unconfirmed") or cb.get("unconfirmed")):
-                    ok = None
-                    lines.append(f"{ca['from']}→{ca['to']}{_row(ca)}: unconfirmed — the "
-                                 f"crossing of {a if ca.get('unconfirmed') else b} vanishes "
-                                 "at its tighter setting")
-                pairs.append(ok)
-                if ok is False:
-                    lines.append(f"{ca['from']}→{ca['to']}{_row(ca)}: {a} at {ca['x']:.6g} "
-                                 f"{_bracket(ca)}, {b} at {cb['x']:.6g} {_bracket(cb)}: "
-                                 f"{d:.3g} apart > {bound:.3g} (resolution + error "
-                                 f"estimates + half-brackets)")
-            verdict = ("no data" if not pairs else "disagree" if False in pairs
-                       else "unconfirmed" if None in pairs else "agree")
-            out.append({"a": a, "b": b, "verdict": verdict, "matched": len(pairs),
-                        "why": lines or ([f"all {len(pairs)} crossings within resolution + "
-                                          f"error estimates + half-brackets"] if pairs
-                                         else ["no crossing on a common row"])})
+            pairs, lines, unmatched, matched = [], [], [], 0
+            for one, other in ((a, b), (b, a)):
+                for ca in boundaries[one]:
+                    cands = [cb for cb in boundaries[other] if cb["y"] == ca["y"]
+                             and cb["from"] == ca["from"] and cb["to"] == ca["to"]]
+                    if not cands:
+                        got, line = _unmatched(ca, one, other, seen)
+                        if got != "outside":
+                            pairs.append(got)
+                        lines.append(line)
+                        unmatched.append({"solver": one, "x": ca["x"], "y": ca["y"],
+                                          "outcome": {False: "disagree"}.get(got, got)})
+                        continue
+                    if one == b:          # matched from a's side already
+                        continue
+                    matched += 1
+                    cb = min(cands, key=lambda c: abs(c["x"] - ca["x"]))
+                    d = abs(cb["x"] - ca["x"])
+                    bound = (width + (ca.get("error") or 0) + (cb.get("error") or 0)
+                             + 0.5 * (np.ptp(ca["bracket"]) + np.ptp(cb["bracket"])))
+                    ok = bool(d <= bound * (1 + 1e-9))
+                    if ok and (ca.get("unconfirmed") or cb.get("unconfirmed")):
+                        ok = None
+                        lines.append(f"{ca['from']}→{ca['to']}{_row(ca)}: unconfirmed — the "
+                                     f"crossing of {a if ca.get('unconfirmed') else b} "
+                                     "vanishes at its tighter setting")
+                    pairs.append(ok)
+                    if ok is False:
+                        lines.append(f"{ca['from']}→{ca['to']}{_row(ca)}: {a} at "
+                                     f"{ca['x']:.6g} {_bracket(ca)}, {b} at {cb['x']:.6g} "
+                                     f"{_bracket(cb)}: {d:.3g} apart > {bound:.3g} "
+                                     "(resolution + error estimates + half-brackets)")
+            if not boundaries[a] and not boundaries[b]:
+                got, line = _no_crossings(a, b, seen)
+                if got is not None:
+                    pairs.append(got)
+                lines.append(line)
+            verdict = ("disagree" if False in pairs else "incomplete" if "incomplete" in pairs
+                       else "unconfirmed" if None in pairs else "agree" if pairs
+                       else "no data")
+            why = lines or ([f"all {matched} crossings within resolution + error "
+                             "estimates + half-brackets"] if pairs else ["nothing compared"])
+            out.append({"a": a, "b": b, "verdict": verdict, "matched": matched, "why": why,
+                        "unmatched": unmatched})
     return out
+
+
+VERDICT_ORDER = ("disagree", "incomplete", "unconfirmed", "no data", "agree")
+
+
+def verdict_status(verdicts):
+    """The map's status for a CI: counts per verdict, and the worst verdict over its pairs
+    (`no comparison` for a map of one solver)."""
+    counts = {v: sum(1 for x in verdicts if x["verdict"] == v) for v in VERDICT_ORDER}
+    worst = next((v for v in VERDICT_ORDER if counts[v]), "no comparison")
+    return {"status": worst, "pairs": len(verdicts), **counts}
 
 
 def _row(c):
@@ -565,13 +668,14 @@ def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=N
                                # the point's own check: its regime rerun at tighter settings
                                # (points bracketing a crossing); None where not rerun
                                "error_estimate": tight})
+    verdicts = compare_boundaries(found, width, readings(points, xa.name, y_name, level))
     return {"scene": sc.name, "x": xa.as_dict(), "y": ya.as_dict() if ya else None,
             "set": plan["overrides"], "observable": what, "level": level,
             "resolution": plan["resolution"], "bracket_width": width,
             "coarse": list(plan["coarse"]), "engines": plan["engines"],
             "settings": settings, "estimate": plan["estimate"],
             "points": points, "boundaries": found,
-            "verdicts": compare_boundaries(found, width),
+            "verdicts": verdicts, "status": verdict_status(verdicts),
             "value_deviation": _value_deviation(lines) if what is not None else [],
             "slope_at_lo": slopes,
             "runs": dict(runner.runs), "uniform_grid_runs": uniform,

@@ -96,12 +96,14 @@ def _refine(gap, lo, hi, v0, d):
 
 
 def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: np.ndarray,
-                    lines: dict[str, np.ndarray], hint: dict | None = None) -> dict[str, float]:
+                    lines: dict[str, np.ndarray], hint: dict | None = None,
+                    unconfirmed: list | None = None) -> dict[str, float]:
     """Sweep values where a mode line crosses `order` × the excitation line, refined by root
     finding on the solver itself (the mode followed by label, else by nearest frequency).
     The first estimate is the lines' linear interpolation (±2 % of the step), or another
     solver's critical speed of the same name in `hint` (±1e-4 relative: solvers that agree
-    save half the modes runs; one that does not falls back to the whole step)."""
+    save half the modes runs; one that does not falls back to the whole step). A crossing of
+    the lines the solver does not confirm is appended to `unconfirmed` with the reason."""
     cb = scene.campbell
     if cb.excitation_hz is None:
         return {}
@@ -129,7 +131,8 @@ def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: 
                     v = (_refine(gap, lo, hi, near, 1e-4 * abs(near))
                          if near is not None and lo < near < hi
                          else _refine(gap, lo, hi, v0, 0.02 * (hi - lo)))
-                except (ValueError, IndexError):
+                except (ValueError, IndexError) as e:
+                    first = f"root finding on the solver: {e}"
                     # a body-frame linearisation can lose the mode exactly at the crossing
                     # (its body-frame frequency is 0 there): parabola through points beside it,
                     # its root taken only among them. Else the solver does not confirm the
@@ -138,13 +141,21 @@ def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: 
                     # 'fuselage' label below ~10 rad/s), and a root extrapolated from points
                     # near the lines' estimate (4.54 rad/s) to 4.98 was no critical speed.
                     x = v0 + 1e-3 * (hi - lo) * np.array([-3, -2, 2, 3.0])
+                    why = None
                     try:
                         y = np.array([gap(v) for v in x])
                         roots = np.roots(np.polyfit(x - v0, y, 2)).real + v0
                         v = float(roots[np.argmin(np.abs(roots - v0))])
-                    except (ValueError, IndexError):
-                        continue
-                    if not x[0] <= v <= x[-1]:
+                        if not x[0] <= v <= x[-1]:
+                            why = (f"the parabola's root {v:.6g} lies outside the points "
+                                   f"beside the estimate [{x[0]:.6g}, {x[-1]:.6g}]")
+                    except (ValueError, IndexError) as e:
+                        why = f"parabola beside the estimate: {e}"
+                    if why:
+                        if unconfirmed is not None:
+                            unconfirmed.append({"name": name, "lines_estimate": float(v0),
+                                                "step": [float(lo), float(hi)],
+                                                "reason": f"{first}; {why}"})
                         continue
                 out[name] = float(v)
     return out
@@ -217,15 +228,19 @@ def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print):
         if v not in memo[s.name]:
             memo[s.name][v] = solvers.modes(sc, s, {**params, cb.parameter: float(v)})
         return memo[s.name][v]
-    crit, usable = {}, []
+    crit, usable, unconfirmed, missing = {}, [], {}, []
     for s in chosen:
         tracked = track([at(s, float(v)) for v in values])
         if not tracked:
-            log(f"campbell {s.name}: a sweep point failed; no lines")
+            bad = next((m for m in memo[s.name].values() if m.status != "ok"), None)
+            missing.append({"solver": s.name, "reason": "a sweep point failed: no lines"
+                            + (f" ({bad.status}: {bad.reason})" if bad else "")})
+            log(f"campbell {s.name}: {missing[-1]['reason']}")
             continue
         usable.append(s)
         crit[s.name] = critical_speeds(sc, s, params, values, tracked,
-                                       hint=next(iter(crit.values()), None))
+                                       hint=next(iter(crit.values()), None),
+                                       unconfirmed=unconfirmed.setdefault(s.name, []))
     step = (values[-1] - values[0]) / max(len(values) - 1, 1)
     grid, per_point = campbell.sample(lambda v: [at(s, v) for s in usable], values,
                                       cb.refine if usable else 0, step / 2 ** cb.depth)
@@ -238,7 +253,9 @@ def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print):
            "lines_hz": {s: {k: none(v) for k, v in ln.items()} for s, ln in lines.items()},
            "line_mac": {s: {k: none(v) for k, v in d.mac.items()} for s, d in diagrams.items()},
            "events": {s: [e.as_dict() for e in ev] for s, ev in events.items()},
-           "min_mac_unmarked": {s: d.min_mac_unmarked() for s, d in diagrams.items()}}
+           "min_mac_unmarked": {s: d.min_mac_unmarked() for s, d in diagrams.items()},
+           "unconfirmed_critical_speeds": {s: u for s, u in unconfirmed.items() if u},
+           "incomplete": missing}
     if lines:
         _campbell_png(out_dir / "campbell.png", sc, grid, lines, crit, params, events)
         obj["recording"] = str(_campbell_rrd(out_dir / "campbell.rrd", sc, grid, lines))
@@ -254,6 +271,9 @@ def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print):
     md += ["", f"Critical {cb.parameter} [{cb.unit}] (a mode line crosses the excitation "
            "line):", ""]
     md += [f"- {n}: " + ", ".join(f"{k} {v:.6f}" for k, v in c.items()) for n, c in crit.items()]
+    md += [f"- {n}: {u['name']} unconfirmed (the lines cross near {u['lines_estimate']:.6g}): "
+           f"{u['reason']}" for n, us in unconfirmed.items() for u in us]
+    md += [f"- {m['solver']}: no critical speeds — {m['reason']}" for m in missing]
     md += ["", "![campbell](campbell.png)"]
     return obj, crit, md
 
@@ -290,7 +310,10 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
                      **({"notes": r.notes} if r.notes else {}),
                      **({k: list(np.ravel(v)) for k, v in r.extra.items()}),
                      **({"reason": r.reason} if r.reason else {})} for r in results],
-           "comparisons": [c.as_dict() for c in comparisons]}
+           "comparisons": [c.as_dict() for c in comparisons],
+           "unpaired_modes": metrics.unpaired_modes(results),
+           "incomplete": [{"solver": r.solver, "status": r.status, "reason": r.reason}
+                          for r in results if r.status != "ok"]}
     md = [f"# {sc.name}: {sc.title}", "", f"Source: {sc.source}", "",
           "| solver | status | frequencies [Hz] | labels | notes |", "|---|---|---|---|---|"]
     md += [f"| {r.solver} | {r.status} | {', '.join(f'{f:.8g}' for f in r.frequencies_hz)} | "
@@ -298,6 +321,11 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
     md += ["", "| a | b | mode | rel. difference | verdict |", "|---|---|---|---|---|"]
     md += [f"| {c.a} | {c.b} | {c.channel} | {c.max_rel:.2e} | {c.verdict} |"
            for c in comparisons]
+    if obj["unpaired_modes"]:
+        md += ["", "Modes left unpaired (not compared):", "",
+               "| a | b | solver | mode | frequency [Hz] | why |", "|---|---|---|---|---|---|"]
+        md += [f"| {u['a']} | {u['b']} | {u['solver']} | {u['mode']} | "
+               f"{u['frequency_hz']:.8g} | {u['reason']} |" for u in obj["unpaired_modes"]]
     if sc.mode_shape_3d:
         drawn = mode_shapes.write(out_dir, sc, params, results)
         if drawn:
@@ -323,7 +351,34 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
         if rows:
             obj["identified_from_free_response"] = rows
             md += [""] + lines_md
+    failed = {m["solver"] for m in obj["incomplete"]}
+    obj["incomplete"] += [m for m in (obj.get("campbell") or {}).get("incomplete", [])
+                          if m["solver"] not in failed]
+    obj["status"], obj["summary"] = modes_status(comparisons, obj)
+    md[1:1] = ["", f"**{obj['summary']}**"]
     write_text(out_dir / "report.md", "\n".join(md) + "\n")
     obj["report"] = str(out_dir / "report.md")
     write_json(out_dir / "result.json", obj)
     return obj, results, comparisons
+
+
+def modes_status(comparisons, obj) -> tuple[str, str]:
+    """The run's status and its one line: `incomplete` where a solver (or its Campbell sweep)
+    failed or nothing was compared, else `disagree` on any disagreement, else `agree`; the
+    unpaired modes and unconfirmed critical speeds counted alongside."""
+    n_ok = sum(c.verdict == "agree" for c in comparisons)
+    line = f"{n_ok} of {len(comparisons)} comparisons agree"
+    missing = [f"{m['solver']} " + (f"{m['status']} ({m['reason']})" if "status" in m
+                                    else m["reason"]) for m in obj["incomplete"]]
+    if missing:
+        line += "; incomplete: " + ", ".join(missing)
+    elif not comparisons:
+        line += "; incomplete: nothing compared"
+    unpaired = len(obj["unpaired_modes"])
+    unconf = sum(len(u) for u in ((obj.get("campbell") or {})
+                                  .get("unconfirmed_critical_speeds") or {}).values())
+    line += (f"; {unpaired} modes unpaired" if unpaired else "") + (
+        f"; {unconf} critical speeds unconfirmed" if unconf else "")
+    status = ("incomplete" if missing or not comparisons else
+              "disagree" if any(c.verdict != "agree" for c in comparisons) else "agree")
+    return status, line

@@ -63,7 +63,8 @@ def verdict_rows(comparisons: list[Comparison]) -> list[list[str]]:
 
 def disagreement_message(result, channels=None) -> str | None:
     """The verdict table of the comparisons on `channels` (default: all) that do not agree
-    (disagree, or skipped because a solver failed), or None when every one agrees."""
+    (disagree, or skipped because a solver failed), or None when every one agrees. A solver
+    that failed, or a run with nothing compared, is never agreement: the message says so."""
     chosen = [c for c in result.comparisons if channels is None or c.channel in channels]
     if channels is not None:
         compared = list(dict.fromkeys(c.channel for c in result.comparisons))
@@ -72,11 +73,17 @@ def disagreement_message(result, channels=None) -> str | None:
             raise BadInput(f"channels: {', '.join(unknown)} not compared in this run "
                            f"(compared: {', '.join(compared)})")
     bad = [c for c in chosen if c.verdict != "agree"]
-    if not bad:
+    missing = [f"{s} {r.status}" + (f" ({r.reason})" if r.reason else "")
+               for s, r in result.runs.items() if r.status != "ok"]
+    if not bad and not missing and chosen:
         return None
+    head = f"{len(bad)} of {len(chosen)} comparisons of {result.scene} do not agree"
+    if missing:
+        head += "; incomplete: " + ", ".join(missing)
+    if not chosen:
+        head += "; nothing was compared"
     rows = [r + [c.decided_by] for r, c in zip(verdict_rows(bad), bad)]
-    return (f"{len(bad)} of {len(chosen)} comparisons of {result.scene} do not agree:\n"
-            + _text(VERDICT_HEADER + ["decided by"], rows))
+    return head + (":\n" + _text(VERDICT_HEADER + ["decided by"], rows) if bad else "")
 
 
 class _Folder:
@@ -282,10 +289,10 @@ class ModesResult:
                                             m.labels or [""] * len(m.frequencies_hz)))
                  or (m.reason or "")] for s, m in self.runs.items()]
 
+    status = property(lambda self: self._obj.get("status"))
+
     def _title(self):
-        n_ok = sum(c.verdict == "agree" for c in self.comparisons)
-        return (f"{self.scene}: {len(self.runs)} solvers, {n_ok} of {len(self.comparisons)} "
-                "mode comparisons agree")
+        return f"{self.scene}: {len(self.runs)} solvers, {self._obj.get('summary')}"
 
     def _crit(self):
         return [f"critical {s}: " + ", ".join(f"{k} {v:.6f}" for k, v in c.items())
@@ -400,6 +407,7 @@ class Summary:
                     for r in d["power"]] + [d["summary"], f"{d['runs']} runs, "
                                                          f"{d['wall_s']:.1f} s"]
         if self.kind == "map":
+            from ..output.map_plot import status_line
             out = []
             for s, cs in d["boundaries"].items():
                 for c in cs:
@@ -407,7 +415,7 @@ class Summary:
                     out.append(f"{s:14s} {c['from']} → {c['to']}{row}: {d['x']['name']} in "
                                f"[{c['bracket'][0]:.6g}, {c['bracket'][1]:.6g}]")
             return out + [f"{v['a']} vs {v['b']}: {v['verdict']} — {'; '.join(v['why'])}"
-                          for v in d["verdicts"] if v["verdict"] != "no data"]
+                          for v in d["verdicts"]] + [status_line(d)]
         return [f"campaign {d['name']}: {d['n_jobs']} jobs ({d['n_run']} run, "
                 f"{d['n_reused']} reused), {d['n_failed']} cases with a failed solver, "
                 f"{d['n_crashed']} crashed jobs; {d['wall_s']:.1f} s"]

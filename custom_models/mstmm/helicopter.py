@@ -5,7 +5,8 @@ offset centre of mass) → tail boom → tail end (clamped, or free when hoverin
 masses and sections: compare.physics.mstmm.helicopter_layout (shared with every solver).
 
 As in the paper every element is written in the rotor frame: blades with centrifugal
-stiffening, lag softening, torsion Ω² term and extension spin softening; the shaft with its
+stiffening, lag softening, torsion Ω² term (and the tension–torsion term when the scene's
+tension_torsion is on) and extension spin softening; the shaft with its
 gyroscopic coupling; hub, fuselage and tail without rotation terms.
 
 Overall transfer equation, in the paper's structure: the unknowns are the free-tip states of
@@ -84,7 +85,7 @@ def blade_root_basis(b, omega, spin, hub_radius):
     scale = np.ones(12)
     scale[6:] = 1.0 / b["EI_flap"]
     Q = el.blade_subspace(omega, spin, b["L"], hub_radius, b["EI_flap"], b["EI_lag"], b["GJ"],
-                          b["EA"], b["m"], b["I_alpha"], b["L"], 0.0, S, scale)
+                          b["EA"], b["m"], b["I_alpha"], b["L"], 0.0, S, scale, b["k_A2"])
     return Q / scale[:, None]
 
 
@@ -164,7 +165,7 @@ def overall_matrix(L, omega, spin, hub_radius, clamped=True, parts=False):
     z_fus = z
     z = (tr.fus[0] + w2 * tr.fus[1]) @ z
     Ut = el.rotating_blade(omega, 0.0, t["L"], 0.0, t["EI_flap"], t["EI_lag"], t["GJ"],
-                           t["EA"], t["m"], t["I_alpha"], t["L"], 0.0)
+                           t["EA"], t["m"], t["I_alpha"], t["L"], 0.0, 0.0)
     z = Ut @ z
     end = z[0:6] if clamped else z[6:12]
     A = np.vstack(rows + [end])
@@ -311,7 +312,7 @@ def mode_shape(L, omega, spin, hub_radius, clamped, stations=7):
         for xs in np.linspace(0.0, b["L"], stations):
             z = z0 if xs == 0 else el.rotating_blade(
                 omega, spin, b["L"], hub_radius, b["EI_flap"], b["EI_lag"], b["GJ"], b["EA"],
-                b["m"], b["I_alpha"], 0.0, xs) @ z0
+                b["m"], b["I_alpha"], 0.0, xs, b["k_A2"]) @ z0
             parts.append([z[el.X], z[el.Y], z[el.Z], z[el.TX] * b["chord"] / 2])
     f = L["fuselage"]
     top = z_fus @ x

@@ -84,9 +84,13 @@ def markdown(paper, cols: dict, ansys=None) -> str:
     return "\n".join(lines)
 
 
+TOLS1 = (0.02, 1e-3)     # Table 1 is reproduced far closer: its counts at 2 % and 0.1 %
+
+
 def table1(overrides: dict, solvers=SOLVERS) -> str:
-    """Table 1 at 0, 20, 40 rad/s, matched within each mode family."""
-    out = []
+    """Table 1 at 0, 20, 40 rad/s, matched within each mode family, and the counts over its 15
+    entries."""
+    out, total = [], {}
     for speed, rows in TABLE1.items():
         paper = [v for v, _ in rows]
         fams = [lab for _, lab in rows]
@@ -103,6 +107,11 @@ def table1(overrides: dict, solvers=SOLVERS) -> str:
                 row += " — |" if j is None else f" {cols[c][0][j]:.4f} {100 * rel:+.2f}% |"
             lines.append(row)
         out.append("\n".join(lines))
+        for c, (f, lab) in cols.items():
+            total[c] = [n + count_within(paper, f, tol, fams, lab) for n, tol in
+                        zip(total.get(c, [0, 0]), TOLS1)]
+    out.append("\n".join(f"{c}: {n[0]} of 15 within 2 %, {n[1]} within 0.1 %"
+                         for c, n in total.items()))
     return "\n\n".join(out)
 
 

@@ -168,6 +168,8 @@ def tension_torsion_transfer(GJ, kA2, I_alpha, m, omega, spin, hub_radius, L, x_
     r1, r2 = (-c1 + disc) / (2.0 * c2), (-c1 - disc) / (2.0 * c2)
     d = min(abs(min(r1, r2)), abs(max(r1, r2) - L))
     span = abs(x_b - x_a)
+    if span == 0.0:
+        return np.eye(2)
     nseg = max(1, int(np.ceil(max(2.0 * span / d, span * np.sqrt(abs(q) / GJ) / 1.5))))
     h = (x_b - x_a) / nseg
     U = np.eye(2)

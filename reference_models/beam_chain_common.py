@@ -5,12 +5,15 @@ eigenproblem, labels, shapes). The dynamics (centrifugal, Coriolis, the chain's 
 each engine.
 
 Layout (the MuJoCo notes §4, "rigid-finite-element" layout, second order in 1/N): N hinges at
-x_i = (i − ½)Δl, Δl = L/N, each with springs EI/Δl (bending) and GJ/Δl (torsion); the root
+x_i = (i − ½)Δl, Δl = L/N, each with springs EI/Δl (bending) and GJ/Δl (torsion, plus
+T_i k_A²/Δl with the tension–torsion term); the root
 piece [0, Δl/2] is clamped, N − 1 bodies of length Δl and the last of length Δl/2.
 """
 from __future__ import annotations
 
 import numpy as np
+
+from compare.physics import mstmm
 
 N_STATIONS = 10     # mode shapes sampled at x_k = k·L/10, k = 1..10 (every speed alike)
 
@@ -34,11 +37,28 @@ def segment_inertia(m_line: float, length: float, axial: float, bend1: float, be
                      m * length**2 / 12 + bend2 * length])
 
 
+def chain_tension(lay: dict, m_line: float, spin: float, root: float) -> np.ndarray:
+    """The chain's own centrifugal tension at each hinge: Ω² Σ m_j r_j over the bodies
+    outboard of it (r_j the body's centre radius, root offset r_H included)."""
+    centres = root + lay["hinges"] + 0.5 * lay["lengths"]
+    pull = spin**2 * m_line * lay["lengths"] * centres
+    return np.cumsum(pull[::-1])[::-1]
+
+
+def torsion_springs(lay: dict, GJ: float, k_A2: float, m_line: float, spin: float,
+                    root: float) -> np.ndarray:
+    """Torsion hinge stiffness per hinge, (GJ + T_i k_A²)/Δl: the tension–torsion term
+    (k_A2 = 0 when off) from the chain's own tension T_i at the hinge. A rigid-segment chain
+    has no such term of its own (a hinge on the axis: the tension passes through it)."""
+    return (GJ + k_A2 * chain_tension(lay, m_line, spin, root)) / lay["dl"]
+
+
 def blade_chain(params: dict, section: dict, n: int, rotary_inertia: bool = True) -> dict:
     """Rigid-segment blade along x from the root at x = r_H, spinning about z at `speed`.
 
-    Joints per hinge, in this order: torsion (about x, GJ/Δl), flap (about y: out of the rotor
-    plane, EI_flap/Δl), lag (about z: in the plane, EI_lag/Δl). Segment inertia: the line mass
+    Joints per hinge, in this order: torsion (about x, GJ/Δl, or (GJ + T_i k_A²)/Δl with the
+    tension–torsion term), flap (about y: out of the rotor plane, EI_flap/Δl), lag (about z:
+    in the plane, EI_lag/Δl); stiffness per hinge. Segment inertia: the line mass
     plus the section's ρ∫z²dA = ρI_flap (about y), ρ∫y²dA = ρI_lag (about z), I_α (about x).
     These section terms are what make the rotating-frame terms of a rigid section come out
     right: the torsion 'propeller' stiffness Ω²(I_zz − I_yy) = Ω²ρ(I_lag − I_flap) per length
@@ -54,10 +74,12 @@ def blade_chain(params: dict, section: dict, n: int, rotary_inertia: bool = True
     b1, b2 = (rho * section["I_flap"], rho * section["I_lag"]) if rotary_inertia else (0, 0)
     inertia = np.array([segment_inertia(section["m"], ell, section["I_alpha"], b1, b2)
                         for ell in lay["lengths"]])
-    dl = lay["dl"]
+    dl, ones = lay["dl"], np.ones(n)
+    k_t = torsion_springs(lay, section["GJ"], mstmm.tension_torsion_k2(params), section["m"],
+                          params["speed"], params["hub_radius"])
     return {**lay, "axis": 0, "root": params["hub_radius"], "spin": params["speed"],
-            "joints": (("torsion", 0, section["GJ"] / dl), ("flap", 1, section["EI_flap"] / dl),
-                       ("lag", 2, section["EI_lag"] / dl)),
+            "joints": (("torsion", 0, k_t), ("flap", 1, section["EI_flap"] / dl * ones),
+                       ("lag", 2, section["EI_lag"] / dl * ones)),
             "masses": section["m"] * lay["lengths"], "inertia": inertia,
             "L": params["L"], "chord": params["chord"]}
 
@@ -70,9 +92,10 @@ def shaft_chain(params: dict, n: int, spin: float) -> dict:
     m = params["m"]
     tiny = 1e-9 * m * lay["dl"] ** 3 / 12     # engines want a positive polar inertia
     inertia = np.array([[m * ell**3 / 12, m * ell**3 / 12, tiny] for ell in lay["lengths"]])
-    dl = lay["dl"]
+    dl, ones = lay["dl"], np.ones(n)
     return {**lay, "axis": 2, "root": 0.0, "spin": spin,
-            "joints": (("bend_v", 0, params["EI_xx"] / dl), ("bend_u", 1, params["EI_yy"] / dl)),
+            "joints": (("bend_v", 0, params["EI_xx"] / dl * ones),
+                       ("bend_u", 1, params["EI_yy"] / dl * ones)),
             "masses": m * lay["lengths"], "inertia": inertia, "L": params["L"]}
 
 
@@ -81,7 +104,7 @@ def joint_table(chain: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     n, js = len(chain["hinges"]), chain["joints"]
     fam = np.array([j[0] for _ in range(n) for j in js])
     hinge = np.repeat(np.arange(n), len(js))
-    k = np.array([j[2] for _ in range(n) for j in js])
+    k = np.array([j[2][i] for i in range(n) for j in js])
     return fam, hinge, k
 
 
@@ -269,7 +292,6 @@ def shaft_result(params: dict, s: dict, linearised, package, method: str):
     packaging (`package`): both engines run it the same way; ω* = ω/ω₀ in extra."""
     import time
 
-    from compare.physics import mstmm
     n = checked_segments(s)
     w0 = mstmm.spinning_shaft_omega0(params["EI_xx"], params["m"], params["L"])
     spin = params["spin_ratio"] * w0
@@ -297,7 +319,6 @@ def blade_result(params: dict, s: dict, linearised, package, method: str, check=
     section, n)` raises ValueError for what that engine cannot model."""
     import time
 
-    from compare.physics import mstmm
     n = checked_segments(s)
     if not s["rotary_inertia"] and params["speed"] != 0:
         raise ValueError("rotary_inertia=False (Euler–Bernoulli segments) is consistent only "

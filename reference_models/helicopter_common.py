@@ -20,8 +20,9 @@ records of minutes) nor Floquet analysis (one linearisation instead of many).
 
 The tree: the blades, shaft and tail boom in the rigid-finite-element layout of
 beam_chain_common (blades as the rotating-beam model: torsion, flap, lag hinges and the
-section's rotary inertia; shaft: two bending hinges and torsion, tail: torsion and two bending
-hinges, both with their section's rotary inertia, which the engines need for a physical body),
+section's rotary inertia, the torsion springs with the tension–torsion term when it is on;
+shaft: two bending hinges and torsion, tail: torsion and two bending hinges, both with their
+section's rotary inertia, which the engines need for a physical body),
 the hub and fuselage rigid, the drive at the shaft's foot a hinge about z spinning at Ω (its
 coordinate held: the speed is prescribed), the tail's far end clamped (Table 3) or the
 fuselage free (Table 4). No axial flexibility (the paper's 24.1 Hz 'axial cyclic' root has
@@ -70,16 +71,19 @@ def _inertia(m_line, ell, axial, b1, b2, axis):
 
 def _chain(bodies, parent, start, axis, L, n, m_line, inertia, joints, tag, sign=1.0):
     """n-hinge chain from `start` (parent frame) along unit axis `axis` (− with sign −1);
-    returns the index of the last body and the position of its hinge relative to `start`."""
+    joints (name, axis, k): k the section stiffness (spring k/Δl) or a function of the layout
+    giving the spring per hinge. Returns the index of the last body and the position of its
+    hinge relative to `start`."""
     lay = bc.layout(L, n)
     e = sign * np.eye(3)[axis]
+    springs = [k(lay) if callable(k) else np.full(n, k / lay["dl"]) for _, _, k in joints]
     prev = None
     for i, x in enumerate(lay["hinges"]):
         ell = lay["lengths"][i]
         bodies.append(Body(parent, np.asarray(start) + x * e if prev is None else (x - prev) * e,
                            m_line * ell, 0.5 * ell * e, inertia(ell),
-                           joints=[((tag, name, i), "hinge", ax, k / lay["dl"])
-                                   for name, ax, k in joints]))
+                           joints=[((tag, name, i), "hinge", ax, float(k[i]))
+                                   for (name, ax, _), k in zip(joints, springs)]))
         parent, prev = len(bodies) - 1, x
     return parent, prev * e
 
@@ -123,13 +127,17 @@ def tree(params: dict, n: int, free: bool = False) -> list:
 
     def blade_inertia(ell):
         return _inertia(b["m"], ell, b["I_alpha"], rho * b["I_flap"], rho * b["I_lag"], 0)
+
+    def blade_torsion(bl):        # GJ + T_i k_A² per hinge (the tension–torsion term)
+        return bc.torsion_springs(bl, b["GJ"], b["k_A2"], b["m"], params["speed"],
+                                  params["hub_radius"])
     for k in range(4):
         c, sn = np.cos(k * np.pi / 2), np.sin(k * np.pi / 2)
         out.append(Body(hub, centre + lay["roots"][k], TINY_MASS, np.zeros(3),
                         [TINY_INERTIA] * 3, rot=np.array([[c, -sn, 0], [sn, c, 0], [0, 0, 1]])))
         _chain(out, len(out) - 1, np.zeros(3), 0, b["L"], n, b["m"], blade_inertia,
-               (("torsion", 0, b["GJ"]), ("flap", 1, b["EI_flap"]), ("lag", 2, b["EI_lag"])),
-               f"blade{k}")
+               (("torsion", 0, blade_torsion), ("flap", 1, b["EI_flap"]),
+                ("lag", 2, b["EI_lag"])), f"blade{k}")
     return out
 
 

@@ -28,3 +28,53 @@ def rotor_default_run(tmp_path_factory):
 def pytest_addoption(parser):
     parser.addoption("--update-golden", action="store_true",
                      help="rewrite tests/golden/*.json from the current solvers (review the diff)")
+
+
+def tension_torsion_exact_hz(speed, L, GJ, I_alpha, r_prop=1.0):
+    """Exact first torsion frequency [Hz] of a uniform blade from the axis (r_H = 0) with the
+    tension–torsion term: ((GJ + T k_A²)φ′)′ + I_α(ω² − r_prop Ω²)φ = 0, T = m̄Ω²(L² − x²)/2,
+    I_α = m̄ k_A² (uniform density; r_prop = 1 the paper's eq. 30, (I_lag − I_flap)/I_α a rigid
+    section's propeller term). Divided by I_α: ((a + Ω²(L² − x²)/2)φ′)′ + (ω² − rΩ²)φ = 0,
+    a = GJ/I_α; x = √c·t, c = L² + 2a/Ω² gives Legendre's equation ((1 − t²)φ_t)_t +
+    ν(ν+1)φ = 0 with ν(ν+1) = 2(ω² − rΩ²)/Ω². Clamped root: the odd solution t·₂F₁(A, B; 3/2;
+    t²), A = (1 − ν)/2, B = (ν + 2)/2; free tip (p(L) = GJ > 0): its t-derivative
+    F + 2z(AB/(3/2))·₂F₁(A+1, B+1; 5/2; z) vanishes at z = L²/c. The first root in ν."""
+    import numpy as np
+    from scipy.optimize import brentq
+    from scipy.special import hyp2f1
+    z = L**2 / (L**2 + 2 * GJ / I_alpha / speed**2)
+
+    def g(nu):
+        A, B = (1 - nu) / 2, (nu + 2) / 2
+        return hyp2f1(A, B, 1.5, z) + 2 * z * (A * B / 1.5) * hyp2f1(A + 1, B + 1, 2.5, z)
+    nus = np.linspace(0.5, 200.0, 40000)
+    v = np.array([g(n) for n in nus])
+    i = int(np.argmax(np.sign(v[:-1]) != np.sign(v[1:])))
+    nu = brentq(g, nus[i], nus[i + 1], xtol=1e-14, rtol=1e-15)
+    return float(np.sqrt(speed**2 * (r_prop + nu * (nu + 1) / 2)) / (2 * np.pi))
+
+
+def one_to_one_count(paper, computed, tol):
+    """The most table entries that can each have their own computed mode within relative tol,
+    by Hopcroft–Karp (scipy's maximum_bipartite_matching) — an algorithm independent of the
+    Hungarian assignment that compare.analysis.tables uses; both must give the same count."""
+    import numpy as np
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import maximum_bipartite_matching
+    rel = np.abs(np.asarray(computed)[None, :] / np.asarray(paper)[:, None] - 1)
+    match = maximum_bipartite_matching(csr_matrix((rel <= tol).astype(int)), perm_type="column")
+    return int(np.sum(match >= 0))
+
+
+def table_counts(paper, computed):
+    """(within 2 %, within 0.05 %) one to one, from compare.analysis.tables, checked against
+    one_to_one_count and against the assignment itself (no computed mode used twice)."""
+    from compare.analysis.tables import count_within, match_one_to_one
+    out = []
+    for tol in (0.02, 5e-4):
+        used = [j for j, _ in match_one_to_one(paper, computed, tol) if j is not None]
+        assert len(used) == len(set(used)), "a computed mode matched twice"
+        n = count_within(paper, computed, tol)
+        assert n == one_to_one_count(paper, computed, tol), tol
+        out.append(n)
+    return tuple(out)

@@ -76,6 +76,20 @@ def nonrotating_blade_hz(params: dict, n: int = 3, prefix: str = "") -> dict:
             "torsion": k * np.pi / (2 * L) * np.sqrt(s["GJ"] / s["I_alpha"]) / (2 * np.pi)}
 
 
+def tension_torsion_k2(params: dict, prefix: str = "") -> float:
+    """k_A² [m²] of the tension–torsion (trapeze) term, 0 when the scene's `tension_torsion`
+    is 'off'. The blade's torsional stiffness under the centrifugal tension T(x) is
+    GJ + T·k_A², k_A² = I_p/A the polar radius of gyration squared of the section about the
+    elastic axis: the fibres off the axis turn helical when the section twists, and their
+    tension resists it (Houbolt & Brooks, NACA Report 1346, 1958; Hodges & Dowell, NASA TN
+    D-7818, 1974: the torsion equation's [(GJ + T k_A²) φ′]′). Rectangle b × h: (b² + h²)/12
+    (uniform density: I_α = m̄ k_A²)."""
+    if params["tension_torsion"] == "off":
+        return 0.0
+    s = blade_section_from(params, prefix)
+    return (s["I_flap"] + s["I_lag"]) / s["A"]
+
+
 def torsion_rotating_hz(f0_hz: np.ndarray, speed: float) -> np.ndarray:
     """Torsion of the paper's eq. 30, (GJφ')' − I_α(φ̈ + Ω²φ) = 0: ω² = ω₀² + Ω² exactly
     (uniform blade, any boundary conditions)."""
@@ -121,7 +135,7 @@ def helicopter_layout(p: dict) -> dict:
     blade = blade_section_from(p, "blade_")
     return {
         "blade": dict(blade, L=p["blade_L"], EA=p["blade_E"] * blade["A"],
-                      chord=p["blade_chord"]),
+                      chord=p["blade_chord"], k_A2=tension_torsion_k2(p, "blade_")),
         "roots": [p["hub_radius"] * np.array([np.cos(k * np.pi / 2), np.sin(k * np.pi / 2),
                                               0.0]) for k in range(4)],
         "hub": {"m": m_hub, "I": I_hub, "cm": np.zeros(3)},

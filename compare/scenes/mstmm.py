@@ -92,6 +92,21 @@ def n_modes(default):
 
 BLADE_DOC = "rectangular blade, chord in the rotor plane, thickness out of it"
 
+
+def tension_torsion():
+    """The tension–torsion (trapeze) term, a model choice every blade solver implements its
+    own way (mstmm: the torsion transfer matrix of [(GJ + T k_A²)φ′]′ by power series; fem:
+    the geometric stiffness ∫T k_A² φ′²; the engines: each torsion hinge's spring
+    (GJ + T_i k_A²)/Δl with T_i the chain's own centrifugal tension at the hinge). Torsional
+    stiffness GJ + T(x)·k_A², k_A² = I_p/A = (b² + h²)/12 (Houbolt & Brooks, NACA Report 1346,
+    1958; Hodges & Dowell, NASA TN D-7818, 1974). The paper's eq. 30 has no such term ('off',
+    the default). Uniform blade, r_H = 0, Rayleigh with the rest shape sin(πx/2L):
+    ω² = ω₀² + Ω²(1 + π²/12 + 1/4) — independent of the section, as I_α = m̄k_A²
+    (tests/test_mstmm.py checks it against the exact root)."""
+    return Param("tension_torsion", "off", "", "tension–torsion term T·k_A² in the blade's "
+                 "torsional stiffness: off = the paper's eq. 30, on = GJ + T k_A² (Houbolt & "
+                 "Brooks 1958)", kind="choice", choices=("off", "on"))
+
 ROTATING_BEAM = Scene(
     name="rotating-beam",
     title="Rotating cantilever blade: flap, lag and torsion frequencies (Table 1)",
@@ -109,6 +124,7 @@ ROTATING_BEAM = Scene(
               lo=0.0, hi=1e3),
         Param("speed", 0.0, "rad/s", "rotor speed Ω", lo=0.0, hi=1e4),
         n_modes(5),
+        tension_torsion(),
     ),
     leaves={**leaves("blade"), "exudyn": "reference_models.exudyn.beam_modes",
             "mujoco": "reference_models.mujoco.beam_modes"},
@@ -118,7 +134,8 @@ ROTATING_BEAM = Scene(
     mode_shape_3d=mstmm_shapes.rotating_beam,
     campaign_cases=({"name": "rotating-beam"},),
     published_timings=(TABLE1_TIMING,),
-    notes=BLADE_DOC + "; torsion (GJφ')' − I_α(φ̈ + Ω²φ) = 0 as the paper's eq. 30.",
+    notes=BLADE_DOC + "; torsion (GJφ')' − I_α(φ̈ + Ω²φ) = 0 as the paper's eq. 30, or "
+    "((GJ + T k_A²)φ')' − I_α(φ̈ + Ω²φ) = 0 with tension_torsion=on.",
 )
 
 SPINNING_SHAFT = Scene(
@@ -180,6 +197,7 @@ def helicopter_params(n_default):
         positive("tail_L", 4.0, "m", "tail boom length"),
         positive("tail_E", 2e10, "Pa", "tail boom Young's modulus (paper: '2 MPa')"),
         positive("tail_G", 7.6923e9, "Pa", "tail boom shear modulus (paper: '7.6923 MPa')"),
+        tension_torsion(),
     )
 
 

@@ -3,7 +3,8 @@ coefficients used here: tension quadratic in x).
 
 bending(): Hermite cubic, dofs (y, y') per node; ∫EI N''N'', ∫T N'N', ∫m N N.
 second_order(): quadratic Lagrange (3 nodes per element), ∫k N'N', ∫c N N — torsion and
-extension converge at h⁴ in frequency like the Hermite bending elements.
+extension converge at h⁴ in frequency like the Hermite bending elements; k may vary along x
+(the tension–torsion stiffness GJ + T(x)k_A², quadratic: still integrated exactly).
 """
 import numpy as np
 
@@ -44,8 +45,9 @@ def quadratic_nodes(n_el, L):
     return np.linspace(0.0, L, 2 * n_el + 1)
 
 
-def second_order(n_el, L, stiff, inertia):
-    """K = ∫stiff q'², M = ∫inertia q² with quadratic elements (2·n_el + 1 nodes)."""
+def second_order(n_el, L, stiff, inertia, extra=None):
+    """K = ∫(stiff + extra(x)) q'², M = ∫inertia q² with quadratic elements (2·n_el + 1
+    nodes); `extra` e.g. the tension–torsion stiffness T(x)·k_A²."""
     nn = 2 * n_el + 1
     K = np.zeros((nn, nn))
     M = np.zeros_like(K)
@@ -57,7 +59,8 @@ def second_order(n_el, L, stiff, inertia):
             w = 0.5 * wg * h
             N = np.array([2 * (xi - 0.5) * (xi - 1), -4 * xi * (xi - 1), 2 * xi * (xi - 0.5)])
             dN = np.array([4 * xi - 3, -8 * xi + 4, 4 * xi - 1]) / h
-            K[idx, idx] += w * stiff * np.outer(dN, dN)
+            k = stiff + (extra(e * h + xi * h) if extra is not None else 0.0)
+            K[idx, idx] += w * k * np.outer(dN, dN)
             M[idx, idx] += w * inertia * np.outer(N, N)
     return K, M
 

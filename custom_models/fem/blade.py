@@ -1,6 +1,7 @@
 """`fem` leaf for `rotating-beam`: the rotating cantilever blade by finite elements,
 independent of the transfer matrices (only the physics is shared: the same tension
-T(x) = m̄Ω²[r_H(L − x) + (L² − x²)/2], lag softening −Ω²m̄, torsion +Ω²I_α, extension −Ω²m̄).
+T(x) = m̄Ω²[r_H(L − x) + (L² − x²)/2], lag softening −Ω²m̄, torsion +Ω²I_α, extension −Ω²m̄,
+and with tension_torsion on the torsion geometric stiffness ∫T k_A² φ'²).
 
 Flap and lag: Hermite cubic elements with centrifugal geometric stiffness ∫T y'y'. Torsion and
 extension: quadratic elements. Convergence: every family is solved on n and 2n elements and
@@ -10,7 +11,7 @@ relative change between the extrapolated and the fine values (the error estimate
 import numpy as np
 
 from compare.contract import ModesResult, merge_settings
-from compare.physics.mstmm import blade_section_from
+from compare.physics.mstmm import blade_section_from, tension_torsion_k2
 
 from .beam import lowest_modes
 
@@ -21,7 +22,7 @@ def properties(params, prefix=""):
     s = blade_section_from(params, prefix)
     return dict(L=params[prefix + "L"], EI_flap=s["EI_flap"], EI_lag=s["EI_lag"], GJ=s["GJ"],
                 EA=params[prefix + "E"] * s["A"], m=s["m"], I_alpha=s["I_alpha"],
-                chord=params[prefix + "chord"])
+                chord=params[prefix + "chord"], k_A2=tension_torsion_k2(params, prefix))
 
 
 def family_problem(b, spin, r_h, family, n_el):
@@ -29,10 +30,10 @@ def family_problem(b, spin, r_h, family, n_el):
     displacement at the element-boundary nodes."""
     from .beam import bending, second_order
     L, m = b["L"], b["m"]
+    tension = lambda x: m * spin**2 * (r_h * (L - x) + 0.5 * (L**2 - x**2))
     if family in ("flap", "lag"):
         nodes = np.linspace(0.0, L, n_el + 1)
         EI = b["EI_flap"] if family == "flap" else b["EI_lag"]
-        tension = lambda x: m * spin**2 * (r_h * (L - x) + 0.5 * (L**2 - x**2))
         K, KT, M = bending(nodes, EI, m, tension)
         K = K + KT
         if family == "lag":
@@ -41,7 +42,9 @@ def family_problem(b, spin, r_h, family, n_el):
         sample = lambda v: np.concatenate([[0.0], v[0::2]])
     else:
         stiff, inert = (b["GJ"], b["I_alpha"]) if family == "torsion" else (b["EA"], m)
-        K, M = second_order(n_el, L, stiff, inert)
+        # the tension–torsion term: geometric stiffness ∫T k_A² φ'² (k_A2 = 0 when off)
+        extra = (lambda x: b["k_A2"] * tension(x)) if family == "torsion" else None
+        K, M = second_order(n_el, L, stiff, inert, extra)
         K = K + (spin**2 if family == "torsion" else -spin**2) * M
         free = slice(1, None)
         sample = lambda v: np.concatenate([[0.0], v[1::2]])

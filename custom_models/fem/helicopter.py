@@ -5,7 +5,8 @@ physics of each element, see custom_models/mstmm/helicopter.py).
 Beams (4 blades, drive shaft, tail boom) are 3-D Hermite members: per node the 6 shared dofs
 (u, v, w, θx, θy, θz in the member frame, θz = v', θy = −w') plus 2 member-own dofs (u', θx')
 so that extension and torsion are Hermite cubic too. Blades: centrifugal geometric stiffness
-∫T(v'² + w'²), lag and extension softening −Ω²m̄, torsion +Ω²I_α. Shaft: spin softening and
+∫T(v'² + w'²), lag and extension softening −Ω²m̄, torsion +Ω²I_α (and ∫T k_A² φ'² with the
+tension–torsion term). Shaft: spin softening and
 the gyroscopic matrix G (v, w blocks ∓2Ω M_b). Hub and fuselage: rigid bodies (lumped mass and
 inertia at the centre of mass); blade roots, shaft ends and tail root are tied to them by rigid
 links. Eigenproblem M q̈ + G q̇ + K q = 0 (complex, sparse shift-invert); convergence: blades meshed
@@ -50,13 +51,15 @@ class Model:
         return idx
 
 
-def member_fields(nodes, EA, m, EI_v, EI_w, GJ, I_alpha, tension=None):
+def member_fields(nodes, EA, m, EI_v, EI_w, GJ, I_alpha, tension=None, k_A2=0.0):
     """Field matrices (8 dofs per node: u, u', v, v', w, w', φ, φ') K, M and the bending mass
-    M_b (per plane), in member coordinates."""
+    M_b (per plane), in member coordinates; torsion stiffness GJ + T(x)·k_A² (the
+    tension–torsion term, k_A2 = 0 when off)."""
     _, Ku, Mu = bending(nodes, 0.0, m, lambda x: EA)        # ∫EA u'², the "tension" form
     Kv, KTv, Mv = bending(nodes, EI_v, m, tension)
     Kw, KTw, Mw = bending(nodes, EI_w, m, tension)
-    _, Kt, Mt = bending(nodes, 0.0, I_alpha, lambda x: GJ)
+    _, Kt, Mt = bending(nodes, 0.0, I_alpha,
+                        lambda x: GJ + (k_A2 * tension(x) if k_A2 else 0.0))
     return {"u": (Ku, Mu), "v": (Kv + KTv, Mv), "w": (Kw + KTw, Mw), "t": (Kt, Mt)}
 
 
@@ -101,7 +104,7 @@ def build(L, spin, n_blade, n_shaft, n_tail, clamped):
     blade_members = []
     for k in range(4):
         f = member_fields(blade_nodes, b["EA"], b["m"], b["EI_lag"], b["EI_flap"], b["GJ"],
-                          b["I_alpha"], T)
+                          b["I_alpha"], T, b["k_A2"])
         f["u"] = (f["u"][0] - spin**2 * f["u"][1], f["u"][1])
         f["v"] = (f["v"][0] - spin**2 * f["v"][1], f["v"][1])
         f["t"] = (f["t"][0] + spin**2 * f["t"][1], f["t"][1])

@@ -9,7 +9,7 @@ labels every root by construction. Frequencies in Hz, shapes sampled at 13 fixed
 import numpy as np
 
 from compare.contract import ModesResult, merge_settings
-from compare.physics.mstmm import blade_section_from
+from compare.physics.mstmm import blade_section_from, tension_torsion_k2
 
 from . import elements as el
 from .roots import find_roots, root_error_hz
@@ -23,12 +23,12 @@ def blade_properties(params: dict, prefix: str = "") -> dict:
     s = blade_section_from(params, prefix)
     return dict(L=params[prefix + "L"], EI_flap=s["EI_flap"], EI_lag=s["EI_lag"], GJ=s["GJ"],
                 EA=params[prefix + "E"] * s["A"], m=s["m"], I_alpha=s["I_alpha"],
-                chord=params[prefix + "chord"])
+                chord=params[prefix + "chord"], k_A2=tension_torsion_k2(params, prefix))
 
 
 def transfer(b: dict, omega: float, spin: float, hub_radius: float, x_a: float, x_b: float):
     return el.rotating_blade(omega, spin, b["L"], hub_radius, b["EI_flap"], b["EI_lag"],
-                             b["GJ"], b["EA"], b["m"], b["I_alpha"], x_a, x_b)
+                             b["GJ"], b["EA"], b["m"], b["I_alpha"], x_a, x_b, b["k_A2"])
 
 
 def state_scale(b):
@@ -47,19 +47,24 @@ def tip_basis(b, omega, spin, hub_radius, family):
         S[r, j] = 1.0
     return el.blade_subspace(omega, spin, b["L"], hub_radius, b["EI_flap"], b["EI_lag"],
                              b["GJ"], b["EA"], b["m"], b["I_alpha"], 0.0, b["L"], S,
-                             state_scale(b)), res
+                             state_scale(b), b["k_A2"]), res
 
 
 def family_function(b, spin, hub_radius, family):
     """g(ω): det of the tip resultants of the orthonormal clamped-root basis (bounded by 1,
     zero exactly at the roots, continuous in ω). Bending families propagate only their own
     4x4 block (elements.bending_tip_det); torsion and extension are the closed-form 2x2
-    cos/sin matrix, whose (resultant, resultant) entry is the characteristic function."""
+    cos/sin matrix (torsion with the tension–torsion term: its power-series 2x2), whose
+    (resultant, resultant) entry is the characteristic function."""
     if family in ("flap", "lag"):
         EI = b["EI_flap"] if family == "flap" else b["EI_lag"]
         flap = family == "flap"
         return lambda omega: el.bending_tip_det(EI, b["m"], omega, spin, hub_radius, b["L"],
                                                 flap)
+    if family == "torsion" and b["k_A2"] > 0 and spin != 0:
+        return lambda omega: el.tension_torsion_transfer(
+            b["GJ"], b["k_A2"], b["I_alpha"], b["m"], omega, spin, hub_radius, b["L"], 0.0,
+            b["L"])[1, 1]
     stiff, inert, sgn = ((b["GJ"], b["I_alpha"], -1.0) if family == "torsion"
                          else (b["EA"], b["m"], 1.0))
     return lambda omega: el.second_order_transfer(

@@ -10,6 +10,7 @@ Beam kinematics and resultants (T(x) the axial tension, e.g. centrifugal):
     flap  (w = Z):  Θy = −w',  My = −EI w'',  Qz = −EI w''' + T w'
     lag   (v = Y):  Θz =  v',  Mz =  EI v'',  Qy = −EI v''' + T v'
     torsion:        Mx = GJ Θx',  Mx' + I_α(ω² − Ω²) Θx = 0       (paper eq. 30)
+                    or Mx = (GJ + T k_A²) Θx' with the tension–torsion term (k_A2 > 0)
     axial (u = X):  Qx = EA u',   Qx' + m̄(ω² + Ω²) u = 0        (spin softening)
 and the bending equation EI y'''' − (T y')' − k y = 0 with k = m̄ω² (flap) or m̄(ω² + Ω²)
 (lag, the paper's eq. 28 with its −Ω² m̄ y term).
@@ -152,8 +153,66 @@ def second_order_transfer(stiff, g2, s):
 
 
 @nb.njit(cache=True)
-def rotating_blade(omega, spin, L, hub_radius, EI_flap, EI_lag, GJ, EA, m, I_alpha, x_a, x_b):
-    """12x12 transfer of a rotating blade (local x = span from the root) from x_a to x_b."""
+def tension_torsion_transfer(GJ, kA2, I_alpha, m, omega, spin, hub_radius, L, x_a, x_b):
+    """2x2 transfer of (φ, Mx = p φ') from x_a to x_b for (p φ')' + I_α(ω² − Ω²) φ = 0 with
+    p(x) = GJ + k_A² T(x) (tension–torsion term; T quadratic in x). Per segment the power
+    series about its start: p0 (n+2)(n+1) a_{n+2} = −[p1 (n+1)² a_{n+1} + (p2 n(n+1) + q) a_n]
+    (coefficients scaled by hⁿ). p has its two real roots X1 < 0 and X2 > L (p ≥ GJ on the
+    blade, p'' < 0), so each segment is kept to ≤ half their distance d from the blade (the
+    series' convergence radius) and ≤ 1.5 rad of the wavenumber √(|q|/GJ)."""
+    q = I_alpha * (omega * omega - spin * spin)
+    c2 = -0.5 * kA2 * m * spin * spin                # p(x) = c0 + c1 x + c2 x²
+    c1 = -kA2 * m * spin * spin * hub_radius
+    c0 = GJ + kA2 * m * spin * spin * (hub_radius * L + 0.5 * L * L)
+    disc = np.sqrt(c1 * c1 - 4.0 * c2 * c0)
+    r1, r2 = (-c1 + disc) / (2.0 * c2), (-c1 - disc) / (2.0 * c2)
+    d = min(abs(min(r1, r2)), abs(max(r1, r2) - L))
+    span = abs(x_b - x_a)
+    if span == 0.0:
+        return np.eye(2)
+    nseg = max(1, int(np.ceil(max(2.0 * span / d, span * np.sqrt(abs(q) / GJ) / 1.5))))
+    h = (x_b - x_a) / nseg
+    U = np.eye(2)
+    a = np.zeros(404)
+    for i in range(nseg):
+        xs = x_a + i * h
+        p0 = c0 + c1 * xs + c2 * xs * xs
+        p1 = (c1 + 2.0 * c2 * xs) * h                # scaled by h, h²: a_n = coeff·hⁿ
+        p2 = c2 * h * h
+        qq = q * h * h
+        P = np.zeros((2, 2))                         # [φ, φ'](h) from [φ, φ'](0)
+        for j in range(2):
+            a[:] = 0.0
+            a[j] = 1.0 if j == 0 else h
+            val0, val1, biggest, small_run = 0.0, 0.0, 0.0, 0
+            for n in range(400):
+                if n >= 2:
+                    k = n - 2
+                    a[n] = -(p1 * (k + 1) ** 2 * a[k + 1] + (p2 * k * (k + 1) + qq) * a[k]) \
+                        / (p0 * (k + 2) * (k + 1))
+                val0 += a[n]
+                val1 += n * a[n]
+                biggest = max(biggest, abs(val0), abs(val1))
+                if n > 4 and abs(a[n]) * (n + 1) <= 1e-18 * biggest:
+                    small_run += 1
+                    if small_run >= 4:
+                        break
+                else:
+                    small_run = 0
+            P[0, j] = val0
+            P[1, j] = val1 / h
+        pe = c0 + c1 * (xs + h) + c2 * (xs + h) ** 2
+        Cs = np.array([[1.0, 0.0], [0.0, 1.0 / p0]])     # [φ, φ'] from [φ, Mx]
+        Ce = np.array([[1.0, 0.0], [0.0, pe]])
+        U = Ce @ P @ Cs @ U
+    return U
+
+
+@nb.njit(cache=True)
+def rotating_blade(omega, spin, L, hub_radius, EI_flap, EI_lag, GJ, EA, m, I_alpha, x_a, x_b,
+                   kA2):
+    """12x12 transfer of a rotating blade (local x = span from the root) from x_a to x_b;
+    kA2 > 0 adds the tension–torsion term."""
     U = np.zeros((12, 12))
     B = bending_transfer(EI_flap, m, omega, spin, hub_radius, L, x_a, x_b, True)
     for i in range(4):
@@ -164,7 +223,11 @@ def rotating_blade(omega, spin, L, hub_radius, EI_flap, EI_lag, GJ, EA, m, I_alp
         for j in range(4):
             U[LAG[i], LAG[j]] = B[i, j]
     s = x_b - x_a
-    B2 = second_order_transfer(GJ, I_alpha * (omega * omega - spin * spin) / GJ, s)
+    if kA2 > 0.0 and spin != 0.0:
+        B2 = tension_torsion_transfer(GJ, kA2, I_alpha, m, omega, spin, hub_radius, L, x_a,
+                                      x_b)
+    else:
+        B2 = second_order_transfer(GJ, I_alpha * (omega * omega - spin * spin) / GJ, s)
     for i in range(2):
         for j in range(2):
             U[TORSION[i], TORSION[j]] = B2[i, j]
@@ -191,7 +254,7 @@ def orthonormalize(S):
 
 @nb.njit(cache=True)
 def blade_subspace(omega, spin, L, hub_radius, EI_flap, EI_lag, GJ, EA, m, I_alpha, x_a, x_b,
-                   S, scale):
+                   S, scale, kA2):
     """Carry the solution basis S (12 x k, in the scaled state diag(scale)·Z) from x_a to x_b
     segment by segment, re-orthonormalising after each: the growing e^{βx} solutions never
     swamp the decaying ones (the full-span matrix has entries ~e^{βL}, ~1e26 at the 20th flap
@@ -204,7 +267,7 @@ def blade_subspace(omega, spin, L, hub_radius, EI_flap, EI_lag, GJ, EA, m, I_alp
     Q = orthonormalize(S)
     for i in range(nseg):
         U = rotating_blade(omega, spin, L, hub_radius, EI_flap, EI_lag, GJ, EA, m, I_alpha,
-                           x_a + i * h, x_a + (i + 1) * h)
+                           x_a + i * h, x_a + (i + 1) * h, kA2)
         for r in range(12):
             for c in range(12):
                 U[r, c] *= scale[r] / scale[c]

@@ -5,7 +5,8 @@ offset centre of mass) → tail boom → tail end (clamped, or free when hoverin
 masses and sections: compare.physics.mstmm.helicopter_layout (shared with every solver).
 
 As in the paper every element is written in the rotor frame: blades with centrifugal
-stiffening, lag softening, torsion Ω² term and extension spin softening; the shaft with its
+stiffening, lag softening, torsion Ω² term (and the tension–torsion term when the scene's
+tension_torsion is on) and extension spin softening; the shaft with its
 gyroscopic coupling; hub, fuselage and tail without rotation terms.
 
 Overall transfer equation, in the paper's structure: the unknowns are the free-tip states of
@@ -29,18 +30,17 @@ Decisions from the paper's own numbers (measured with this leaf, `fem` agreeing 
   2e9 puts tail modes at 1.7-3.3 Hz, 2e11 leaves no mode between 6.44 and 10.6 Hz.
 - Deviations left (tail clamped, 36.6519 rad/s): this model (and `fem`) has five roots in
   6.30-6.37 Hz (the four flap-1 blade modes and the collective lag mode) where the table
-  lists two, and four in 10.3-12.1 Hz where it lists three; near-coincident roots are what a
-  plain step search misses, so the table's order cannot be matched one to one. Matched to the
-  nearest root: 6.365 +0.01 %, 6.368 −0.04 %, 9.533 +1.28 % (ANSYS +0.18 %), 10.714
-  +0.95 %, 10.798 +0.16 %, 10.816 −0.00 %, 16.158/16.163/16.167 ≤ 0.05 %, 28.997 +0.00 %,
-  but the torsion pair 20.596/20.598 is at 19.868 (−3.5 %; ANSYS −4.4 %) — the torsion
-  equation (eq. 30) gives √(19.002² + (Ω/2π)²) = 19.87 Hz, and the paper's Table 1 shows the
-  same excess at 40 rad/s (20.540 for 20.040) — and 24.894 (no ANSYS value) is nearest
-  24.107 (−3.2 %). That root is the blades' in-plane (axial-cyclic) motion with the hub on the
-  bending shaft: shaft E × 1.1 moves it to 25.085 Hz (+4.1 %), hub density × 1.1 to
-  23.327 Hz (−3.2 %), blade E × 1.1 by +0.17 %, tail E × 1.1 by +0.3 % (measured with this
-  leaf, n_modes 21). The paper's value needs an 8 % stiffer shaft or a 9 % lighter hub — a
-  hub/shaft modelling difference the paper does not specify, not an exponent choice.
+  lists two, and four in 10.3-12.1 Hz where it lists three. Matched one to one (each entry its
+  own root, compare/scenes/mstmm_tables.py): 8 of 13 within 2 %, 4 within 0.05 %. The
+  torsion pair 20.596/20.598 is at 19.868 (−3.5 %; eq. 30 gives √(19.002² + (Ω/2π)²) =
+  19.87 Hz); with the tension–torsion term (scene option tension_torsion=on) at 20.769/20.785
+  (+0.84/+0.91 %, ANSYS's 20.789/20.794 within 0.1 %), then 10 of 13 within 2 %. 24.894
+  (no ANSYS value) is nearest 24.107 (−3.2 %). That root is the blades' in-plane
+  (axial-cyclic) motion with the hub on the bending shaft: shaft E × 1.1 moves it to
+  25.085 Hz (+4.1 %), hub density × 1.1 to 23.327 Hz (−3.2 %), blade E × 1.1 by +0.17 %,
+  tail E × 1.1 by +0.3 % (measured with this leaf, n_modes 21). The paper's value needs an
+  8 % stiffer shaft or a 9 % lighter hub — a hub/shaft modelling difference the paper does
+  not specify, not an exponent choice.
 - Hover (Table 4): only the reactionless 6.365 and 10.816 and the cyclic 16.079 (+0.19 %)
   are reproduced; the paper's 0.780, 1.082, 2.534, 6.187 and 10.437 Hz are whole-aircraft
   modes of its free rotating-frame model, which the paper does not define (we get 0.360 and
@@ -84,7 +84,7 @@ def blade_root_basis(b, omega, spin, hub_radius):
     scale = np.ones(12)
     scale[6:] = 1.0 / b["EI_flap"]
     Q = el.blade_subspace(omega, spin, b["L"], hub_radius, b["EI_flap"], b["EI_lag"], b["GJ"],
-                          b["EA"], b["m"], b["I_alpha"], b["L"], 0.0, S, scale)
+                          b["EA"], b["m"], b["I_alpha"], b["L"], 0.0, S, scale, b["k_A2"])
     return Q / scale[:, None]
 
 
@@ -164,7 +164,7 @@ def overall_matrix(L, omega, spin, hub_radius, clamped=True, parts=False):
     z_fus = z
     z = (tr.fus[0] + w2 * tr.fus[1]) @ z
     Ut = el.rotating_blade(omega, 0.0, t["L"], 0.0, t["EI_flap"], t["EI_lag"], t["GJ"],
-                           t["EA"], t["m"], t["I_alpha"], t["L"], 0.0)
+                           t["EA"], t["m"], t["I_alpha"], t["L"], 0.0, 0.0)
     z = Ut @ z
     end = z[0:6] if clamped else z[6:12]
     A = np.vstack(rows + [end])
@@ -311,7 +311,7 @@ def mode_shape(L, omega, spin, hub_radius, clamped, stations=7):
         for xs in np.linspace(0.0, b["L"], stations):
             z = z0 if xs == 0 else el.rotating_blade(
                 omega, spin, b["L"], hub_radius, b["EI_flap"], b["EI_lag"], b["GJ"], b["EA"],
-                b["m"], b["I_alpha"], 0.0, xs) @ z0
+                b["m"], b["I_alpha"], 0.0, xs, b["k_A2"]) @ z0
             parts.append([z[el.X], z[el.Y], z[el.Z], z[el.TX] * b["chord"] / 2])
     f = L["fuselage"]
     top = z_fus @ x

@@ -73,7 +73,7 @@ def _linearised(chain: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             inert.append(np.diag(chain["inertia"][i]) if last else np.zeros((3, 3)))
             coms.append(list(0.5 * chain["lengths"][i] * e_a) if last else [0.0] * 3)
             masses.append(float(chain["masses"][i]) if last else 0.0)
-            P.append(float(k))
+            P.append(float(k[i]))                       # per hinge
         prev, prev_x = len(jt) - 1, x
     nq = len(jt)
     SC = exu.SystemContainer()

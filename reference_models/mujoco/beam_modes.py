@@ -60,7 +60,7 @@ def _model(chain: dict) -> mujoco.MjModel:
                                explicitinertial=True)
         for _, axis, k in chain["joints"]:
             body.add_joint(type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(np.eye(3)[axis]),
-                           stiffness=float(k))
+                           stiffness=float(k[i]))     # per hinge
         parent, prev_x = body, x
     return spec.compile()
 

@@ -141,7 +141,7 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
     sc = get_scene(scene_name)
     if not (isinstance(repeats, int) and repeats >= 1):
         raise BadInput(f"--repeats must be at least 1, got {repeats!r}")
-    if sc.kind == "modes":
+    if sc.is_modes:
         if vary is not None:
             raise BadInput("--vary: frequency scenes are benched along the solvers' own "
                            "accuracy knobs only")

@@ -144,7 +144,7 @@ def run_extremes(scene_name: str, solver_names, out, include_slow=False, timeout
     sc = get_scene(scene_name)
     if not sc.extremes:
         raise BadInput(f"scene {sc.name!r} lists no extreme cases")
-    if sc.kind != "time":
+    if not sc.is_time:
         raise BadInput(f"scene {sc.name!r}: its extremes run through `xval modes`")
     chosen = solvers.pick(sc, solver_names)
     cases = [c for c in sc.extremes if include_slow or not c.slow]

@@ -292,7 +292,7 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
               identify=True, out_dir=None):
     """`out_dir` given: write there (a campaign case); else a new run folder under `out`."""
     sc = get_scene(scene_name)
-    if sc.kind != "modes":
+    if not sc.is_modes:
         raise BadInput(f"scene {sc.name!r} is a time-domain scene: use `xval run {sc.name}`")
     pl = plan(sc, overrides, solver_names)
     params, chosen = pl.params, list(pl.solvers)

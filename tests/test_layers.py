@@ -269,3 +269,72 @@ def test_no_import_cycle_in_compare():
 
 def test_the_cycle_check_finds_one():
     assert _cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+
+
+# file writes: the atomic helpers, plain writes, numpy/json/matplotlib/rerun savers, a
+# Trajectory's or result's `.save`, folder copies, os.open for writing
+WRITE_CALLS = {"write_text", "write_bytes", "write_json", "publish", "atomic_path", "savez",
+               "savez_compressed", "save", "savefig", "dump", "copytree", "copyfile", "copy"}
+# the rooms of workflows/ that still write, to move into output/ (issue 27 item 5): this list
+# only shrinks — a file that stops writing must leave it, a new writer fails
+STILL_WRITING = {"campaign.py", "guard.py", "inputs.py", "maps.py", "results.py", "runner.py",
+                 "sides.py", "bench.py"}
+
+
+def writes(path):
+    """Calls in a file that write a file."""
+    hits = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if not isinstance(node, ast.Call):
+            continue
+        f = node.func
+        name = f.attr if isinstance(f, ast.Attribute) else f.id if isinstance(f, ast.Name) else ""
+        mode = (node.args[1] if len(node.args) > 1 else
+                next((k.value for k in node.keywords if k.arg == "mode"), None))
+        bad = name in WRITE_CALLS and not (name == "dump" and isinstance(f, ast.Attribute)
+                                           and getattr(f.value, "id", "") == "pickle")
+        bad |= (name in ("open", "fdopen") and isinstance(mode, ast.Constant)
+                and isinstance(mode.value, str) and bool(set(mode.value) & set("wax+")))
+        bad |= name == "open" and any(isinstance(a, ast.Attribute) and a.attr in ("O_WRONLY",
+                                      "O_CREAT", "O_RDWR") for a in ast.walk(node))
+        if bad:
+            hits.append(f"{path.relative_to(ROOT)}:{node.lineno}: {ast.unparse(node)[:80]}")
+    return hits
+
+
+def test_workflows_write_no_files():
+    found = {p.name: writes(p) for p in py_files("compare/workflows")}
+    new = [h for name, hits in found.items() if name not in STILL_WRITING for h in hits]
+    assert not new, "workflows/ writes files (move the writer into compare/output/):\n" \
+        + "\n".join(new)
+    moved = sorted(n for n in STILL_WRITING if not found.get(n))
+    assert not moved, f"{moved} write nothing now: take them off STILL_WRITING"
+
+
+@pytest.mark.parametrize("code", [
+    "from compare.atomic import write_text\ndef f(p):\n    write_text(p / 'report.md', '')\n",
+    "def f(p):\n    p.write_text('x')\n",
+    "def f(p):\n    with open(p, 'w') as fh:\n        fh.write('x')\n",
+    "import json\ndef f(p, o):\n    with open(p, mode='a') as fh:\n        json.dump(o, fh)\n",
+    "import numpy as np\ndef f(p, x):\n    np.savez(p, x=x)\n",
+    "def f(tr, p):\n    tr.save(p / 'run.npz')\n",
+])
+def test_the_writer_rule_catches_a_seeded_writer(code):
+    probe = ROOT / "compare" / "workflows" / "_layer_probe.py"
+    probe.write_text(code)
+    try:
+        assert writes(probe)
+        with pytest.raises(AssertionError, match="_layer_probe"):
+            test_workflows_write_no_files()
+    finally:
+        probe.unlink()
+
+
+def test_the_writer_rule_lets_reads_be():
+    probe = ROOT / "compare" / "workflows" / "_layer_probe.py"
+    probe.write_text("import json\ndef f(p):\n    with open(p) as fh:\n        return json.load(fh)"
+                     "\ndef g(p):\n    return open(p, 'rb').read()\n")
+    try:
+        assert writes(probe) == []
+    finally:
+        probe.unlink()

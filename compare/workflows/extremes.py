@@ -24,8 +24,8 @@ from .. import solvers
 from ..analysis import metrics
 from ..analysis.metrics import MARGINAL
 from ..analysis.trajectory import Trajectory
-from ..atomic import write_json, write_text
 from ..errors import BadInput
+from ..output.study import write_study
 from ..scenes import Extreme, Scene, get_scene
 from .plan import Knobs, plan
 
@@ -167,7 +167,4 @@ def run_extremes(scene_name: str, solver_names, out, include_slow=False, timeout
                                  f"{'; ' if c.settings else ''}"
                                  f"{', '.join(f'{k}={v}' for k, v in c.settings.items())}): "
                                  f"{c.why}" for c in cases]
-    write_text(out_dir / "report.md", "\n".join(md) + "\n")
-    obj["report"] = str(out_dir / "report.md")
-    write_json(out_dir / "result.json", obj)
-    return obj
+    return write_study(out_dir, md, obj)

@@ -192,6 +192,16 @@ class Scene:
     maps: tuple = ()
     notes: str = ""
 
+    @property
+    def is_time(self) -> bool:
+        """A time-domain scene (`xval run`): its leaves simulate on an output grid."""
+        return self.kind == "time"
+
+    @property
+    def is_modes(self) -> bool:
+        """A frequency scene (`xval modes`): its leaves return modes."""
+        return self.kind == "modes"
+
     def param(self, name):
         for p in self.params:
             if p.name == name:
@@ -208,7 +218,7 @@ class Scene:
             p.check(values[p.name])
         if self.check:
             self.check(values)
-        if self.kind == "time":
+        if self.is_time:
             self.output_grid(values)               # the grid must fit before anything runs
         return values
 

@@ -28,6 +28,19 @@ class Param:
     physical: bool = True
 
     @property
+    def is_float(self) -> bool:
+        return self.kind == "float"
+
+    @property
+    def is_numeric(self) -> bool:
+        """A scalar number (float or int): what a map axis can sweep."""
+        return self.kind in ("float", "int")
+
+    def shown_default(self):
+        """The default as `xval show` prints it (a vector as comma-separated numbers)."""
+        return ",".join(f"{x:g}" for x in self.default) if self.kind == "vector" else self.default
+
+    @property
     def continuous_physical(self) -> bool:
         return (self.physical and self.kind in ("float", "vector")
                 and self.name not in RUN_PARAMS)

@@ -18,10 +18,10 @@ import numpy as np
 
 from .. import solvers
 from ..analysis import metrics
-from ..atomic import write_json, write_text
 from ..errors import BadInput
 from ..leafinfo import ORDERS, Adaptive, Fixed, snap  # noqa: F401  (ORDERS: the tests' table)
 from ..output.report import fmt_value
+from ..output.study import write_study
 from ..scenes import get_scene
 from . import budget
 from .bench_modes import run_bench_modes
@@ -127,10 +127,7 @@ def run_throughput(scene_name, solver_names, overrides, out, n_points, log=print
            f"{r['points_per_second']:.1f} | {r['points_per_core_second']:.1f} |"
            for r in obj["rows"]]
     obj["summary_lines"] = lines
-    write_text(out_dir / "report.md", "\n".join(md) + "\n")
-    write_json(out_dir / "bench.json", obj)
-    obj["report"] = str(out_dir / "report.md")
-    return obj
+    return write_study(out_dir, md, obj, "bench.json", report_in_json=False)
 
 
 def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, vary=None,
@@ -141,7 +138,7 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
     sc = get_scene(scene_name)
     if not (isinstance(repeats, int) and repeats >= 1):
         raise BadInput(f"--repeats must be at least 1, got {repeats!r}")
-    if sc.kind == "modes":
+    if sc.is_modes:
         if vary is not None:
             raise BadInput("--vary: frequency scenes are benched along the solvers' own "
                            "accuracy knobs only")

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import solvers
+from ..leafinfo import LeafInfo
 from ..scenes import Scene, get_scene
 
 FAR = 4          # halvings of a fixed step for the reference (1/16 of it)
@@ -30,7 +31,7 @@ def sample(scene: Scene, n: int, seed: int = 0, spread: float = 0.05,
     for _ in range(n):
         over = dict(fixed)
         for p in scene.params:
-            if p.name in fixed or p.name in ("t_end", "output_dt") or p.kind != "float" \
+            if p.name in fixed or p.name in ("t_end", "output_dt") or not p.is_float \
                     or not p.default:
                 continue
             v = float(p.default) * (1 + spread * rng.uniform(-1, 1))
@@ -40,18 +41,18 @@ def sample(scene: Scene, n: int, seed: int = 0, spread: float = 0.05,
     return out
 
 
-def far_tighter(leaf, settings: dict) -> dict | None:
+def far_tighter(info: LeafInfo, settings: dict) -> dict | None:
     """The reference settings: a tolerance 1000× tighter (not below 1e-14), else 1/16 of the
     step; None where the solver has neither knob."""
     s = dict(settings)
-    if s.get("integrator") in getattr(leaf, "ADAPTIVE", ()) and \
+    if s.get("integrator") in info.adaptive and \
             isinstance(s.get("rtol"), (int, float)):
         s["rtol"] = max(s["rtol"] * FAR_RTOL, 1e-14)
         if isinstance(s.get("atol"), (int, float)):
             s["atol"] = s["atol"] * s["rtol"] / settings["rtol"]
         return s
     for _ in range(FAR):
-        s, _, _ = solvers.tighter_settings(leaf, s)
+        s, _, _ = solvers.tighter_settings(info, s)
         if s is None:
             return None
     return s
@@ -59,7 +60,7 @@ def far_tighter(leaf, settings: dict) -> dict | None:
 
 def reference_run(scene: Scene, solver: solvers.Solver, params: dict, warm_up: bool = False):
     """The solver's far tighter run (None where it has no accuracy knob)."""
-    s = far_tighter(solver.leaf(scene), solvers.settings_for(
+    s = far_tighter(solver.info(scene), solvers.settings_for(
         solver, scene.name, t_out=scene.output_grid(params)))
     return None if s is None else solvers.simulate(scene, solver, params, s, warm_up=warm_up)
 

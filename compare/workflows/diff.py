@@ -246,7 +246,7 @@ def diff(old: Side, new: Side, keep_plots=True):
                 run["channels"].append({"channel": "status", "state": "changed",
                                         "old": ro.status, "new": rn.status, "ratio": np.inf,
                                         "note": rn.reason or ro.reason})
-            elif co.kind == "modes" and ro.status == "ok":
+            elif ro.frequencies is not None and ro.status == "ok":   # a frequency case
                 run["channels"] = compare_modes(ro, rn, co.critical.get(solver, {}),
                                                 cn.critical.get(solver, {}))
             elif ro.status == "ok":

@@ -24,8 +24,8 @@ from .. import solvers
 from ..analysis import metrics
 from ..analysis.metrics import MARGINAL
 from ..analysis.trajectory import Trajectory
-from ..atomic import write_json, write_text
 from ..errors import BadInput
+from ..output.study import write_study
 from ..scenes import Extreme, Scene, get_scene
 from .plan import Knobs, plan
 
@@ -144,7 +144,7 @@ def run_extremes(scene_name: str, solver_names, out, include_slow=False, timeout
     sc = get_scene(scene_name)
     if not sc.extremes:
         raise BadInput(f"scene {sc.name!r} lists no extreme cases")
-    if sc.kind != "time":
+    if not sc.is_time:
         raise BadInput(f"scene {sc.name!r}: its extremes run through `xval modes`")
     chosen = solvers.pick(sc, solver_names)
     cases = [c for c in sc.extremes if include_slow or not c.slow]
@@ -167,7 +167,4 @@ def run_extremes(scene_name: str, solver_names, out, include_slow=False, timeout
                                  f"{'; ' if c.settings else ''}"
                                  f"{', '.join(f'{k}={v}' for k, v in c.settings.items())}): "
                                  f"{c.why}" for c in cases]
-    write_text(out_dir / "report.md", "\n".join(md) + "\n")
-    obj["report"] = str(out_dir / "report.md")
-    write_json(out_dir / "result.json", obj)
-    return obj
+    return write_study(out_dir, md, obj)

@@ -68,7 +68,7 @@ def parse_axis(text, sc, flag):
     if not sep or not sep2:
         raise BadInput(f"{flag} {text!r}: expected NAME=LO:HI")
     p = sc.param(name.strip())
-    if p.kind not in ("float", "int"):
+    if not p.is_numeric:
         raise BadInput(f"{flag} {name}: not a numeric parameter of scene {sc.name}")
     lo, hi = p.parse(lo_t), p.parse(hi_t)
     if not lo < hi:
@@ -530,7 +530,7 @@ def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolutio
     """Everything checked before a run (one line, BadInput): scene, axes, parameters,
     solvers, the work against the budget."""
     sc = get_scene(scene_name)
-    if sc.kind != "time":
+    if not sc.is_time:
         raise BadInput(f"scene {sc.name!r} is a frequency scene: maps are of time scenes")
     if observable is None and sc.regime is None and sc.map_observables:
         observable = next(iter(sc.map_observables))

@@ -17,9 +17,9 @@ from .. import solvers
 from ..analysis import campbell, metrics
 from ..analysis.campbell import mac
 from ..analysis.trajectory import Modes
-from ..atomic import atomic_path, write_json, write_text
 from ..errors import BadInput
-from ..output import mode_shapes
+from ..output import campbell_plot, mode_shapes
+from ..output.study import write_study
 from ..scenes import Scene, get_scene
 from .plan import plan
 from .runner import new_run_dir
@@ -161,58 +161,6 @@ def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: 
     return out
 
 
-def _campbell_png(path, scene, values, lines_by_solver, crit, params, events=None):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    cb = scene.campbell
-    fig, ax = plt.subplots(figsize=(7.5, 4.8))
-    styles = ["-", "--", ":", "-."]
-    keys = list(dict.fromkeys(k for lines in lines_by_solver.values() for k in lines))
-    for k, lines in enumerate(lines_by_solver.values()):
-        for key, f in lines.items():           # one colour per mode, the same in every solver
-            j = keys.index(key)
-            colour = f"C{j % 10}" if len(keys) <= 10 else plt.cm.tab20(j % 20)
-            ax.plot(values, f, lw=1, ls=styles[k % len(styles)], color=colour,
-                    marker=".", ms=2, label=key if k == 0 else None)   # dots: the samples
-    if cb.excitation_hz is not None:
-        for order in cb.orders:
-            ax.plot(values, [order * cb.excitation_hz(params, v) for v in values], "k:", lw=1,
-                    label=f"{order}× excitation")
-    for c in crit.values():
-        for v in c.values():
-            ax.plot([v], [cb.excitation_hz(params, v)], "ko", ms=3)
-    veer = [(e.at, np.nanmean([lines[k][np.searchsorted(values, e.at)] for k in e.lines]))
-            for s, lines in lines_by_solver.items() for e in (events or {}).get(s, [])
-            if e.kind != "crossing"]
-    if veer:        # where two lines hand their shapes over without crossing
-        ax.plot(*zip(*veer), "o", mfc="none", mec="k", ms=7, label="veering (shapes exchanged)")
-    ax.set_xlabel(f"{cb.parameter} [{cb.unit or '–'}]")
-    ax.set_ylabel("frequency [Hz]")
-    top = max(np.nanmax(f) for lines in lines_by_solver.values() for f in lines.values())
-    ax.set_ylim(0, 1.1 * top)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
-    legend = ", ".join(f"{s}: '{styles[k % len(styles)]}'" for k, s in enumerate(lines_by_solver))
-    ax.set_title(f"Campbell diagram (line style per solver — {legend})", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
-
-def _campbell_rrd(path, scene, values, lines_by_solver):
-    import rerun as rr
-    with atomic_path(path) as tmp, \
-            rr.RecordingStream("xval", recording_id=f"campbell-{path.parent.name}") as rec:
-        rec.save(str(tmp))
-        idx = [rr.TimeColumn(scene.campbell.parameter, duration=values)]   # 1 s = 1 unit
-        for solver, lines in lines_by_solver.items():
-            for key, f in lines.items():
-                rec.send_columns(f"campbell/{rr.escape_entity_path_part(key)}/{solver}",
-                                 indexes=idx, columns=rr.Scalars.columns(scalars=f))
-    return path
-
-
 def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print):
     """Critical speeds on the scene's grid (lines by label, refined on each solver's own mode:
     unchanged by the diagram), then the diagram: the grid refined where any solver's lines are
@@ -257,8 +205,8 @@ def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print):
            "unconfirmed_critical_speeds": {s: u for s, u in unconfirmed.items() if u},
            "incomplete": missing}
     if lines:
-        _campbell_png(out_dir / "campbell.png", sc, grid, lines, crit, params, events)
-        obj["recording"] = str(_campbell_rrd(out_dir / "campbell.rrd", sc, grid, lines))
+        campbell_plot.png(out_dir / "campbell.png", sc, grid, lines, crit, params, events)
+        obj["recording"] = str(campbell_plot.rrd(out_dir / "campbell.rrd", sc, grid, lines))
     md = ["", "## Campbell diagram", "",
           f"{len(grid)} values of {cb.parameter} ({len(values)} on the scene's grid, "
           f"{len(grid) - len(values)} added where lines come close, swap or lose their shape).",
@@ -292,7 +240,7 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
               identify=True, out_dir=None):
     """`out_dir` given: write there (a campaign case); else a new run folder under `out`."""
     sc = get_scene(scene_name)
-    if sc.kind != "modes":
+    if not sc.is_modes:
         raise BadInput(f"scene {sc.name!r} is a time-domain scene: use `xval run {sc.name}`")
     pl = plan(sc, overrides, solver_names)
     params, chosen = pl.params, list(pl.solvers)
@@ -356,10 +304,7 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
                           if m["solver"] not in failed]
     obj["status"], obj["summary"] = modes_status(comparisons, obj)
     md[1:1] = ["", f"**{obj['summary']}**"]
-    write_text(out_dir / "report.md", "\n".join(md) + "\n")
-    obj["report"] = str(out_dir / "report.md")
-    write_json(out_dir / "result.json", obj)
-    return obj, results, comparisons
+    return write_study(out_dir, md, obj), results, comparisons
 
 
 def modes_status(comparisons, obj) -> tuple[str, str]:

@@ -58,7 +58,7 @@ class _Study:
 
     def _run(self, solver, params, estimate=False):
         self.n_runs += 1 + bool(estimate and self.sc.error_estimate)
-        if self.sc.kind == "modes":
+        if self.sc.is_modes:
             return solvers.modes(self.sc, solver, params)
         return solvers.simulate(self.sc, solver, params, self.pl.settings[solver.name],
                                 self.pl.timeout_s, estimate and self.sc.error_estimate,
@@ -66,14 +66,14 @@ class _Study:
 
     def compare(self, runs: dict) -> list:
         rs = [runs[s.name] for s in self.chosen]
-        if self.sc.kind == "modes":
+        if self.sc.is_modes:
             return metrics.frequency_comparisons(rs, self.sc.tolerances_for(self.p))
         return metrics.pairwise(rs, self.sc.tolerances_for(self.p))
 
     def perturbed(self, solver, name, eps):
         """The run of `solver` with parameter `name` × (1 + eps), its nominal error bars."""
         r = self._run(solver, {**self.p, name: _scaled(self.p[name], 1.0 + eps)})
-        if self.sc.kind != "modes":
+        if not self.sc.is_modes:
             r.errors = self.nominal[solver.name].errors
         return r
 
@@ -88,7 +88,7 @@ class _Study:
 
 def _change(sc, a, b, channel) -> float:
     """max |a − b| of one channel (a time channel or a mode's frequency)."""
-    if sc.kind == "modes":
+    if sc.is_modes:
         fa = dict(zip(a.labels, a.frequencies_hz))
         fb = dict(zip(b.labels, b.frequencies_hz))
         return abs(fa[channel] - fb[channel]) if channel in fa and channel in fb else math.inf

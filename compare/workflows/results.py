@@ -463,7 +463,7 @@ class SceneInfo:
         out = [f"{sc.name}: {sc.title}"]
         out += [f"  source: {ref}" for ref in papers_in(sc.source) or [sc.source]]
         for p in sc.params:
-            d = ",".join(f"{x:g}" for x in p.default) if p.kind == "vector" else p.default
+            d = p.shown_default()
             out.append(f"  {p.name:16s} = {str(d):14s} {p.unit:9s} {p.describe_range():18s} "
                        f"{p.doc}")
         if sc.channels:
@@ -474,8 +474,7 @@ class SceneInfo:
 
     def _repr_markdown_(self):
         sc = self.scene
-        rows = [[p.name, ",".join(f"{x:g}" for x in p.default) if p.kind == "vector"
-                 else p.default, p.unit, p.describe_range(), p.doc] for p in sc.params]
+        rows = [[p.name, p.shown_default(), p.unit, p.describe_range(), p.doc] for p in sc.params]
         return (f"**{sc.name}**: {sc.title}\n\n"
                 + _markdown(["parameter", "default", "unit", "range", "meaning"], rows)
                 + (f"\n\nchannels: {', '.join(sc.channels)}" if sc.channels else ""))

@@ -22,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analysis.trajectory import Trajectory, _py
-from ..atomic import atomic_path
+from ..analysis.trajectory import Trajectory
 from ..errors import BadInput
+from ..output.baseline import write_baseline
 from . import guard
 
 BASELINE_FORMAT = "xval-baseline"
@@ -264,11 +264,7 @@ def save_baseline(path_in, out) -> dict:
                 "source": str(side.path), "source_kind": side.kind,
                 "recon": {"rel": RECON_REL, "err_frac": RECON_ERR_FRAC},
                 "cases": cases, "maps": side.maps}
-    out = Path(out)
-    with atomic_path(out) as tmp:
-        with open(tmp, "wb") as f:
-            np.savez_compressed(f, manifest=np.array(json.dumps(manifest, default=_py)),
-                                **arrays)
+    out = write_baseline(Path(out), manifest, arrays)
     return {"baseline": str(out), "bytes": out.stat().st_size, "cases": len(cases),
             "samples_full": n_full, "samples_kept": n_kept}
 

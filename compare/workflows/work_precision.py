@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..atomic import write_json, write_text
 from ..output.report import plot_style, save_figure
+from ..output.study import write_study
 
 LEVELS = (1e-3, 1e-6, 1e-9)
 COARSE_ERR = 1e-2          # the coarse end of a ladder: this error reached (or a failed run)
@@ -47,10 +47,7 @@ def walk(rungs, start, run, exhaustive=False, patience=2):
 def write_outputs(out_dir, obj, md):
     """report.md (the figure linked at its end) and bench.json; the result with its report."""
     md = md + ["", "![work-precision](work_precision.png)"]
-    write_text(out_dir / "report.md", "\n".join(md) + "\n")
-    write_json(out_dir / "bench.json", obj)
-    obj["report"] = str(out_dir / "report.md")
-    return obj
+    return write_study(out_dir, md, obj, "bench.json", report_in_json=False)
 
 
 def repeat_timed(walls, again, repeats):

@@ -72,15 +72,18 @@ def reference_check(sc: Scene, tr: Trajectory, ref: Trajectory, bound: float):
 
 def _settings(solver, sc, case, params):
     """The solver's accurate settings with the case's overrides where the solver has the key
-    (an integrator it does not offer is left out), checked against the output grid."""
+    (an integrator it does not offer is left out; a dict value is per solver: {name: value},
+    the solvers it does not name keep their own), checked against the output grid."""
     leaf = solver.leaf(sc)
-    over = {k: v for k, v in case.settings.items() if k in leaf.DEFAULT_SETTINGS}
+    over = {k: v.get(solver.name) if isinstance(v, dict) else v
+            for k, v in case.settings.items() if k in leaf.DEFAULT_SETTINGS}
+    over = {k: v for k, v in over.items() if v is not None}
     integrator = over.pop("integrator", None)
     if integrator is not None and integrator not in leaf.INTEGRATORS:
         integrator = None
     base = solvers.settings_for(solver, sc.name)
     dt = over.get("dt", base.get("dt"))
-    if isinstance(dt, float) and dt > params["output_dt"] and "dt" not in case.settings:
+    if isinstance(dt, float) and dt > params["output_dt"] and "dt" not in over:
         over["dt"] = params["output_dt"]      # a fine output grid: its default step must fit
     return solvers.settings_for(solver, sc.name, integrator=integrator, extra=over,
                                 t_out=sc.output_grid(params))

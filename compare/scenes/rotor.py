@@ -137,6 +137,9 @@ def _free_spin_ramp(p, tr):
 #   torque 50 N·m: MuJoCo 8.1e-6 → 5e-4: 3.6e-7; Exudyn 2.2e-6 → 1e-3: 1.7e-8
 #   tilt0 3.0: Exudyn 8.2e-6 → 1e-3: 9.4e-8 (MuJoCo 7.3e-8 at its default)
 #   tilt0 π − 2e-3: MuJoCo 1.9e-5 → 5e-4: 1.3e-7; Exudyn 2.1e-4, 2.4e-6 → 5e-4: 3.5e-8
+#   1000 s horizon: MuJoCo 3.7e-6 → 5e-4: 1.8e-7 (54 s). Exudyn ends `diverged` (the energy
+#   rule: 70 % of the energy scale at 431 s; at 1e-3 still at 742 s) — an honest status the
+#   case allows, left at its default step as the finding.
 # The cases give the engines those steps (the largest halving below half the bound): what they
 # test is stability and honesty at the extreme, which a step that does not resolve the motion
 # cannot show. The bounds stay.
@@ -167,7 +170,8 @@ SPINUP_EXTREMES = (
     Extreme("tilt0 π − 2e-3", {"tilt0": float(np.pi - 2e-3), "t_end": 1}, _RESOLVE_TILT_PI,
             why="1e-3 rad from where every solver stops (tilt π − 1e-3; engines at the step "
                 "that resolves it)"),
-    Extreme("1000 s horizon", {"t_end": 1000, "output_dt": 0.1}, bound=1e-6, slow=True,
+    Extreme("1000 s horizon", {"t_end": 1000, "output_dt": 0.1}, {"dt": {"mujoco": 5e-4}},
+            bound=1e-6, slow=True,
             why="energy drift growth over a long captured run"),
     Extreme("rk4 below its stability limit", {"k": 1e7, "t_end": 0.2, "output_dt": 0.001},
             {"integrator": "rk4", "dt": 2.5e-4}, bound=1e-6, expect="ok",

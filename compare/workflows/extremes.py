@@ -73,15 +73,18 @@ def reference_check(sc: Scene, tr: Trajectory, ref: Trajectory, bound: float):
 
 def _plan(solver, sc, case, params, timeout_s):
     """One solver's plan of the case: its accurate settings with the case's overrides where the
-    solver has the key (an integrator it does not offer is left out), checked against the
+    solver has the key (an integrator it does not offer is left out; a dict value is per
+    solver: {name: value}, the solvers it does not name keep their own), checked against the
     output grid and the budgets."""
     info = solver.info(sc)
-    over = {k: v for k, v in case.settings.items() if k in info.defaults}
+    over = {k: v.get(solver.name) if isinstance(v, dict) else v
+            for k, v in case.settings.items() if k in info.defaults}
+    over = {k: v for k, v in over.items() if v is not None}
     integrator = over.pop("integrator", None)
     if integrator is not None and integrator not in info.integrator_names:
         integrator = None
     dt = over.get("dt", {**info.defaults, **solver.preset}.get("dt"))
-    if isinstance(dt, float) and dt > params["output_dt"] and "dt" not in case.settings:
+    if isinstance(dt, float) and dt > params["output_dt"] and "dt" not in over:
         over["dt"] = params["output_dt"]      # a fine output grid: its default step must fit
     return plan(sc, case.set, [solver.name], over, Knobs(integrator=integrator),
                 timeout_s=timeout_s)

@@ -532,6 +532,9 @@ def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolutio
     sc = get_scene(scene_name)
     if sc.kind != "time":
         raise BadInput(f"scene {sc.name!r} is a frequency scene: maps are of time scenes")
+    if level is not None and observable is None:      # a level of which observable?
+        raise BadInput(f"--level needs --observable NAME (of {sc.name}: "
+                       f"{', '.join(sc.map_observables) or 'none'})")
     if observable is None and sc.regime is None and sc.map_observables:
         observable = next(iter(sc.map_observables))
     if observable is None and sc.regime is None:

@@ -127,7 +127,8 @@ def test_to_pandas_without_pandas_names_the_extra(monkeypatch):
     from compare.workflows.results import ModesResult, TimeResult
     extras = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())[
         "project"]["optional-dependencies"]
-    table = SimpleNamespace(to_arrow=lambda what, t=pa.table({"t": [0.0]}): t)
+    arrow = pa.table({"t": [0.0]})                             # before pandas is hidden
+    table = SimpleNamespace(to_arrow=lambda what: arrow)
     monkeypatch.setitem(sys.modules, "pandas", None)          # as if not installed
     for cls in (TimeResult, ModesResult):
         with pytest.raises(ImportError) as e:

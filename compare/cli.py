@@ -99,12 +99,33 @@ def _budget_options(sp):
                          "default 1e9)")
 
 
+def version() -> str:
+    """The installed distribution's version (pyproject.toml's, as pip installed it)."""
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as dist_version
+    try:
+        return dist_version("xval")
+    except PackageNotFoundError:                  # a clone used without `pip install`
+        return "unknown (not installed: pip install -e .)"
+
+
+def warn_workers(args):
+    """--workers above the cores this process may use: one line, then carry on (the jobs
+    share the cores: no faster, more memory)."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    if args.workers and not args.scheduler and cores and args.workers > cores:
+        print(f"xval: warning: --workers {args.workers} is more than the {cores} cores here: "
+              f"the jobs share them (no faster, more memory)", file=sys.stderr)
+
+
 def build_parser():
     p = _Parser(prog="xval", description="Cross-validate multibody dynamics solvers: the same "
                 "scene through our implementations of published methods, Exudyn and MuJoCo, "
                 "compared in numbers, plots and rerun recordings.",
                 epilog="Exit status: 0 finished, 1 a verdict is disagree under --strict, 2 bad "
                        "input (one line, nothing run), 3 a solver crashed.")
+    p.add_argument("--version", action="version", version=f"xval {version()}",
+                   help="print the installed version and exit")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser,
                            metavar="COMMAND")
     sub.add_parser("list", help="list scenes and solvers",
@@ -427,6 +448,7 @@ def cmd_campaign(args):
             raise BadInput(f"--baseline {args.baseline}: is the folder this campaign writes (it "
                            f"would be diffed against itself): save it first with `xval "
                            f"baseline save {args.baseline} base.npz` and pass base.npz")
+    warn_workers(args)
     try:
         with stdout_to_stderr():
             r = api.campaign(args.file, executor=args.executor, scheduler=args.scheduler,
@@ -518,6 +540,7 @@ def cmd_map(args):
     coarse = _coarse(args.coarse) if args.coarse else None
     if coarse and not args.y:
         coarse = (coarse[0], 1)
+    warn_workers(args)
     try:
         with stdout_to_stderr():
             r = api.map(args.scene, args.x, args.y, args.solver, resolution=args.resolution,

@@ -178,7 +178,7 @@ def test_result_views_hold_the_same_numbers(xval_run):
     try:
         import pandas  # noqa: F401
     except ImportError:
-        with pytest.raises(ImportError, match="pip install pandas"):
+        with pytest.raises(ImportError, match=r"pip install 'xval\[pandas\]'"):
             r.to_pandas()
     else:
         assert r.to_pandas().shape[0] == 4 * len(r.t)

@@ -71,3 +71,67 @@ def test_every_option_of_every_subcommand_has_a_help_line():
     assert missing == []
     assert {c.dest for c in sub._choices_actions} == set(sub.choices)   # each command too
     assert all(c.help for c in sub._choices_actions)
+
+
+def test_version_is_the_one_in_pyproject():
+    """`xval --version`: exit 0, the version pyproject.toml declares (read here, not by xval)."""
+    import tomllib
+    from pathlib import Path
+    declared = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())
+    rc, so, se = xval("--version")
+    assert rc == 0 and so.strip() == f"xval {declared['project']['version']}", se
+
+
+def test_level_without_an_observable_is_refused(tmp_path):
+    """--level of which observable? (rotor-spinup maps its regime: the level used to be
+    dropped without a word)."""
+    rc, so, se = xval("map", "rotor-spinup", "--x", "torque=1:5", "--level", "40",
+                      "--out", str(tmp_path / "o"))
+    assert rc == 2 and so == "" and len(se.strip().splitlines()) == 1, se
+    assert "--level needs --observable" in se and not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("command", ["map", "campaign"])
+def test_more_workers_than_cores_is_one_warning_line_and_goes_on(command, monkeypatch, capsys,
+                                                                  tmp_path):
+    import os
+
+    from compare import api
+    from compare.cli import main
+    cores = len(os.sched_getaffinity(0))
+
+    class Ran(Exception):
+        pass
+
+    def started(*a, workers=None, **kw):       # the study starts, with the workers asked for
+        raise Ran(workers)
+    monkeypatch.setattr(api, command, started)
+    argv = [command] + (["rotor-spinup", "--x", "torque=1:5"] if command == "map" else [])
+    for n, warned in ((cores, False), (cores + 1, True)):
+        with pytest.raises(Ran) as ran:
+            main(argv + ["--workers", str(n), "--out", str(tmp_path / "o")])
+        err = capsys.readouterr().err
+        assert ran.value.args == (n,)
+        assert err.count("\n") == warned and (f"more than the {cores} cores" in err) == warned
+
+
+def test_to_pandas_without_pandas_names_the_extra(monkeypatch):
+    """The message names an extra that pyproject.toml declares, pinned like the others."""
+    import re
+    import tomllib
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    import pyarrow as pa
+
+    from compare.workflows.results import ModesResult, TimeResult
+    extras = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())[
+        "project"]["optional-dependencies"]
+    arrow = pa.table({"t": [0.0]})                             # before pandas is hidden
+    table = SimpleNamespace(to_arrow=lambda what: arrow)
+    monkeypatch.setitem(sys.modules, "pandas", None)          # as if not installed
+    for cls in (TimeResult, ModesResult):
+        with pytest.raises(ImportError) as e:
+            cls.to_pandas(table)
+        extra = re.search(r"pip install 'xval\[(\w+)\]'", str(e.value)).group(1)
+        assert re.fullmatch(r"pandas==[\d.]+", " ".join(extras[extra]))

@@ -191,6 +191,37 @@ def test_bad_input_one_line_exit_2(folders, tmp_path):
     assert rc == 2 and "incomplete campaign folder" in se
 
 
+def test_an_empty_or_cut_file_is_one_line_exit_2(folders, tmp_path, capsys):
+    """An empty file, a baseline cut short, a run folder whose result.json or trajectory is
+    cut: one line naming the file, exit 2 (a traceback's exit 1 would read as "changed")."""
+    from compare.cli import main
+    base = tmp_path / "base.npz"
+    sides.save_baseline(folders["A"], base)
+    run = tmp_path / "run"
+    shutil.copytree(folders["A"] / "spin", run)
+    for name in ("cut-json", "cut-npz"):
+        shutil.copytree(run, tmp_path / name)
+    result = tmp_path / "cut-json" / "result.json"
+    result.write_text(result.read_text()[:200])
+    npz = next((tmp_path / "cut-npz").glob("*.npz"))
+    npz.write_bytes(npz.read_bytes()[:1000])
+    (tmp_path / "empty.npz").write_bytes(b"")
+    (tmp_path / "cut.npz").write_bytes(base.read_bytes()[:base.stat().st_size // 2])
+    for old, new, bad, what in [
+            ("empty.npz", folders["A"], "empty.npz", "empty file"),
+            ("cut.npz", folders["A"], "cut.npz", "not a complete .npz"),
+            ("cut-json", run, result, "broken JSON"),
+            (run, "cut-npz", npz, "cannot be read")]:
+        capsys.readouterr()
+        rc = main(["diff", str(tmp_path / old), str(tmp_path / new), "--out",
+                   str(tmp_path / "o")])
+        so, se = capsys.readouterr()
+        assert rc == 2 and so == "", se
+        assert len(se.strip().splitlines()) == 1 and f"{tmp_path / bad}: " in se, se
+        assert what in se, se
+    assert main(["diff", str(base), str(folders["A"]), "--out", str(tmp_path / "o")]) == 0
+
+
 def test_campaign_with_baseline_exits_1_when_results_moved(folders, tmp_path):
     base = tmp_path / "base.npz"
     sides.save_baseline(folders["A"], base)

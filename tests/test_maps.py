@@ -111,17 +111,61 @@ def test_work_over_the_budget_is_refused_with_one_line(tmp_path):
 
 
 def test_map_json_has_the_contract_fields(tmp_path):
+    """contract.md's `xval map --json`: x with its unit, points with regime and value, the
+    boundaries, the pairwise comparisons, each solver's points per second, the map's image."""
     r = _xval("map", "rotor-spinup", "--x", "torque=2.5:3.5", "--set", "eccentricity=0.005",
-              "--solver", "quaternion", "--resolution", "0.05", "--coarse", "3", "--json",
-              "--out", str(tmp_path), cwd=tmp_path)
+              "--solver", "quaternion", "--solver", "euler-vector", "--resolution", "0.05",
+              "--coarse", "3", "--json", "--out", str(tmp_path), cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     obj = json.loads(r.stdout)
     assert obj["scene"] == "rotor-spinup" and obj["y"] is None
-    assert {"params", "solver", "regime"} <= set(obj["points"][0])
-    (c,) = obj["boundaries"]["quaternion"]
-    assert {"x", "y", "bracket", "from", "to"} <= set(c) and c["y"] is None
+    assert obj["x"] == {"name": "torque", "lo": 2.5, "hi": 3.5, "unit": "N·m"}
+    for p in obj["points"]:
+        assert {"params", "solver", "regime", "value", "status", "error_estimate"} <= set(p)
+        assert p["value"] is None and p["regime"] in ("capture", "passage")
+    for s in ("quaternion", "euler-vector"):
+        (c,) = obj["boundaries"][s]
+        assert {"x", "y", "bracket", "from", "to"} <= set(c) and c["y"] is None
+        n = sum(p["solver"] == s for p in obj["points"])
+        assert obj["points_per_s"][s] == pytest.approx(obj["runs"][s] / obj["run_wall_s"][s])
+        assert obj["runs"][s] >= n > 0
+    (v,) = obj["comparisons"]
+    assert {v["a"], v["b"]} == {"quaternion", "euler-vector"} and v["verdict"] == "agree"
+    assert obj["map"].endswith("map.png") and (tmp_path / obj["map"]).exists()
     for f in ("plot", "report", "recording"):
         assert (tmp_path / obj["files"][f]).exists()
+
+
+def test_a_script_without_the_main_guard_maps_in_this_process(tmp_path):
+    """`xval.map()` at a plain script's top level: spawned workers would import the script
+    again and die (BrokenProcessPool); it runs in-process with one line saying what to add."""
+    script = tmp_path / "plain.py"
+    script.write_text(
+        "import sys\nimport xval\n\n"
+        "r = xval.map('rotor-spinup', 'torque=1:5', solvers=['quaternion'], resolution=0.2,\n"
+        "             coarse=3, workers=2, record=False, t_end=0.5, out=sys.argv[1])\n"
+        "print(*sorted(p['params']['torque'] for p in r['points'] if p['status'] == 'ok'))\n")
+    r = subprocess.run([sys.executable, str(script), str(tmp_path / "o")], cwd=tmp_path,
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["1.0", "3.0", "5.0"]          # the 3 coarse points, all ok
+    (line,) = [ln for ln in r.stderr.splitlines() if ln.startswith("xval:")]
+    assert str(script) in line and 'if __name__ == "__main__":' in line
+
+
+def test_the_main_guard_is_read_from_the_scripts_source(tmp_path):
+    """Where the call sits: at the top level (also through a function) it is unguarded; under
+    `if __name__ == "__main__":` (either way round) it is not."""
+    script = tmp_path / "s.py"
+    script.write_text(
+        "from compare.workflows.executors import unguarded_script\n"
+        "def f():\n    return unguarded_script()\n"
+        "print(unguarded_script() is not None, f() is not None)\n"
+        "if __name__ == '__main__':\n    print(f() is not None)\n"
+        "if '__main__' == __name__:\n    print(unguarded_script() is not None)\n")
+    r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0 and r.stdout.split() == ["True", "True", "False", "False"], r.stderr
 
 
 def test_bench_points_runs_the_map_batch_path(tmp_path):

@@ -8,6 +8,7 @@ POSIX system; a worker busy inside a compiled kernel sees it when the kernel ret
 whose pipe the workers held, ends with them. `terminated_as_interrupt()` turns SIGTERM into
 the Ctrl-C path (finished jobs kept, one line saying how to resume, the lock released).
 """
+import ast
 import ctypes
 import multiprocessing
 import os
@@ -81,6 +82,37 @@ def make_executor(kind, scheduler, workers, ignore_sigint=False):
                                mp_context=multiprocessing.get_context("spawn"),
                                initializer=_worker_init,
                                initargs=(os.getpid(), ignore_sigint)), None
+
+
+def _is_main_test(node):
+    """`__name__ == "__main__"` (either way round)."""
+    if not (isinstance(node, ast.Compare) and len(node.ops) == 1
+            and isinstance(node.ops[0], ast.Eq)):
+        return False
+    sides = [node.left, node.comparators[0]]
+    return (any(isinstance(x, ast.Name) and x.id == "__name__" for x in sides)
+            and any(isinstance(x, ast.Constant) and x.value == "__main__" for x in sides))
+
+
+def unguarded_script():
+    """The script whose top level called us outside `if __name__ == "__main__":`, or None.
+    A spawned pool worker imports the main script again: from that line it would call us
+    again and die (BrokenProcessPool). None where there is no script file (a notebook,
+    `python -c`) or its source cannot be read."""
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    f = sys._getframe(1)
+    while f is not None and not (f.f_globals is vars(main) and f.f_code.co_name == "<module>"):
+        f = f.f_back
+    if f is None or not path:
+        return None
+    try:
+        tree = ast.parse(open(path, encoding="utf-8").read())
+    except (OSError, SyntaxError, ValueError):
+        return None
+    guarded = any(isinstance(n, ast.If) and _is_main_test(n.test)
+                  and n.body[0].lineno <= f.f_lineno <= n.body[-1].end_lineno for n in tree.body)
+    return None if guarded else path
 
 
 class Interrupted(Exception):

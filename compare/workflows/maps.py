@@ -21,6 +21,7 @@ import hashlib
 import json
 import math
 import os
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,7 +34,13 @@ from ..errors import BadInput
 from ..scenes import get_scene
 from . import plan as planner
 from .digest import STORE_VERSION, job_code
-from .executors import Interrupted, make_executor, stop, terminated_as_interrupt
+from .executors import (
+    Interrupted,
+    make_executor,
+    stop,
+    terminated_as_interrupt,
+    unguarded_script,
+)
 
 NONE = "none"                     # an observable's label where its event did not happen
 MAX_JOBS = 100_000                # runs a map may plan before it is refused (--max-jobs)
@@ -532,6 +539,9 @@ def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolutio
     sc = get_scene(scene_name)
     if not sc.is_time:
         raise BadInput(f"scene {sc.name!r} is a frequency scene: maps are of time scenes")
+    if level is not None and observable is None:      # a level of which observable?
+        raise BadInput(f"--level needs --observable NAME (of {sc.name}: "
+                       f"{', '.join(sc.map_observables) or 'none'})")
     if observable is None and sc.regime is None and sc.map_observables:
         observable = next(iter(sc.map_observables))
     if observable is None and sc.regime is None:
@@ -669,19 +679,24 @@ def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=N
                                # (points bracketing a crossing); None where not rerun
                                "error_estimate": tight})
     verdicts = compare_boundaries(found, width, readings(points, xa.name, y_name, level))
+    for p in points:                     # contract.md: every point has both (one is None)
+        p.setdefault("regime", None)
+        p.setdefault("value", None)
+    per_solver = {s: runner.runs[s] / runner.wall[s] for s in runner.runs if runner.wall.get(s)}
     return {"scene": sc.name, "x": xa.as_dict(), "y": ya.as_dict() if ya else None,
             "set": plan["overrides"], "observable": what, "level": level,
             "resolution": plan["resolution"], "bracket_width": width,
             "coarse": list(plan["coarse"]), "engines": plan["engines"],
             "settings": settings, "estimate": plan["estimate"],
             "points": points, "boundaries": found,
-            "verdicts": verdicts, "status": verdict_status(verdicts),
+            "verdicts": verdicts, "comparisons": verdicts,     # contract.md's name
+            "status": verdict_status(verdicts),
             "value_deviation": _value_deviation(lines) if what is not None else [],
             "slope_at_lo": slopes,
             "runs": dict(runner.runs), "uniform_grid_runs": uniform,
             "run_wall_s": dict(runner.wall), "wall_s": wall,
-            "points_per_core_second": {s: runner.runs[s] / runner.wall[s]
-                                       for s in runner.runs if runner.wall.get(s)},
+            # per solver: points per second of its own run time (contract.md's points_per_s)
+            "points_per_core_second": per_solver, "points_per_s": per_solver,
             "points_per_second": sum(runner.runs.values()) / wall if wall > 0 else None,
             "reused": sum(1 for r in runner.memo.values() if r.get("reused"))}
 
@@ -727,23 +742,31 @@ def map_to_folder(plan, out, settings_for=None, executor="local", scheduler=None
         sc = plan["scene"]
         salt = {"store": STORE_VERSION, "code": job_code(sc, plan["chosen"]),
                 "versions": {s.name: solvers.versions(s) for s in plan["chosen"]}}
-    pool, client = make_executor(executor, scheduler, workers)
+    script = executor == "local" and unguarded_script()
+    if script:                     # its spawned workers would run the script again and die
+        print(f"xval: {script}: the map runs in this process, one point at a time; put the "
+              f'call under `if __name__ == "__main__":` for {workers} workers', file=sys.stderr)
+        pool, client = None, None
+    else:
+        pool, client = make_executor(executor, scheduler, workers)
     stopped = False
     try:
         with terminated_as_interrupt():
             result = run_map(plan, settings_for, pool, workers, store, log, salt)
     except KeyboardInterrupt:
         stopped = True
-        stop(pool)
+        if pool is not None:
+            stop(pool)
         n = len(list(Path(store).glob("*.json"))) if store else 0
         raise Interrupted(f"{n} map points are stored in {store} and will be reused"
                           if store else "map stopped") from None
     finally:
-        if not stopped:
+        if not stopped and pool is not None:
             pool.shutdown(wait=True)
         if client is not None:
             client.close()
     result["files"] = write_map_outputs(out_dir, result, record)
+    result["map"] = result["files"]["plot"]
     result["folder"] = str(out_dir)
     write_json(out_dir / "map.json", result)
     return result

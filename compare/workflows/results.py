@@ -131,8 +131,8 @@ def _pandas(table):
     try:
         import pandas  # noqa: F401
     except ImportError:
-        raise ImportError("to_pandas() needs pandas, which xval does not install "
-                          "(pip install pandas), or use to_arrow()") from None
+        raise ImportError("to_pandas() needs pandas, an optional extra: pip install "
+                          "'xval[pandas]' (or use to_arrow())") from None
     return table.to_pandas()
 
 

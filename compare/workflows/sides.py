@@ -17,6 +17,9 @@ the estimate between kept samples.
 from __future__ import annotations
 
 import json
+import zipfile
+import zlib
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -82,6 +85,37 @@ class Side:
 
 # --- reading folders --------------------------------------------------------------------------
 
+# what reading a cut, empty or foreign file raises (JSON, .npz, a key the format must have)
+UNREADABLE = (OSError, EOFError, ValueError, KeyError, TypeError, zipfile.BadZipFile, zlib.error)
+
+
+@contextmanager
+def readable(path):
+    """A file that cannot be read as written: one line naming it and what is wrong (exit 2;
+    for `diff` a traceback's exit 1 would read as "changes found")."""
+    try:
+        yield
+    except BadInput:
+        raise
+    except UNREADABLE as e:
+        p = Path(path)
+        if p.is_file() and p.stat().st_size == 0:
+            what = "empty file"
+        elif isinstance(e, json.JSONDecodeError):
+            what = f"broken JSON ({e.msg}, line {e.lineno} column {e.colno}); cut short?"
+        elif isinstance(e, KeyError):
+            what = f"not what xval writes (no {e})"
+        else:
+            line = str(e).splitlines()[0] if str(e) else ""
+            what = f"cannot be read ({type(e).__name__}: {line}); cut short, or not xval's?"
+        raise BadInput(f"{path}: {what}") from None
+
+
+def _json(path):
+    with readable(path):
+        return json.loads(Path(path).read_text())
+
+
 def load_side(path) -> Side:
     p = Path(path)
     if p.is_file():
@@ -106,16 +140,17 @@ def _load_campaign(p):
     if not (p / "summary.json").exists():
         raise BadInput(f"{p}: incomplete campaign folder (no summary.json: it was stopped); "
                        f"run the same `xval campaign` again to finish it")
-    summary = json.loads((p / "summary.json").read_text())
+    summary = _json(p / "summary.json")
     cases = {}
-    for obj in summary["cases"]:
-        name = obj["case"]
-        case_dir = p / name
-        if "frequencies_hz" in (obj.get("runs") or [{}])[0] or "campbell" in obj \
-                or (case_dir / "modes.json").exists():
-            cases[name] = _modes_case(name, obj)
-        else:
-            cases[name] = _time_case(name, obj, case_dir)
+    with readable(p / "summary.json"):
+        for obj in summary["cases"]:
+            name = obj["case"]
+            case_dir = p / name
+            if "frequencies_hz" in (obj.get("runs") or [{}])[0] or "campbell" in obj \
+                    or (case_dir / "modes.json").exists():
+                cases[name] = _modes_case(name, obj)
+            else:
+                cases[name] = _time_case(name, obj, case_dir)
     return Side(p, "campaign", cases, _load_maps(p))
 
 
@@ -123,11 +158,12 @@ def _load_run(p):
     if guard.is_incomplete(p) or not (p / "result.json").exists():
         raise BadInput(f"{p}: incomplete run folder ({guard.MARKER} marker, no result.json: "
                        f"the run was stopped before it finished); run it again")
-    obj = json.loads((p / "result.json").read_text())
-    name = obj["scene"]
-    if obj.get("runs") and "frequencies_hz" in obj["runs"][0]:
-        return Side(p, "run", {name: _modes_case(name, obj)})
-    return Side(p, "run", {name: _time_case(name, obj, p)})
+    obj = _json(p / "result.json")
+    with readable(p / "result.json"):
+        name = obj["scene"]
+        if obj.get("runs") and "frequencies_hz" in obj["runs"][0]:
+            return Side(p, "run", {name: _modes_case(name, obj)})
+        return Side(p, "run", {name: _time_case(name, obj, p)})
 
 
 def _verdicts(obj):
@@ -140,7 +176,7 @@ def _time_case(name, obj, folder):
         f = folder / f"{r['solver']}.npz"
         rec = RunRec(r["solver"], r["status"], r.get("settings", {}), reason=r.get("reason"))
         if f.exists():
-            with np.load(f, allow_pickle=False) as z:
+            with readable(f), np.load(f, allow_pickle=False) as z:
                 meta = json.loads(str(z["meta"]))
             rec.versions = meta.get("versions", {})
             rec.digest = meta["stats"].get("input_digest")
@@ -153,7 +189,8 @@ def _time_case(name, obj, folder):
 
 def _trajectory_loader(path):
     def load():
-        tr = Trajectory.load(path)
+        with readable(path):
+            tr = Trajectory.load(path)
         return {ch: Series(tr.t, x, tr.errors.get(ch)) for ch, x in tr.channels.items()}
     return load
 
@@ -177,10 +214,7 @@ def _load_maps(p):
     for f in sorted(p.rglob("map.json")):
         if "jobs" in f.relative_to(p).parts[:1]:
             continue
-        try:
-            obj = json.loads(f.read_text())
-        except (OSError, ValueError):
-            continue
+        obj = _json(f)
         key = str(f.parent.relative_to(p))
         out[obj.get("scene", "map") if key == "." else key] = {
             "scene": obj.get("scene"), "boundaries": obj.get("boundaries") or {}}
@@ -270,40 +304,42 @@ def save_baseline(path_in, out) -> dict:
 
 
 def _load_baseline(p):
-    try:
+    with readable(p):
+        if not zipfile.is_zipfile(p):              # np.load would try it as a pickle
+            raise zipfile.BadZipFile("not a complete .npz")
         z = np.load(p, allow_pickle=False)
         manifest = json.loads(str(z["manifest"]))
-    except (OSError, ValueError, KeyError):
-        raise BadInput(f"{p}: not a campaign folder, run folder or xval baseline") from None
-    if manifest.get("format") != BASELINE_FORMAT:
-        raise BadInput(f"{p}: not an xval baseline")
-    if manifest.get("version", 0) > BASELINE_VERSION:
-        raise BadInput(f"{p}: baseline version {manifest['version']} is newer than this "
-                       f"xval reads ({BASELINE_VERSION})")
-    rel, frac = manifest["recon"]["rel"], manifest["recon"]["err_frac"]
-    cases = {}
-    for name, c in manifest["cases"].items():
-        runs = {}
-        for solver, r in c["runs"].items():
-            rec = RunRec(solver, r["status"], r.get("settings") or {}, r.get("versions") or {},
-                         r.get("code"), r.get("digest"), r.get("reason"), r.get("frequencies"),
-                         r.get("labels"))
-            if r.get("arrays"):
-                rec.loader = _baseline_loader(z, r, rel, frac)
-            runs[solver] = rec
-        cases[name] = CaseRec(name, c["scene"], c["kind"], c["params"], runs,
-                              c.get("verdicts", {}), c.get("critical", {}), c.get("error"))
+        if not isinstance(manifest, dict) or manifest.get("format") != BASELINE_FORMAT:
+            raise BadInput(f"{p}: not an xval baseline")
+        if manifest.get("version", 0) > BASELINE_VERSION:
+            raise BadInput(f"{p}: baseline version {manifest['version']} is newer than this "
+                           f"xval reads ({BASELINE_VERSION})")
+        rel, frac = manifest["recon"]["rel"], manifest["recon"]["err_frac"]
+        cases = {}
+        for name, c in manifest["cases"].items():
+            runs = {}
+            for solver, r in c["runs"].items():
+                rec = RunRec(solver, r["status"], r.get("settings") or {},
+                             r.get("versions") or {}, r.get("code"), r.get("digest"),
+                             r.get("reason"), r.get("frequencies"), r.get("labels"))
+                if r.get("arrays"):
+                    rec.loader = _baseline_loader(z, r, rel, frac, p)
+                runs[solver] = rec
+            cases[name] = CaseRec(name, c["scene"], c["kind"], c["params"], runs,
+                                  c.get("verdicts", {}), c.get("critical", {}), c.get("error"))
     return Side(p, "baseline", cases, manifest.get("maps", {}))
 
 
-def _baseline_loader(z, r, rel, frac):
+def _baseline_loader(z, r, rel, frac, path):
     def load():
         pre = r["arrays"]
-        t = z[f"{pre}.t"]
+        with readable(path):
+            t = z[f"{pre}.t"]
+            xs = {ch: z[f"{pre}.x.{ch}"] for ch in r["channels"]}
+            errs = {ch: z[f"{pre}.e.{ch}"].astype(float) for ch in r["errors"]}
         out = {}
         for ch in r["channels"]:
-            x = z[f"{pre}.x.{ch}"]
-            err = z[f"{pre}.e.{ch}"].astype(float) if ch in r["errors"] else None
+            x, err = xs[ch], errs.get(ch)
             scale = float(np.nanmax(np.abs(x))) if np.isfinite(x).any() else 0.0
             recon = np.full(len(t), rel * scale)
             if err is not None:

@@ -60,8 +60,10 @@ def test_round_off_the_tighter_rerun_cannot_see_is_in_the_bound(tmp_path):
     """Torque 3.2 → 3.2000001 (t_end 5) moved the custom pair's `potential` to 2.10e-8 J
     against error estimates 1.2e-8 + allowance 7.2e-9: the rtol-1e-13 rerun's own error
     (~2e-9 J: the step-size controller's jitter) was taken for zero. With what the rerun
-    cannot see added, every channel agrees and the estimate still explains the deviation
-    (a bound 10× the deviation would say nothing)."""
+    cannot see added, every channel agrees and the estimate itself explains the deviation
+    (measured 2.04e-8 against 2.10e-8; without the unseen error it was 1.2e-8, which the
+    scene's allowance, 3e-10 of the scale since the allowances were measured per pair, would
+    now hide: so the estimate is checked on its own), and the bound is not 10× loose."""
     p = SPINUP.resolve({"torque": 3.2000001, "t_end": 5.0})
     chosen = [solvers.get_solver("euler-vector"), solvers.get_solver("quaternion")]
     res = runner.run_scene(SPINUP, p, chosen, lambda s: solvers.settings_for(s, SPINUP.name),
@@ -69,4 +71,4 @@ def test_round_off_the_tighter_rerun_cannot_see_is_in_the_bound(tmp_path):
     pot = next(c for c in res.comparisons if c.channel == "potential")
     assert all(c.verdict == "agree" for c in res.comparisons), [c.decided_by for c in
                                                                 res.comparisons]
-    assert pot.deviation > pot.allowance and pot.ratio > 0.1
+    assert pot.error_estimate >= 0.9 * pot.deviation and pot.ratio > 0.1

@@ -240,7 +240,7 @@ def modes_for(params, settings, clamped):
                          f"(the mode-shape stations sit on nodes), shaft_elements and "
                          f"tail_elements positive integers; got {mesh}")
     w, shapes, unstable = frequencies(L, spin, mesh, clamped, n_modes)
-    notes = []
+    notes, change = [], np.zeros_like(w)
     if s["richardson"]:
         w2, shapes, unstable = frequencies(L, spin, tuple(2 * m for m in mesh), clamped,
                                            n_modes)
@@ -248,13 +248,15 @@ def modes_for(params, settings, clamped):
         ext = w2[:k] + (w2[:k] - w[:k]) / 15.0
         notes.append(f"meshes {mesh} and twice; Richardson change "
                      f"{np.max(np.abs(ext - w2[:k]) / ext):.1e}")
-        w, shapes = ext, shapes[:k]
+        w, shapes, change = ext, shapes[:k], np.abs(ext - w2[:k])
     if unstable:
         notes.append(f"divergent (real) eigenvalues {np.round(unstable, 4).tolist()} 1/s")
     from custom_models.mstmm.labels import label_modes
     labels = label_modes(np.array(shapes), w, L, spin)
     return ModesResult(frequencies_hz=w / (2 * np.pi), labels=labels, shapes=np.array(shapes),
-                       settings=s, notes=notes, extra={"unstable": unstable})
+                       settings=s, notes=notes,
+                       extra={"unstable": unstable,
+                              "richardson_change_hz": change / (2 * np.pi)})
 
 
 def modes(params: dict, settings: dict) -> ModesResult:

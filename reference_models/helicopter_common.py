@@ -178,17 +178,42 @@ def mbc_matrices(linearised, params: dict, n: int, psi: float = 0.0, free: bool 
             secs)
 
 
-def eigen(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False):
-    """Eigenvalues (Im > 0, ascending) and eigenvectors in multi-blade coordinates, the
-    coordinate names, and the seconds the engine spent linearising. Free: rigid-body roots
-    (|s| < 1e-3 rad/s) dropped."""
+# A root grows when Re s exceeds this. Numerical noise of Re s (both engines, both scenes,
+# N = 20 and 40): at rest ≤ 9.1e-10 1/s on the oscillating roots, ≤ 1.4e-11 on the free
+# aircraft's rigid-body roots; spinning ≤ 4.1e-5 (oscillating) and ≤ 1.04e-4 (rigid-body): the
+# finite differences of the velocity Jacobian (2.5e-5 relative, see the engines' modules).
+# 10 × the largest noise; a growth time of 1000 s.
+GROWTH_TOL = 1e-3
+RIGID_BODY = 1e-3       # |s| [1/s] below: the free aircraft's rigid-body roots (noise ≤ 1.1e-4)
+
+
+def roots(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False):
+    """Every root s of p̈ = K p + D ṗ with Im s ≥ 0 — oscillating, real (growing or decaying)
+    and rigid-body alike — and its eigenvector in multi-blade coordinates, the coordinate
+    names and the seconds the engine spent linearising."""
     K, D, names, secs = mbc_matrices(linearised, params, n, psi, free)
     m = len(names)
     lam, V = np.linalg.eig(np.block([[np.zeros((m, m)), np.eye(m)], [K, D]]))
+    keep = lam.imag >= 0
+    return lam[keep], V[:m, keep], names, secs
+
+
+def growing(lam: np.ndarray) -> np.ndarray:
+    """Re s of the roots that grow (Re s > GROWTH_TOL), oscillating or real, largest first."""
+    g = lam.real[(lam.real > GROWTH_TOL) & (np.abs(lam) > RIGID_BODY)]
+    return np.sort(g)[::-1]
+
+
+def eigen(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False):
+    """The oscillating roots (Im > 0, ascending) and their eigenvectors in multi-blade
+    coordinates, the coordinate names, the seconds the engine spent linearising, and every
+    root (`roots`: real ones included, for the stability finding). Rigid-body roots
+    (|s| < RIGID_BODY) are not modes."""
+    lam, V, names, secs = roots(linearised, params, n, psi, free)
     scale = np.max(np.abs(lam))
-    sel = (lam.imag > 1e-9 * scale) & (np.abs(lam) > 1e-3)
+    sel = (lam.imag > 1e-9 * scale) & (np.abs(lam) > RIGID_BODY)
     order = np.argsort(lam.imag[sel])
-    return lam[sel][order], V[:m, sel][:, order], names, secs
+    return lam[sel][order], V[:, sel][:, order], names, secs, lam
 
 
 BLADE_SHARE = 0.3   # a mode whose blades hold this share of |p|² is named after the blades
@@ -227,14 +252,15 @@ def classify(v: np.ndarray, names: list):
 
 def _frequencies(linearised, params, s, free):
     """Frequencies (Hz, Richardson-extrapolated from N/2 when asked: pairs by nearest
-    frequency), the extrapolation's change, the (family, kind, sense) of each mode and the
-    seconds spent linearising, in ascending order."""
+    frequency), the extrapolation's change, the (family, kind, sense) of each mode, the
+    seconds spent linearising, the number of coordinates and every root (the finer model's),
+    in ascending order."""
     n = bc.checked_segments(s)
-    lam, V, names, secs = eigen(linearised, params, n, s["psi"], free)
+    lam, V, names, secs, every = eigen(linearised, params, n, s["psi"], free)
     f = lam.imag / (2 * np.pi)
     change = np.zeros_like(f)
     if s["extrapolate"]:
-        lam2, _, _, secs2 = eigen(linearised, params, n // 2, s["psi"], free)
+        lam2, _, _, secs2, _ = eigen(linearised, params, n // 2, s["psi"], free)
         secs += secs2
         f2 = lam2.imag / (2 * np.pi)
         m = min(len(f), len(f2), 3 * params["n_modes"] + 12)
@@ -243,7 +269,8 @@ def _frequencies(linearised, params, s, free):
         ext[rows] = (4 * f[rows] - f2[cols]) / 3
         change[rows] = ext[rows] - f[rows]
         f = ext
-    return f, change, [classify(V[:, i], names) for i in range(len(f))], secs, len(names)
+    return (f, change, [classify(V[:, i], names) for i in range(len(f))], secs, len(names),
+            every)
 
 
 def _on_blades(f, kinds, speed_hz):
@@ -274,17 +301,29 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
 
     extra: `fixed_frame_hz` (the frequency an observer on the fuselage sees), `whirl`
     (regressive / progressive for cyclic modes), `richardson_change_hz` (the extrapolation's
-    change: the discretisation error estimate)."""
+    change: the discretisation error estimate), the stability finding: `finding` ('stable' or
+    'unstable'), `unstable` (Re s of every growing root, 1/s, also in the notes),
+    `max_re_per_s` (the largest Re s of any root), `real_roots_per_s` (the non-oscillating
+    roots beyond the rigid-body ones)."""
     s = merge_settings(settings, MODES_SETTINGS, ())
     t0 = time.perf_counter()
-    f, change, kinds, secs, n_dof = _frequencies(linearised, params, s, free)
+    f, change, kinds, secs, n_dof, every = _frequencies(linearised, params, s, free)
+    grow = growing(every)
+    real = np.sort(every.real[(np.abs(every.imag) <= 1e-9 * np.max(np.abs(every)))
+                              & (np.abs(every) > RIGID_BODY)])
+    notes = [note] + ([f"unstable: {len(grow)} growing root(s), Re s = "
+                       f"{np.round(grow, 4).tolist()} 1/s (> {GROWTH_TOL:g})"] if len(grow) else [])
     blade_f = _on_blades(f, kinds, params["speed"] / (2 * np.pi))
     order = np.argsort(blade_f)
     k = params["n_modes"]
     kinds = [kinds[i] for i in order]
     return ModesResult(frequencies_hz=blade_f[order][:k], labels=_labels(kinds)[:k],
-                       settings=s, notes=[note],
-                       extra={"fixed_frame_hz": f[order][:k],
+                       settings=s, notes=notes,
+                       extra={"finding": "unstable" if len(grow) else "stable",
+                              "unstable": grow.tolist(),
+                              "max_re_per_s": float(every.real.max()),
+                              "real_roots_per_s": real.tolist(),
+                              "fixed_frame_hz": f[order][:k],
                               "whirl": [w for _, _, w in kinds][:k],
                               "richardson_change_hz": change[order][:k],
                               "frequency_error_hz": np.abs(change[order][:k]),

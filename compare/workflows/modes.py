@@ -281,9 +281,10 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
             obj["mode_shapes_figure"] = str(drawn["figure"])
             md += ["", "## Mode shapes", "", drawn["text"], "", "![mode shapes](mode_shapes.png)"]
     if sc.explain_frequencies and any(c.verdict == "disagree" for c in comparisons):
+        ran = {r.solver: r for r in results}        # the runs above, not run again
         rows, lines_md = sc.explain_frequencies(
-            params, comparisons, lambda n, p: solvers.modes(sc, solvers.get_solver(n), p),
-            sc.tolerances_for(params))
+            params, comparisons, lambda n, p: ran[n] if p == params and n in ran
+            else solvers.modes(sc, solvers.get_solver(n), p), sc.tolerances_for(params))
         obj["explanations"] = rows
         md += [""] + lines_md
     if sc.campbell and campbell_sweep and any(

@@ -170,9 +170,8 @@ def _explain(runs, seeded=1.0):
             return runs[name]
         p = {**p, "speed": p["speed"] * seeded} if name == "mstmm" else p
         return solvers.modes(sc, solvers.get_solver(name), p)
-    comps = metrics.frequency_comparisons(list(runs.values()), sc.tolerances["frequency"],
-                                          sc.tolerances["frequency_by_solver"])
-    rows, md = sc.explain_frequencies(HP, comps, modes_at, sc.tolerances)
+    comps = metrics.frequency_comparisons(list(runs.values()), sc.tolerances_for(HP))
+    rows, md = sc.explain_frequencies(HP, comps, modes_at, sc.tolerances_for(HP))
     return comps, [r for r in rows if {r["a"], r["b"]} == {"mstmm", "exudyn"}], md
 
 

@@ -42,8 +42,11 @@ SHAFT_TOLERANCES = {"frequency": 1e-8, "frequency_by_solver": {"exudyn": 3e-6, "
 CLAMPED_TOLERANCES = {"frequency": 5e-6, "frequency_by_solver": BLADE_ENGINE_ALLOWANCE,
                       "frequency_by_pair": {"exudyn|mujoco": 5e-7}}
 # helicopter-hover (8 modes), same cases: mstmm–fem ≤ 4.2e-5 (fuselage 1 at speed), exudyn–mujoco
-# ≤ 6.0e-7, custom–engine at rest ≤ 1.62e-4 (flap cyclic 2)
-HOVER_TOLERANCES = {"frequency": 1e-4, "frequency_by_solver": {"exudyn": 5e-4, "mujoco": 5e-4},
+# ≤ 6.0e-7, custom–engine at rest ≤ 1.62e-4 (flap cyclic 2: the 8 modes at rest hold no lag
+# mode); at speed the 8 hold lag differential 1, where the sections' rotary inertia gives
+# 1.3e-3 as on the clamped aircraft (a differential mode: no frame question) — the blade's
+# allowance
+HOVER_TOLERANCES = {"frequency": 1e-4, "frequency_by_solver": BLADE_ENGINE_ALLOWANCE,
                     "frequency_by_pair": {"exudyn|mujoco": 3e-6}}
 
 

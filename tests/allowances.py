@@ -121,7 +121,8 @@ def allowance_table(table=None):
     demanding case. Measured: the deviation left beyond both error estimates; where the
     estimates cover it all, max|Δ| (the allowance then only widens a window ≥ max|Δ| already).
     `covers`: the allowance (+ estimates) covers every measured case (the verdict agrees);
-    `wider`: the scene file's documented reason for a wider one."""
+    `wider`: the scene file's documented reason for a wider one ({pair: reason} or
+    {pair: {channel: reason}})."""
     from compare.analysis.metrics import allowance, allowance_si, frequency_allowance
     from compare.scenes import ORIGIN, SCENES
     table = table if table is not None else json.loads(TABLE.read_text())
@@ -136,8 +137,11 @@ def allowance_table(table=None):
             mine = [n for n, t in judged.items() if t is tol]
             for a, b in _pairs(sc):
                 wider = tol.get("wider", {})
-                reason = wider.get(f"{a}|{b}") or wider.get(f"{b}|{a}")
+                pair_reason = wider.get(f"{a}|{b}") or wider.get(f"{b}|{a}")
                 for ch in channels(sc):
+                    # a reason for the whole pair, or {channel: reason}
+                    reason = (pair_reason.get(ch) if isinstance(pair_reason, dict)
+                              else pair_reason)
                     allow = (frequency_allowance(tol, a, b) if sc.kind == "modes"
                              else allowance(tol, a, b, ch))
                     ratio, measured, covers, where = None, None, True, []

@@ -66,7 +66,15 @@ def _tolerances(partial):
     return {**{c: 1e-9 for c in ("crank_angle", "crank_rate", "crank_accel", "rocker_angle",
                                  "slider_x")},
             "by_solver": {"lagrange-partial": partial, "mujoco": _MUJOCO},
-            "by_pair": {"lagrange-partial|mujoco": {"crank_accel": 2e-4}}}
+            "by_pair": {"lagrange-partial|mujoco": {"crank_accel": 2e-4}},
+            # lagrange-partial's own model error (its 0.1° finite differences: crank_rate 2.1e-6
+            # of scale against lagrange-exact) is the solver's, not the pair's; against MuJoCo
+            # the engine's error bar (its convergence ratio, 1/(1 − r) ≈ 2.3× the halving
+            # change) now holds most of it, leaving 1.4e-7
+            "wider": {"lagrange-partial|mujoco": {
+                "crank_rate": "lagrange-partial's finite-difference model error, 2.1e-6 of "
+                              "scale against lagrange-exact, partly inside MuJoCo's error bar "
+                              "here"}}}
 
 
 PRESS_TOLERANCES = _tolerances({"crank_angle": 1e-6, "crank_rate": 3e-6, "crank_accel": 1e-5,

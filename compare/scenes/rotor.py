@@ -211,7 +211,14 @@ SPINUP = Scene(
                 "by_pair": {"euler-vector|quaternion": {
                     c: ("rel+abs", r, 1e-11) for c, r in (
                         ("omega_norm", 3e-11), ("spin_rate", 3e-11), ("tilt", 1e-10),
-                        ("work", 3e-11), ("kinetic", 5e-11), ("potential", 3e-10))}}},
+                        ("work", 3e-11), ("kinetic", 5e-11), ("potential", 3e-10))}},
+                # since the error estimates hold the tighter rerun's own error (a third run at
+                # half its tolerance) 9.7e-13 J of work is left at the measured cases; the
+                # allowance keeps the 8.4e-11 measured before it as the margin for other
+                # torques (3.2 → 3.2000001 moved potential by 2.5e-9 J at rtol 1e-11)
+                "wider": {"euler-vector|quaternion": {
+                    "work": "the step controller's jitter between torques: 8.4e-11 of scale "
+                            "left before the estimates held the tighter rerun's own error"}}},
     key_channel="omega_norm",
     view_channels=("omega_norm", "tilt", "energy_balance"),
     energy_scale_channels=("kinetic", "potential", "work"),

@@ -13,17 +13,9 @@ from pathlib import Path
 
 import pytest
 from conftest import xval
+from test_faults import SLOW
 
-# one job of euler-vector at dt 1e-5 over 20 s (RK4, error estimate at half the step): ~3 s
-CAMPAIGN = """name = "slow"
-[[cases]]
-name = "spin"
-scene = "rotor-spinup"
-solvers = ["euler-vector"]
-dt = 1e-5
-set = { t_end = 20 }
-sweep = { torque = { start = 1.0, stop = 2.0, num = 4 } }
-"""
+CAMPAIGN = SLOW % 4         # four ~3-s jobs: long enough to be killed mid-run
 # the rotor's capture boundary along the torque over a long horizon: ~0.1 s a point
 MAP = ["map", "rotor-spinup", "--x", "torque=1:5", "--solver", "euler-vector",
        "--set", "t_end=200", "--coarse", "9", "--resolution", "0.05", "--no-record"]

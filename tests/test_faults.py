@@ -38,8 +38,11 @@ def popen():
     started = []
 
     def start(args):
+        # as from a terminal: SIGINT at its default, even where this test run inherited it
+        # ignored (a shell's background job: then Python never raises KeyboardInterrupt)
         p = subprocess.Popen([sys.executable, "-m", "compare", *args], stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, text=True, start_new_session=True)
+                             stderr=subprocess.PIPE, text=True, start_new_session=True,
+                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
         started.append(p)
         return p
     yield start

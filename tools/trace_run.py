@@ -1,6 +1,6 @@
 """Count the duplicated work behind one `xval run` (issue 27's trace).
 
-    python tools/trace_run.py run rotor-spinup --set torque=3.2 --set t_end=1 --out /tmp/x
+    python tools/trace_run.py run rotor-spinup --set torque=3.2 --set t_end=1 --out DIR
 
 Prints, for the command given: project files entered, calls of `get_scene`, `Solver.leaf`
 (and `LeafInfo` look-ups and builds), output-grid builds, settings checks (`merge_settings`, leaves'

@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from compare import solvers
-from compare.analysis import metrics
 from compare.scenes import SCENES, get_scene
 
 # short cases: time scenes a fraction of their horizon; the helicopters at rest, where the
@@ -47,9 +46,7 @@ def verdicts(scene_name, custom, change=None):
             runs.append(solvers.simulate(sc, s, q, solvers.settings_for(s, sc.name),
                                          estimate_error=sc.error_estimate))
     assert all(r.status == "ok" for r in runs), [(r.solver, r.status, r.reason) for r in runs]
-    if sc.kind == "modes":
-        return metrics.frequency_comparisons(runs, sc.tolerances_for(p))
-    return metrics.pairwise(runs, sc.tolerances_for(p))
+    return sc.verdicts(p, runs)
 
 
 @pytest.mark.parametrize("scene_name, custom", PAIRS, ids=lambda x: x)

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..analysis.metrics import first_crossing
+from ..analysis.metrics import first_crossing, frequency_comparisons, pairwise
 from ..errors import BadInput
 from .params import Param
 
@@ -227,6 +227,12 @@ class Scene:
         else the scene's."""
         return next((c.tolerances for c in self.allowance_cases if c.when(params)),
                     self.tolerances)
+
+    def verdicts(self, params, runs):
+        """Every pair of `runs` (Trajectories, or Modes for a frequency scene) compared and
+        judged against the allowances of `params` — the one way a scene judges its solvers."""
+        tol = self.tolerances_for(params)
+        return frequency_comparisons(runs, tol) if self.is_modes else pairwise(runs, tol)
 
     def output_grid(self, params):
         t_end, dt = params["t_end"], params["output_dt"]

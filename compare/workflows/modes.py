@@ -250,7 +250,7 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
     for s in chosen:
         log(f"{sc.name}: {s.name} …")
         results.append(solvers.modes(sc, s, params))
-    comparisons = metrics.frequency_comparisons(results, sc.tolerances_for(params))
+    comparisons = sc.verdicts(params, results)
     obj = {"scene": sc.name, "params": params,
            "runs": [{"solver": r.solver, "status": r.status, "wall_s": round(r.wall_s, 6),
                      "frequencies_hz": list(r.frequencies_hz), "labels": r.labels,

@@ -20,7 +20,6 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from .. import solvers
-from ..analysis import metrics
 from ..errors import BadInput
 from .plan import plan
 
@@ -65,10 +64,7 @@ class _Study:
                                 warm_up=False, t_out=self.pl.t_out)
 
     def compare(self, runs: dict) -> list:
-        rs = [runs[s.name] for s in self.chosen]
-        if self.sc.is_modes:
-            return metrics.frequency_comparisons(rs, self.sc.tolerances_for(self.p))
-        return metrics.pairwise(rs, self.sc.tolerances_for(self.p))
+        return self.sc.verdicts(self.p, [runs[s.name] for s in self.chosen])
 
     def perturbed(self, solver, name, eps):
         """The run of `solver` with parameter `name` × (1 + eps), its nominal error bars."""

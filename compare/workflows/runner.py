@@ -97,7 +97,7 @@ def run_scene(scene: Scene, params: dict, chosen: list[Solver], settings_for: Ca
 
 def finish_run(scene: Scene, params: dict, trajectories: list[Trajectory], files: dict,
                out_dir: str | Path, record: bool = True, report: bool = True) -> RunResult:
-    comparisons = metrics.pairwise(trajectories, scene.tolerances_for(params))
+    comparisons = scene.verdicts(params, trajectories)
     findings = scene.findings(params, trajectories) if scene.findings else []
     result = RunResult(scene, params, trajectories, comparisons, findings, Path(out_dir), files)
     return write_outputs(result, record, report)

@@ -50,3 +50,26 @@ def test_power_json_and_bad_input():
         ("channel", "epsilon", "how", "pair", "parameter", "solver")}
     rc, out, err = cli("power", "rotor-whirl", "--parameter", "n_spin")
     assert rc == 2 and err.count("\n") == 1 and "n_spin" in err
+
+
+def test_a_campaign_case_estimates_its_power_as_xval_power_confirms_it(tmp_path):
+    """A campaign case's ε* comes from one solver's sensitivities without a confirming run;
+    `xval power` finds each ε* from runs of the solver itself (confirmed, or bisected). The
+    estimate's bracket [(B − Δ₀)/D, (B + Δ₀)/D] must hold the ε* those runs find (1.5: the
+    bisection's last bracket) — a sensitivity off by its step H (ε 1e4× too large) or taken
+    from a run of the wrong parameter fails this."""
+    case = {"scene": "rotor-spinup", "set": {"t_end": "1", "torque": "3.2"},
+            "solvers": ["euler-vector", "quaternion"]}
+    f = tmp_path / "camp.json"
+    f.write_text(json.dumps({"name": "p", "cases": [{"name": "c", "power": True, **case}]}))
+    s = xval.campaign(str(f), out=str(tmp_path))
+    (c,) = s["cases"]
+    estimate = {(r["parameter"], r["solver"]): r["bracket"] for r in c["power"]}
+    confirmed = xval.power("rotor-spinup", case["solvers"], params=case["set"],
+                           parameters=["m", "R", "torque"])
+    for r in confirmed["power"]:
+        lo, hi = estimate[(r["parameter"], r["solver"])]
+        assert r["epsilon"] is not None, r
+        assert lo / 1.01 <= r["epsilon"] <= hi * 1.5, (r, lo, hi)
+    report = (tmp_path / "campaign" / "p" / "report.md").read_text()
+    assert "worst ε*" in report and "Detection power" in report

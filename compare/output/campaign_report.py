@@ -40,6 +40,20 @@ def _worst(obj):
     return max(cs, key=lambda c: c["max_rel"] / c["tolerance"]) if cs else None
 
 
+def _worst_power(obj):
+    """The case's least visible (parameter, solver) and its ε*, and the parameters it does
+    not verify in some solver; — where the case measured no power."""
+    rows = obj.get("power")
+    if rows is None:
+        return "—"
+    found = [r for r in rows if r["epsilon"] is not None]
+    blind = sorted({r["parameter"] for r in rows if r["epsilon"] is None})
+    text = (f"{max(r['epsilon'] for r in found):.1g} "
+            f"(`{max(found, key=lambda r: r['epsilon'])['parameter']}`)" if found
+            else "none")
+    return text + (f"; not verified: {', '.join(blind)}" if blind else "")
+
+
 def _comparison_rows(obj, full_up_to=12):
     """Every comparison when there are few; else one row per channel with its worst pair
     (closest to or furthest over the tolerance) and the verdict counts (the case report has
@@ -141,8 +155,12 @@ def write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed, 
           f"solver, settings, package versions, model code), {len(crashed)} crashed; "
           f"{wall_s:.1f} s.", "", "Sources:", ""] + [f"- {r}" for r in refs]
     md += ["", "## Overview", "",
+           "Worst ε*: the largest of the smallest relative changes of one physical parameter "
+           "in one solver that the case's verdicts detect (estimated from one solver's "
+           "sensitivities; `xval power` confirms with runs) — what the case's `agree` is "
+           "worth.", "",
            "| case | scene | solvers ok | failed | verdicts | worst deviation / tolerance | "
-           "report |", "|---|---|---|---|---|---|---|"]
+           "worst ε* | report |", "|---|---|---|---|---|---|---|---|"]
     sweeps = {}
     for c in cases:
         obj = outcome.get(c.name, {"runs": [], "comparisons": [], "error": "not finished"})
@@ -154,7 +172,7 @@ def write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed, 
                  f"{_num(w['tolerance'], '.0e')}" if w else "—")
         md.append(f"| {c.name} | {c.scene.name} | {', '.join(ok) or '—'} | "
                   f"{', '.join(bad) or '—'} | {_verdicts(obj)} | {worst} | "
-                  f"[report]({c.name}/report.md) |")
+                  f"{_worst_power(obj)} | [report]({c.name}/report.md) |")
         mine_reused = sorted(j.solver or "modes" for j in jobs
                              if j.case == c.name and j.label in reused)
         summary["cases"].append({"case": c.name, "sweep": c.sweep_parent,
@@ -173,6 +191,8 @@ def write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed, 
                    "scene's tolerance; every pair in the case report):", ""]
             md += _comparison_rows(obj)
         md += _findings(obj)
+        if "power_summary" in obj:
+            md += ["", f"Detection power: {obj['power_summary']} (table in the case report)."]
         md += _reuse_and_messages(c, jobs, reused, out_dir)
     for parent, points in sweeps.items():
         png = sweep_plot(parent, points, outcome, out_dir / parent / "sweep.png")

@@ -204,8 +204,26 @@ def run_markdown(result, figures):
             f"{_fmt(c.max_rel, '.2e')} | {c.tolerance:.2g} | {metrics.ratio_text(c.ratio)} | "
             f"**{c.shown}** |"
             for c in result.comparisons]
+    out += power_markdown(getattr(result, "power", None))
     out += [""] + [f"![{f}]({f})" for f in figures]
     return "\n".join(out) + "\n"
+
+
+def power_markdown(power) -> list[str]:
+    """The detection power of a run's verdicts: per parameter and solver the relative change,
+    reaching that solver only, that turns an agreeing verdict to disagree (`xval power`)."""
+    if power is None:
+        return []
+    out = ["", "## Detection power", "", power["summary"] + ".", ""]
+    if not power["rows"]:
+        return out
+    out += ["ε*: the smallest relative change of a parameter in one solver that turns one of "
+            "these verdicts to disagree (`xval power` confirms each with runs).", "",
+            "| parameter | solver | ε* | flips | channel | how |", "|---|---|---|---|---|---|"]
+    out += [f"| {r['parameter']} | {r['solver']} | {_fmt(r['epsilon'], '.2g')} | "
+            f"{' vs '.join(r['pair'] or ['—'])} | {r['channel'] or '—'} | {r['how']} |"
+            for r in power["rows"]]
+    return out
 
 
 def write_run_report(out_dir, result):

@@ -50,7 +50,7 @@ from ..errors import BadInput
 from ..output.joblog import captured, distinct_lines
 from ..output.progress import PlainProgress
 from ..scenes import get_scene
-from . import guard, runner
+from . import guard, power, runner
 from . import plan as planner
 from .digest import _scene_module, job_code
 from .executors import (  # noqa: F401  (connect: the API's check)
@@ -66,7 +66,7 @@ MAP_KEYS = ("name", "scene", "x", "y", "set", "solvers", "resolution", "coarse",
             "level", "engines")
 MAX_JOBS = 10_000          # jobs (cases × solvers) a campaign may plan before it is refused
 CASE_KEYS = ("name", "scene", "set", "sweep", "solvers", "dt", "rtol", "integrator",
-             "settings", "timeout_s")
+             "settings", "timeout_s", "power")
 
 
 BUILT_IN = ("default", "long")
@@ -77,8 +77,12 @@ def default_campaign(name: str = "default") -> dict:
     scene, every solver, minutes) or "long" (the cases a scene marks `"campaign": "long"`, e.g.
     the engines' full sail deployment, tens of minutes)."""
     from ..scenes import SCENES
+    # the default campaign's time cases report their detection power (`power`: one
+    # sensitivity run per physical parameter of the case's first solver)
     camp = {"name": name,
-            "cases": [{"scene": sc.name, **{k: v for k, v in case.items() if k != "campaign"}}
+            "cases": [{"scene": sc.name, **({"power": True} if name == "default" and sc.is_time
+                                            else {}),
+                       **{k: v for k, v in case.items() if k != "campaign"}}
                       for sc in SCENES.values() for case in sc.campaign_cases
                       if case.get("campaign", "default") == name]}
     if name == "default":              # each scene's default maps
@@ -182,6 +186,8 @@ def check_shape(camp, src):
         if "solvers" in c and not (isinstance(c["solvers"], list) and c["solvers"]
                                    and all(isinstance(s, str) for s in c["solvers"])):
             bad(f"{at}.solvers", "must be a non-empty list of solver names")
+        if "power" in c and not isinstance(c["power"], bool):
+            bad(f"{at}.power", f"must be true or false, got {c['power']!r}")
         for k in ("dt", "rtol", "timeout_s"):
             if k in c and not (_is_num(c[k]) and c[k] > 0):
                 bad(f"{at}.{k}", f"must be a positive number, got {c[k]!r}")
@@ -242,10 +248,14 @@ class Job:
     settings: dict
     timeout_s: float | None
     digest: str
+    # "run", or "sensitivity": the solver's response to each physical parameter, from which
+    # the case's detection power is estimated (`power.sensitivities`)
+    task: str = "run"
 
     @property
     def label(self):
-        return f"{self.case}/{self.solver or 'modes'}"
+        return f"{self.case}/{self.solver or 'modes'}" + (
+            "" if self.task == "run" else f" {self.task}")
 
     @property
     def key(self):
@@ -319,6 +329,12 @@ def plan(camp, src="built-in campaign", timeout_s=None, max_output_gib=None, max
             for s in pl.solvers:
                 jobs.append(Job(pname, sc.name, pl.params, overrides, s.name, (s.name,),
                                 pl.settings[s.name], pl.timeout_s, pl.only(s).digest()))
+            if c.get("power") and len(pl.solvers) > 1:
+                s = pl.solvers[0]            # the registry lists a scene's own solvers first
+                d = hashlib.sha256(f"{pl.only(s).digest()}|sensitivity|{power.H!r}".encode())
+                jobs.append(Job(pname, sc.name, pl.params, overrides, s.name, (s.name,),
+                                pl.settings[s.name], pl.timeout_s, d.hexdigest(),
+                                "sensitivity"))
     return cases, jobs
 
 
@@ -349,7 +365,14 @@ def run_job(job: Job, store: str):
     store = Path(store)
     t0 = time.perf_counter()
     with captured(store / f"{job.key}.log") as text:
-        if job.solver is None:
+        if job.task == "sensitivity":
+            sc = get_scene(job.scene)
+            sens = power.sensitivities(sc, solvers.get_solver(job.solver), job.params,
+                                       job.settings, sc.output_grid(job.params), job.timeout_s)
+            write_json(store / f"{job.key}.sensitivity.json",
+                       {"input_digest": job.digest, "solver": job.solver, "sensitivity": sens})
+            status = "ok" if sens else "error"
+        elif job.solver is None:
             from .modes import run_modes
             d = store / job.key
             obj, results, _ = run_modes(job.scene, list(job.solvers), job.overrides, None,
@@ -378,6 +401,9 @@ def _stored_meta(path):
 
 def is_done(job, store):
     """Stored with this digest and not stopped by its wall-clock limit."""
+    if job.task == "sensitivity":
+        f = store / f"{job.key}.sensitivity.json"
+        return f.exists() and json.loads(f.read_text()).get("input_digest") == job.digest
     if job.solver is None:
         f = store / job.key / "modes.json"
         return f.exists() and json.loads(f.read_text()).get("input_digest") == job.digest
@@ -535,7 +561,8 @@ def dispatch_order(jobs):
     job) — in reverse registry order, which lists the simplest first: so the pool does not end
     on one worker alone."""
     families: dict = {}
-    rank = {id(j): ((0, -i) if j.solver is None else (1, i)) for i, j in enumerate(jobs)}
+    rank = {id(j): ((0, -i) if j.solver is None else (1 + (j.task != "run"), i))
+            for i, j in enumerate(jobs)}
     for j in sorted(jobs, key=lambda j: rank[id(j)]):
         families.setdefault(_scene_module(get_scene(j.scene)), []).append(j)
     waves = itertools.zip_longest(*families.values())
@@ -576,14 +603,16 @@ def _finish_safely(case, jobs, store, out_dir, crashed, reused, view):
 def finish_case(case, jobs, store, out_dir, crashed, reused, view):
     """Link the stored results into the case folder, compare, record and report them (unless
     the same results were reported already). Returns the case's result dict."""
-    mine = [j for j in jobs if j.case == case.name]
+    everything = [j for j in jobs if j.case == case.name]
+    mine = [j for j in everything if j.task == "run"]
     case_dir = out_dir / case.name
-    key = hashlib.sha256(" ".join(j.digest for j in mine).encode()).hexdigest()
+    key = hashlib.sha256(" ".join(j.digest for j in everything).encode()).hexdigest()
     marker = case_dir / "case.json"
     if mine[0].solver is None:
         return _finish_modes(case, mine[0], store, case_dir, crashed)
     done_before = marker.exists() and json.loads(marker.read_text()).get("jobs") == key \
-        and (case_dir / "result.json").exists() and not any(j.label in crashed for j in mine)
+        and (case_dir / "result.json").exists() \
+        and not any(j.label in crashed for j in everything)
     if done_before:
         return json.loads((case_dir / "result.json").read_text())
     trs, files = [], {}
@@ -598,13 +627,34 @@ def finish_case(case, jobs, store, out_dir, crashed, reused, view):
                                   {c: np.full(len(t), np.nan) for c in case.scene.channels},
                                   status="error",
                                   reason=crashed.get(j.label, "no result file")))
+    sens = next((j for j in everything if j.task == "sensitivity"), None)
     with captured(case_dir / "report.log") as text:
-        res = runner.finish_run(case.scene, case.params, trs, files, case_dir)
+        res = runner.finish_run(case.scene, case.params, trs, files, case_dir,
+                                power=_case_power(sens, store, crashed))
     if text[0]:
         view.log(f"{case.name}: report phase said: {distinct_lines(text[0], 3)[0]} "
                  f"(see {case_dir / 'report.log'})")
     write_json(marker, {"jobs": key, "digests": {j.solver: j.digest for j in mine}})
     return res.as_json()
+
+
+def _case_power(job, store, crashed):
+    """The case's detection power estimated from its sensitivity job, as a function of the
+    comparisons (None: the case asked for none; a failed job gives no rows, and says so)."""
+    if job is None:
+        return None
+    f = store / f"{job.key}.sensitivity.json"
+    if job.label in crashed or not f.exists():
+        why = crashed.get(job.label, "no result file")
+        return lambda comparisons: ([], f"not measured: the sensitivity job failed ({why})")
+    sens = json.loads(f.read_text())["sensitivity"]
+    if not sens:
+        return lambda comparisons: ([], f"not measured: {job.solver}'s nominal run failed")
+
+    def rows(comparisons):
+        r = power.estimated(comparisons, sens, job.solver)
+        return [x.as_dict() for x in r], power.summary(r)
+    return rows
 
 
 def _finish_modes(case, job, store, case_dir, crashed):

@@ -33,12 +33,17 @@ class Power:
     parameter: str
     solver: str
     epsilon: float | None      # None: no ε up to 1 flips a verdict (or none to flip)
-    pair: str | None           # the comparison that flips first: "a vs b"
+    pair: list | None          # the comparison that flips first: [a, b]
     channel: str | None
     how: str                   # linear | bisection | why there is no ε
+    # an estimate's bracket [lo, hi] on ε* (`estimated`); `epsilon` is then hi
+    bracket: list | None = None
 
     def as_dict(self):
-        return asdict(self)
+        d = asdict(self)
+        if self.bracket is None:
+            del d["bracket"]
+        return d
 
 
 def _scaled(value, factor):
@@ -161,13 +166,64 @@ def _one(study, solver, name) -> Power:
         flips = _verdict_at(study, solver, name, eps)
         if flips:
             n = flips[0][1]
-            return Power(name, solver.name, eps, f"{n.a} vs {n.b}", n.channel, "linear")
+            return Power(name, solver.name, eps, [n.a, n.b], n.channel, "linear")
     found = _bisect(study, solver, name, min(eps, EPS_MAX))
     if found is None or found[0] is None:
         return Power(name, solver.name, None, None, None, f"no ε up to {EPS_MAX:g} flips a "
                      "verdict")
     e, n = found
-    return Power(name, solver.name, e, f"{n.a} vs {n.b}", n.channel, "bisection")
+    return Power(name, solver.name, e, [n.a, n.b], n.channel, "bisection")
+
+
+def sensitivities(sc, solver, params: dict, settings: dict, t_out, timeout_s=None) -> dict:
+    """{parameter: {channel: max|Δy| / H}} from one solver: the physics' response to a relative
+    change of each continuous physical parameter, which every solver that agrees with this one
+    shares to within that agreement. `H` as `xval power`'s finite difference; a parameter whose
+    step fails maps to None."""
+    run = lambda p: solvers.simulate(sc, solver, p, settings, timeout_s, False,  # noqa: E731
+                                     warm_up=False, t_out=t_out)
+    nominal = run(params)
+    if nominal.status != "ok":
+        return {}
+    out = {}
+    for q in sc.params:
+        if not q.continuous_physical or not np.any(np.asarray(params[q.name], float)):
+            continue
+        fd = run({**params, q.name: _scaled(params[q.name], 1.0 + H)})
+        out[q.name] = (None if fd.status != "ok" else
+                       {c: float(np.max(np.abs(fd.channels[c] - nominal.channels[c]))) / H
+                        for c in sc.channels})
+    return out
+
+
+def estimated(comparisons: list, sens: dict, by: str) -> list[Power]:
+    """ε* per (parameter, solver) from one solver's sensitivities `sens`, without a confirming
+    run (the campaign: one run per parameter of its cheapest solver is what a case can pay).
+    With a response linear in ε, a comparison with bound B, nominal deviation Δ₀ and output
+    change D per relative change cannot flip below (B − Δ₀)/D and must flip at (B + Δ₀)/D:
+    `epsilon` is the latter (what the verdicts are sure to detect) over the solver's agreeing
+    comparisons, `bracket` both ends; `xval power` confirms with runs."""
+    names = list(dict.fromkeys(x for c in comparisons for x in (c.a, c.b)))
+    rows = []
+    for name, d in sens.items():
+        for s in names:
+            if d is None:
+                rows.append(Power(name, s, None, None, None, f"the {H:g} step fails in {by}"))
+                continue
+            ends = [((c.tolerance * c.scale - c.max_abs) / d[c.channel],
+                     (c.tolerance * c.scale + c.max_abs) / d[c.channel], c)
+                    for c in comparisons
+                    if c.verdict == "agree" and s in (c.a, c.b) and d.get(c.channel)]
+            if not ends or min(e[1] for e in ends) > EPS_MAX:
+                rows.append(Power(name, s, None, None, None,
+                                  f"no agreeing comparison responds to it up to {EPS_MAX:g}"))
+                continue
+            lo = min(e[0] for e in ends)
+            hi, _, c = min((e[1], i, e[2]) for i, e in enumerate(ends))
+            rows.append(Power(name, s, hi, [c.a, c.b], c.channel,
+                              f"estimated from {by}'s sensitivity, unconfirmed",
+                              [max(lo, 0.0), hi]))
+    return rows
 
 
 def summary(rows: list[Power]) -> str:
@@ -210,7 +266,7 @@ def run_power(scene_name: str, overrides: dict, names: list[str],
             rows.append(_one(study, s, name))
             r = rows[-1]
             log(f"{sc.name}: {name} in {s.name}: "
-                + (f"ε* = {r.epsilon:.2g} ({r.pair}, {r.channel}; {r.how})"
+                + (f"ε* = {r.epsilon:.2g} ({' vs '.join(r.pair)}, {r.channel}; {r.how})"
                    if r.epsilon is not None else f"none ({r.how})"))
     return {"scene": sc.name, "params": {k: overrides[k] for k in overrides},
             "solvers": [s.name for s in chosen],

@@ -402,7 +402,8 @@ class Summary:
                     + list(d["lines"]) + [f"note: {n}" for n in d["notes"][:20]])
         if self.kind == "power":
             return [f"{r['parameter']:20s} {r['solver']:26s} "
-                    + (f"ε* {r['epsilon']:.2g}  ({r['pair']}, {r['channel']}; {r['how']})"
+                    + (f"ε* {r['epsilon']:.2g}  ({' vs '.join(r['pair'])}, {r['channel']}; "
+                       f"{r['how']})"
                        if r["epsilon"] is not None else f"—  ({r['how']})")
                     for r in d["power"]] + [d["summary"], f"{d['runs']} runs, "
                                                          f"{d['wall_s']:.1f} s"]

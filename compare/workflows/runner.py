@@ -29,6 +29,8 @@ class RunResult:
     findings: list
     out_dir: Path
     files: dict = field(default_factory=dict)      # solver -> .npz path
+    # detection power estimated for the run's verdicts: {"rows": [Power dicts], "summary"}
+    power: dict | None = None
 
     def as_json(self):
         runs = []
@@ -49,6 +51,8 @@ class RunResult:
         out = {"scene": self.scene.name, "params": self.params, "runs": runs,
                "comparisons": [c.as_dict() for c in self.comparisons],
                "findings": [f.__dict__ for f in self.findings]}
+        if self.power is not None:
+            out["power"], out["power_summary"] = self.power["rows"], self.power["summary"]
         if "recording" in self.files:
             out["recording"] = str(self.files["recording"])
         if "report" in self.files:
@@ -96,10 +100,16 @@ def run_scene(scene: Scene, params: dict, chosen: list[Solver], settings_for: Ca
 
 
 def finish_run(scene: Scene, params: dict, trajectories: list[Trajectory], files: dict,
-               out_dir: str | Path, record: bool = True, report: bool = True) -> RunResult:
+               out_dir: str | Path, record: bool = True, report: bool = True,
+               power: Callable | None = None) -> RunResult:
+    """Compare, find, then record and report. `power(comparisons) -> (rows, summary)`: the
+    detection power of these verdicts (a campaign case that measured its sensitivities)."""
     comparisons = scene.verdicts(params, trajectories)
     findings = scene.findings(params, trajectories) if scene.findings else []
     result = RunResult(scene, params, trajectories, comparisons, findings, Path(out_dir), files)
+    if power is not None:
+        rows, text = power(comparisons)
+        result.power = {"rows": rows, "summary": text}
     return write_outputs(result, record, report)
 
 

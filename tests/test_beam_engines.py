@@ -336,3 +336,21 @@ def test_coarse_chain_says_so_at_high_speed():
         _, lo = blade(engine, 40)
         assert 5.4e-5 < lo.extra["richardson_spread_rel"] < 5e-3
         assert not any("raise n_segments" in n for n in lo.notes)
+
+
+def test_the_engine_pair_sees_a_1e_7_stiffness_error_that_their_error_bars_would_hide():
+    """Both engines build one chain, so its discretisation error (their error estimates,
+    ~1e-3 of a frequency) cancels in their difference and the scene judges the pair on its
+    allowance alone (`frequency_one_model`). E × (1 + 4e-7) in Exudyn alone moves every bending
+    frequency by 2e-7 (f ∝ √E at rest) — 7× the pair's 3e-8 allowance, 2e-4 of their error
+    bars: the bending modes must disagree, torsion (√G) agree."""
+    from compare import solvers
+    p = ROTATING_BEAM.resolve({})
+    ex, mj = solvers.get_solver("exudyn"), solvers.get_solver("mujoco")
+    b = solvers.modes(ROTATING_BEAM, mj, p)
+    nominal = ROTATING_BEAM.verdicts(p, [solvers.modes(ROTATING_BEAM, ex, p), b])
+    assert [c.verdict for c in nominal] == ["agree"] * 5
+    a = solvers.modes(ROTATING_BEAM, ex, {**p, "E": p["E"] * (1 + 4e-7)})
+    verdict = {c.channel: c.verdict for c in ROTATING_BEAM.verdicts(p, [a, b])}
+    assert {k for k, v in verdict.items() if v == "disagree"} == {
+        k for k in verdict if not k.startswith("torsion")}, verdict

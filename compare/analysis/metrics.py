@@ -107,8 +107,10 @@ def allowance(tolerances: dict, a: str, b: str, channel: str):
 
 def allowance_channels(tolerances: dict) -> list[str]:
     """The channels `tolerances` gives allowances for (not its "by_pair", "by_solver",
-    "frequency_by_…" tables, nor "wider": pair -> the scene's reason for a wider one)."""
-    return [c for c in tolerances if not c.startswith(("by_", "frequency_by_", "wider"))]
+    "frequency_by_…" tables, "frequency_one_model" pairs, nor "wider": pair -> the scene's
+    reason for a wider one)."""
+    return [c for c in tolerances
+            if not c.startswith(("by_", "frequency_by_", "frequency_one_model", "wider"))]
 
 
 def pairwise(trajectories: list[Trajectory], tolerances: dict) -> list[Comparison]:
@@ -266,18 +268,25 @@ def frequency_comparisons(results: list[Modes], tolerances: dict) -> list[Compar
     """Every pair of solvers, mode by mode, as Comparisons (channel = the mode's label), each
     pair against its `frequency_allowance` from the scene's `tolerances`. As for time
     channels, the verdict is |Δ| ≤ allowance + both solvers' error estimates
-    (`frequency_errors`), where both give one."""
+    (`frequency_errors`), where both give one — except for a pair listed in
+    "frequency_one_model" ("a|b"): two solvers of one discrete model (the same segments,
+    springs and extrapolation) share its discretisation error, which cancels in their
+    difference; their estimates would only hide a difference between them, so such a pair is
+    judged against its own allowance alone."""
     out = []
     ok = [r for r in results if r.status == "ok"]
+    one_model = set(tolerances.get("frequency_one_model", ()))
     for i, a in enumerate(ok):
         for b in ok[i + 1:]:
             tol = frequency_allowance(tolerances, a.solver, b.solver)
+            shared = bool({f"{a.solver}|{b.solver}", f"{b.solver}|{a.solver}"} & one_model)
             for ia, ib in match_modes(list(a.frequencies_hz), a.labels,
                                       list(b.frequencies_hz), b.labels):
                 fa, fb = a.frequencies_hz[ia], b.frequencies_hz[ib]
                 d = abs(fa - fb)
                 scale = max(abs(fa), abs(fb), 1e-300)
-                err = (float(ea[ia] + eb[ib]) if (ea := frequency_errors(a)) is not None
+                err = (float(ea[ia] + eb[ib]) if not shared
+                       and (ea := frequency_errors(a)) is not None
                        and (eb := frequency_errors(b)) is not None else None)
                 bound = tol * scale + (err or 0.0)
                 v = "agree" if d <= bound else "disagree"
@@ -286,6 +295,7 @@ def frequency_comparisons(results: list[Modes], tolerances: dict) -> list[Compar
                     scale, bound / scale, v,
                     f"{fa:.8g} vs {fb:.8g} Hz: |Δ| {d:.2e} {'≤' if v == 'agree' else '>'} "
                     + (f"error estimates {err:.1e} + allowance {tol * scale:.1e} Hz"
-                       if err is not None else f"allowance {tol * scale:.1e} Hz (no error "
-                       "estimate)"), d, err, tol * scale))
+                       if err is not None else f"allowance {tol * scale:.1e} Hz ("
+                       + ("one discrete model: its discretisation error cancels" if shared
+                          else "no error estimate") + ")"), d, err, tol * scale))
     return out

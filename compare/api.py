@@ -197,10 +197,12 @@ def map(scene: str, x: str, y: str | None = None, solvers=None, *,
         resolution: float = 1e-3, coarse=None, observable: str | None = None, level=None,
         engines: str = "boundary", executor: str = "local", scheduler: str | None = None,
         workers: int | None = None, max_jobs=None, record: bool = True, out=None,
-        params: dict | None = None, log: Callable | None = None, **kw) -> Summary:
+        params: dict | None = None, log: Callable | None = None, y_resolution=None,
+        **kw) -> Summary:
     """A map (`xval map`): the scene's regimes, or `observable`, over `x` (and `y`), each
     "NAME=LO:HI"; every solver's crossings with brackets ≤ resolution × the x range, their
-    error estimates and the pairwise verdicts (`s["boundaries"]`, `s["verdicts"]`)."""
+    error estimates and the pairwise verdicts (`s["boundaries"]`, `s["verdicts"]`); a 2-D
+    map traces its boundary in y down to `y_resolution` × the y range (default resolution)."""
     from .workflows.maps import map_to_folder, plan_map
     if executor not in ("local", "dask"):
         raise BadInput(f"--executor: {executor!r} is not local or dask")
@@ -209,7 +211,8 @@ def map(scene: str, x: str, y: str | None = None, solvers=None, *,
     positive_int("--workers", workers)
     plan = plan_map(scene, x, y, _overrides(params, kw), _names(solvers),
                     positive("--resolution", resolution), coarse, observable, level, engines,
-                    positive_int("--max-jobs", max_jobs))
+                    positive_int("--max-jobs", max_jobs),
+                    None if y_resolution is None else positive("--y-resolution", y_resolution))
     (log or _quiet)(f"map {scene}: ~{plan['estimate']['runs']} runs planned "
                     f"(~{plan['estimate']['seconds']:.3g} s of solver time)")
     out, temporary = _out(out)

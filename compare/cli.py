@@ -239,6 +239,9 @@ def build_parser():
     sp.add_argument("--resolution", type=_positive("--resolution"), default=1e-3,
                     help="bracket of every crossing as a fraction of the x range "
                          "(default 1e-3)")
+    sp.add_argument("--y-resolution", type=_positive("--y-resolution"), default=None,
+                    help="a 2-D map adds rows where neighbouring rows' crossings differ, down "
+                         "to this fraction of the y range (default: --resolution)")
     sp.add_argument("--coarse", metavar="NX[,NY]",
                     help="the coarse grid: points along x and rows along y (default 17,9)")
     sp.add_argument("--observable", metavar="NAME",
@@ -548,7 +551,8 @@ def cmd_map(args):
                         engines=args.engines, executor=args.executor,
                         scheduler=args.scheduler, workers=args.workers,
                         max_jobs=args.max_jobs, record=not args.no_record, out=args.out,
-                        params=parse_sets(args.set), log=_log)
+                        params=parse_sets(args.set), log=_log,
+                        y_resolution=args.y_resolution)
     except Interrupted as e:             # Ctrl-C / SIGTERM: workers stopped, points kept
         print(f"xval: interrupted: {e}; resume with: {shlex.join(['xval', *args.argv])}",
               file=sys.stderr)

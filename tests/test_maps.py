@@ -17,11 +17,11 @@ BASE = {"eccentricity": 0.005, "t_end": 10}
 RES = 1e-2                                    # of the torque range 2.5–3.5: brackets ≤ 0.01
 
 
-def _passes(torque, solver):
+def _passes(torque, solver, base=None):
     """The test's own reading of the spec: passage when |ω| over the last 10 % of the run stays
     above 1.1 × the forward critical speed √(k_eff / (I_t − I_p))."""
     sc = get_scene("rotor-spinup")
-    p = sc.resolve({**BASE, "torque": torque})
+    p = sc.resolve({**BASE, **(base or {}), "torque": torque})
     tr = solvers.simulate(sc, solvers.get_solver(solver), p,
                           solvers.settings_for(solvers.get_solver(solver), sc.name,
                                                t_out=sc.output_grid(p)))

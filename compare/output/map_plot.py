@@ -34,6 +34,22 @@ def status_line(result) -> str:
             + f" (status: {st.get('status', '—')})")
 
 
+def _segments(crossings, points, y):
+    """Lines only between computed rows: the k-th crossings of two neighbouring rows of the
+    solver (rows it ran, crossing or not) when both have as many; nothing across a row
+    without a crossing or with a different count — only what was computed is drawn."""
+    rows = sorted({p["params"][y["name"]] for p in points})
+    by_row = {}
+    for c in crossings:
+        by_row.setdefault(c["y"], []).append(c["x"])
+    out = []
+    for a, b in zip(rows, rows[1:]):
+        xa, xb = sorted(by_row.get(a, [])), sorted(by_row.get(b, []))
+        if xa and len(xa) == len(xb):
+            out += [([p, q], [a, b]) for p, q in zip(xa, xb)]
+    return out
+
+
 def plot_map(path, result):
     plt = plot_style()
     x, y = result["x"], result["y"]
@@ -63,12 +79,13 @@ def plot_map(path, result):
                 zorder=2)
         b = result["boundaries"].get(s, [])
         if b:
-            bx = [c["x"] for c in b]
-            by = [c["y"] if y else 0.0 for c in b]
             # later solvers smaller and dashed: boundaries that agree stay visible together
-            ax.plot(bx, by, "o" if y else "|", ls="-" if i == 0 else "--",
-                    ms=max(3, 10 - 2.5 * i), mew=2, lw=max(0.8, 2.5 - 0.6 * i), color=col,
-                    label=f"{s} boundary", zorder=3 + i)
+            style = dict(ms=max(3, 10 - 2.5 * i), mew=2, lw=max(0.8, 2.5 - 0.6 * i),
+                         color=col, zorder=3 + i)
+            ax.plot([c["x"] for c in b], [c["y"] if y else 0.0 for c in b],
+                    "o" if y else "|", ls="none", label=f"{s} boundary", **style)
+            for seg in _segments(b, mine, y) if y else ():
+                ax.plot(*seg, ls="-" if i == 0 else "--", **style)
         else:                       # in the legend all the same: a missing boundary shows
             ax.plot([], [], "|", color=col, label=f"{s}: no crossing")
     # crossings without a counterpart in another solver: a disagreement or a gap, never hidden

@@ -63,13 +63,15 @@ class Extreme:
 class MapSpec:
     """One map of a scene (`xval map`, the default campaign's `[[maps]]`): axes as
     "NAME=LO:HI", parameter overrides, solvers (default: the scene's), the bracket asked
-    (fraction of each axis' range) and the coarse grid (points along x, rows along y)."""
+    (fraction of each axis' range: `resolution` along x, `y_resolution` the rows the boundary's
+    tracing may add, default `resolution`) and the coarse grid (points along x, rows along y)."""
     name: str
     x: str
     y: str | None = None
     set: dict = field(default_factory=dict)
     solvers: tuple = ()
     resolution: float = 1e-3
+    y_resolution: float | None = None
     coarse: tuple = (17, 9)
     observable: str | None = None    # a map observable's name; None: the scene's regime
     level: float | None = None

@@ -230,9 +230,12 @@ SPINUP = Scene(
                     {"name": "rotor-spinup-3.2Nm", "set": {"torque": "3.2", "t_end": "5"}}),
     regime=spinup_regime,
     # the default map: the capture/passage boundary M*(e) at t_end = 10 s, bracketed to 1 % of
-    # the torque range on 5 eccentricity rows (the CLI's `xval map` brackets to 1e-3 by default)
+    # the torque range, traced from 5 eccentricity rows to rows 1/32 of the range apart (the
+    # custom solvers add 20: M*(e) is not monotonic — 1.20 N·m at e = 0.0025, none below
+    # 0.001875, a peak of 4.11 at 0.00625 that the coarse rows 0.005 and 0.01 (3.05, 2.77) hid;
+    # the engines check the coarse rows). The CLI's `xval map` brackets to 1e-3 by default.
     maps=(MapSpec("capture-boundary", x="torque=1:5", y="eccentricity=0:0.02",
-                  set={"t_end": 10}, resolution=1e-2, coarse=(9, 5)),),
+                  set={"t_end": 10}, resolution=1e-2, y_resolution=1 / 32, coarse=(9, 5)),),
     notes="Spring −kγ exactly as the paper defines it (U = ½k|γ|², γ the transverse Euler "
           "vector); a Cardan spring ½k(α²+β²) is a different model.",
 )

@@ -63,7 +63,7 @@ from .executors import (  # noqa: F401  (connect: the API's check)
 
 TOP_KEYS = ("name", "cases", "maps", "max_output_gib", "max_steps", "max_jobs")
 MAP_KEYS = ("name", "scene", "x", "y", "set", "solvers", "resolution", "coarse", "observable",
-            "level", "engines")
+            "level", "engines", "y_resolution")
 MAX_JOBS = 10_000          # jobs (cases × solvers) a campaign may plan before it is refused
 CASE_KEYS = ("name", "scene", "set", "sweep", "solvers", "dt", "rtol", "integrator",
              "settings", "timeout_s", "power")
@@ -89,6 +89,7 @@ def default_campaign(name: str = "default") -> dict:
         camp["maps"] = [{"name": f"{sc.name}-{m.name}", "scene": sc.name, "x": m.x,
                          **({"y": m.y} if m.y else {}), "set": dict(m.set),
                          "resolution": m.resolution, "coarse": list(m.coarse),
+                         **({"y_resolution": m.y_resolution} if m.y_resolution else {}),
                          **({"solvers": list(m.solvers)} if m.solvers else {}),
                          **({"observable": m.observable} if m.observable else {}),
                          **({"level": m.level} if m.level is not None else {}),
@@ -352,7 +353,8 @@ def plan_maps(camp, src="built-in campaign", max_jobs=None):
         pl = _prefixed(at, plan_map, m["scene"], m["x"], m.get("y"), m.get("set"),
                        m.get("solvers"), m.get("resolution", 1e-3),
                        tuple(coarse) if coarse else None, m.get("observable"), m.get("level"),
-                       m.get("engines", "boundary"), max_jobs or camp.get("max_jobs"))
+                       m.get("engines", "boundary"), max_jobs or camp.get("max_jobs"),
+                       m.get("y_resolution"))
         out.append((name, pl))
     return out
 

@@ -3,10 +3,14 @@ boundaries located by every solver on its own and compared with error bars.
 
 Regimes: a coarse grid, then bisection of every grid edge along x whose ends differ in regime
 until its bracket is at most `resolution` × the x range (all open brackets of a round are one
-batch of runs). A 2-D map bisects along x on each row of its y grid: one crossing per row where
-the regime changes. The custom solvers map the whole plane; an engine starts from the custom
-solvers' brackets (its own runs at their ends, widened outwards until they straddle its own
-crossing, then its own bisection) and runs elsewhere only with `engines="everywhere"`.
+batch of runs). A 2-D map bisects along x on each row, then traces the boundary in y: between
+two neighbouring rows whose crossings differ (in number, or in place by more than the x
+bracket) a row is added half-way, run on the coarse x grid and bisected, until neighbouring
+rows agree or are `y_resolution` × the y range apart — the boundary is resolved as a curve in
+both axes, and only computed crossings are drawn. The custom solvers map the whole plane; an
+engine starts from the custom solvers' brackets on the coarse rows (its own runs at their
+ends, widened outwards until they straddle its own crossing, then its own bisection) and runs
+elsewhere only with `engines="everywhere"`: the rows added between are the custom solvers'.
 A scalar observable is refined where it changes fastest (or bisected where it crosses `level`).
 
 Every crossing's bracketing runs are rerun at the solver's tighter settings (those of its own
@@ -44,6 +48,7 @@ from .executors import (
 
 NONE = "none"                     # an observable's label where its event did not happen
 MAX_JOBS = 100_000                # runs a map may plan before it is refused (--max-jobs)
+MAX_ROWS = 257                    # rows a 2-D map's boundary tracing may reach per solver
 # the estimate before anything runs: seconds per output sample and per run, by solver engine,
 # measured on rotor-spinup over 10 s at 1001 samples (quaternion 3.3 ms, euler-vector 5 ms,
 # MuJoCo 86 ms, Exudyn 316 ms per run) plus a fixed cost per run; rough for other scenes
@@ -208,6 +213,37 @@ def bisect_lines(runner, solver, settings, lines, x_axis, width, y_name=None):
         if not mids:
             return
         _fill(runner, solver, settings, lines, mids, x_axis.name, y_name, "label")
+
+
+def _rows_differ(a: dict, b: dict, width: float) -> bool:
+    """Two rows' crossings differ: in number or direction, or in place by more than `width`."""
+    ca, cb = ([(0.5 * (xs[i] + xs[i + 1]), pts[xs[i]], pts[xs[i + 1]])
+               for i in _line_crossings(xs, [pts[x] for x in xs])]
+              for pts in (a, b) for xs in [sorted(pts)])
+    return len(ca) != len(cb) or any(p[1:] != q[1:] or abs(p[0] - q[0]) > width
+                                     for p, q in zip(ca, cb))
+
+
+def trace_rows(runner, solver, settings, lines, x_axis, xs, width, y_name, y_width,
+               max_rows):
+    """Rows added half-way between neighbours whose crossings differ, each run on the coarse
+    x grid `xs` and bisected, until no neighbours differ or they are ≤ `y_width` apart (all
+    rows of a round one batch). Returns the (y, y) gaps left unresolved by `max_rows`."""
+    while True:
+        ys = sorted(lines)
+        gaps = [(a, b) for a, b in zip(ys, ys[1:])
+                if _rows_differ(lines[a], lines[b], width)]
+        new = [0.5 * (a + b) for a, b in gaps if b - a > y_width * (1 + 1e-9)]
+        if not new:
+            return []
+        if len(lines) + len(new) > max_rows:
+            return [(a, b) for a, b in gaps if b - a > y_width * (1 + 1e-9)]
+        grid = [(y, float(x)) for y in new for x in xs]
+        for y in new:
+            lines[y] = {}
+        _fill(runner, solver, settings, lines, grid, x_axis.name, y_name, "label")
+        bisect_lines(runner, solver, settings, {y: lines[y] for y in new}, x_axis, width,
+                     y_name)
 
 
 def _fill(runner, solver, settings, lines, mids, x_name, y_name, key):
@@ -514,13 +550,17 @@ def _bracket(c):
 
 # --- the map -------------------------------------------------------------------------------
 
-def estimate(sc, x_axis, y_axis, chosen, resolution, coarse, engines, params):
+def estimate(sc, x_axis, y_axis, chosen, resolution, coarse, engines, params,
+             y_resolution=None):
     """(runs, seconds) before anything runs: the coarse grid, ~log2 bisection rounds per row
-    for a few crossings, the engines' share, each run at its engine's measured cost."""
+    for a few crossings, the rows a boundary's tracing adds (~log2 halvings per gap), the
+    engines' share, each run at its engine's measured cost."""
     nx, ny = coarse
     rows = ny if y_axis else 1
     rounds = max(1, math.ceil(math.log2(max(2.0, 1.0 / (resolution * (nx - 1))))))
-    per_custom = nx * rows + 2 * rows * rounds + 4 * rows
+    traced = ((ny - 1) * max(1, math.ceil(math.log2(max(2.0, 1.0 / (
+        (y_resolution or resolution) * (ny - 1)))))) if y_axis else 0)
+    per_custom = (nx + 2 * rounds + 4) * (rows + traced)
     per_engine = (nx * rows + 2 * rows * rounds) if engines == "everywhere" else 8 * rows
     samples = params["t_end"] / params["output_dt"] + 1
     runs, secs = 0, 0.0
@@ -533,7 +573,8 @@ def estimate(sc, x_axis, y_axis, chosen, resolution, coarse, engines, params):
 
 
 def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolution=1e-3,
-             coarse=None, observable=None, level=None, engines="boundary", max_jobs=None):
+             coarse=None, observable=None, level=None, engines="boundary", max_jobs=None,
+             y_resolution=None, max_rows=MAX_ROWS):
     """Everything checked before a run (one line, BadInput): scene, axes, parameters,
     solvers, the work against the budget."""
     sc = get_scene(scene_name)
@@ -551,6 +592,9 @@ def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolutio
                        f"(known: {', '.join(sc.map_observables) or 'none'})")
     if not (isinstance(resolution, (int, float)) and 0 < resolution < 0.5):
         raise BadInput(f"--resolution must be in (0, 0.5), got {resolution!r}")
+    y_resolution = resolution if y_resolution is None else y_resolution
+    if not (isinstance(y_resolution, (int, float)) and 0 < y_resolution < 0.5):
+        raise BadInput(f"--y-resolution must be in (0, 0.5), got {y_resolution!r}")
     if engines not in ("boundary", "everywhere"):
         raise BadInput(f"--engines must be boundary or everywhere, got {engines!r}")
     x_axis = parse_axis(x, sc, "--x")
@@ -578,7 +622,8 @@ def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolutio
     params, chosen = pl.params, list(pl.solvers)
     for corner in (x_axis.hi,):
         sc.resolve({**overrides, x_axis.name: corner})
-    runs, secs = estimate(sc, x_axis, y_axis, chosen, resolution, coarse, engines, params)
+    runs, secs = estimate(sc, x_axis, y_axis, chosen, resolution, coarse, engines, params,
+                          y_resolution)
     limit = MAX_JOBS if max_jobs is None else max_jobs
     if runs > limit:
         raise BadInput(f"map of {sc.name}: ~{runs} runs (~{secs:.3g} s on one core) exceed the "
@@ -587,7 +632,7 @@ def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolutio
     return {"scene": sc, "x": x_axis, "y": y_axis, "overrides": overrides, "chosen": chosen,
             "resolution": resolution, "coarse": coarse, "observable": observable,
             "level": level, "engines": engines, "estimate": {"runs": runs, "seconds": secs},
-            "settings": pl.settings}
+            "settings": pl.settings, "y_resolution": y_resolution, "max_rows": max_rows}
 
 
 def is_engine(s):
@@ -615,7 +660,7 @@ def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=N
     engines = [s for s in plan["chosen"] if is_engine(s)]
     everywhere = customs + (engines if plan["engines"] == "everywhere" else [])
     t0 = time.perf_counter()
-    lines, found = {}, {}
+    lines, found, unresolved = {}, {}, {}
     for s in everywhere:
         log(f"map {sc.name}: {s.name} on the {nx} × {len(ys)} coarse grid …")
         grid = [(float(x), y) for y in ys for x in xs]
@@ -628,6 +673,14 @@ def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=N
         log(f"map {sc.name}: {s.name} refining …")
         if what is None:
             bisect_lines(runner, s.name, settings[s.name], lines[s.name], xa, width, y_name)
+            if ya is not None:
+                left = trace_rows(runner, s.name, settings[s.name], lines[s.name], xa, xs,
+                                  width, y_name, plan["y_resolution"] * ya.span,
+                                  plan["max_rows"])
+                if left:
+                    unresolved[s.name] = left
+                    log(f"map {sc.name}: {s.name}: {len(left)} row gaps left unresolved "
+                        f"(more than {plan['max_rows']} rows)")
         else:
             refine_observable(runner, s.name, settings[s.name], lines[s.name], xa, width,
                               level, y_name)
@@ -639,8 +692,10 @@ def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=N
             raise BadInput("--engines boundary needs a custom solver to find the boundary "
                            "first (or pass --engines everywhere)")
         log(f"map {sc.name}: {s.name} from {ref.name}'s brackets …")
-        ref_found = (crossings(lines[ref.name], xa, ya) if what is None
-                     else level_crossings(lines[ref.name], level))
+        coarse_rows = {None if y is None else float(y) for y in ys}
+        ref_found = [c for c in (crossings(lines[ref.name], xa, ya) if what is None
+                                 else level_crossings(lines[ref.name], level))
+                     if c["y"] in coarse_rows]
         if what is None:
             lines[s.name] = refine_engine(runner, s.name, settings[s.name], ref_found, xa,
                                           width, coarse_step, y_name)
@@ -686,6 +741,10 @@ def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=N
     return {"scene": sc.name, "x": xa.as_dict(), "y": ya.as_dict() if ya else None,
             "set": plan["overrides"], "observable": what, "level": level,
             "resolution": plan["resolution"], "bracket_width": width,
+            "y_resolution": plan["y_resolution"] if ya else None,
+            # rows per solver: the coarse grid's and those the boundary's tracing added
+            "rows": {s: len(ls) for s, ls in lines.items()},
+            "unresolved_rows": unresolved,
             "coarse": list(plan["coarse"]), "engines": plan["engines"],
             "settings": settings, "estimate": plan["estimate"],
             "points": points, "boundaries": found,

@@ -198,11 +198,13 @@ def map(scene: str, x: str, y: str | None = None, solvers=None, *,
         engines: str = "boundary", executor: str = "local", scheduler: str | None = None,
         workers: int | None = None, max_jobs=None, record: bool = True, out=None,
         params: dict | None = None, log: Callable | None = None, y_resolution=None,
-        **kw) -> Summary:
+        adaptive: bool = True, **kw) -> Summary:
     """A map (`xval map`): the scene's regimes, or `observable`, over `x` (and `y`), each
     "NAME=LO:HI"; every solver's crossings with brackets ≤ resolution × the x range, their
     error estimates and the pairwise verdicts (`s["boundaries"]`, `s["verdicts"]`); a 2-D
-    map traces its boundary in y down to `y_resolution` × the y range (default resolution)."""
+    map traces its boundary in y down to `y_resolution` × the y range (default resolution).
+    `adaptive=False`: every coarse point at the accurate setting (not only those next to a
+    regime change)."""
     from .workflows.maps import map_to_folder, plan_map
     if executor not in ("local", "dask"):
         raise BadInput(f"--executor: {executor!r} is not local or dask")
@@ -212,7 +214,8 @@ def map(scene: str, x: str, y: str | None = None, solvers=None, *,
     plan = plan_map(scene, x, y, _overrides(params, kw), _names(solvers),
                     positive("--resolution", resolution), coarse, observable, level, engines,
                     positive_int("--max-jobs", max_jobs),
-                    None if y_resolution is None else positive("--y-resolution", y_resolution))
+                    None if y_resolution is None else positive("--y-resolution", y_resolution),
+                    adaptive=adaptive)
     (log or _quiet)(f"map {scene}: ~{plan['estimate']['runs']} runs planned "
                     f"(~{plan['estimate']['seconds']:.3g} s of solver time)")
     out, temporary = _out(out)

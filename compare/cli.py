@@ -244,6 +244,9 @@ def build_parser():
                          "to this fraction of the y range (default: --resolution)")
     sp.add_argument("--coarse", metavar="NX[,NY]",
                     help="the coarse grid: points along x and rows along y (default 17,9)")
+    sp.add_argument("--accurate-everywhere", action="store_true",
+                    help="run every coarse point at the accurate setting (default: a cheap "
+                         "tolerance first, the accurate one next to a regime change)")
     sp.add_argument("--observable", metavar="NAME",
                     help="map a scalar observable of the scene instead of its regime")
     sp.add_argument("--level", type=float, metavar="V",
@@ -552,7 +555,8 @@ def cmd_map(args):
                         scheduler=args.scheduler, workers=args.workers,
                         max_jobs=args.max_jobs, record=not args.no_record, out=args.out,
                         params=parse_sets(args.set), log=_log,
-                        y_resolution=args.y_resolution)
+                        y_resolution=args.y_resolution,
+                        adaptive=not args.accurate_everywhere)
     except Interrupted as e:             # Ctrl-C / SIGTERM: workers stopped, points kept
         print(f"xval: interrupted: {e}; resume with: {shlex.join(['xval', *args.argv])}",
               file=sys.stderr)

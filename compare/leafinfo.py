@@ -22,6 +22,10 @@ ORDERS = {"euler": 1, "explicit_euler": 1, "midpoint": 2, "linacc": 2, "rk4": 4,
           "implicit": 1}
 RTOLS = tuple(10.0 ** -k for k in range(1, 14))     # the tolerance ladder, 1e-1 … 1e-13
 START_RTOL = 1e-6
+# a map point's first, cheap run: a tolerance 1e5× looser than the accurate default (DOP853 at
+# 1e-6 takes ~1/4 the steps of 1e-11 on the rotor); a point next to a regime change is rerun at
+# the accurate setting (compare/workflows/maps.py)
+CHEAP_LOOSENING = 1e5
 MAX_DOUBLINGS = 7          # a fixed step goes at most 2^7 coarser or finer than the default
 
 
@@ -99,6 +103,12 @@ class Adaptive:
     @staticmethod
     def ladder() -> tuple[list[Adaptive], int]:
         return [Adaptive(r) for r in RTOLS], RTOLS.index(START_RTOL)
+
+    def cheap(self) -> Adaptive | None:
+        """The map's cheap level, None where this tolerance is loose already."""
+        r = min(self.rtol * CHEAP_LOOSENING, START_RTOL)
+        return None if r <= self.rtol else Adaptive(
+            r, None if self.atol is None else self.atol * r / self.rtol)
 
 
 @dataclass(frozen=True)
@@ -185,6 +195,14 @@ class LeafInfo:
         if dt == "auto":
             dt = self.auto_dt.get(settings.get("integrator"))
         return Fixed(dt) if _number(dt) and dt > 0 else None
+
+    def cheaper(self, settings: dict) -> dict | None:
+        """A map point's cheap first run: an error-controlled method at a looser tolerance
+        (`Adaptive.cheap`); None for a fixed step (a larger one can cross its stability limit:
+        such a solver maps at its accurate step)."""
+        k = self.knob(settings)
+        c = k.cheap() if isinstance(k, Adaptive) else None
+        return None if c is None else c.apply(settings)
 
     def steps(self, settings: dict, t_end: float) -> tuple[float, float] | None:
         """(steps, dt) of one run with a fixed step; None for an error-controlled method (its

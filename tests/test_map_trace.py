@@ -1,6 +1,8 @@
 """A 2-D map's boundary traced in y: rows added where neighbouring rows' crossings differ,
 until the curve is resolved in both axes — against a boundary known in closed form, and on
 the rotor against an independent passage test at a row the tracing added."""
+import json
+
 import numpy as np
 import pytest
 from test_maps import _passes
@@ -90,3 +92,47 @@ def test_a_row_the_rotor_map_added_holds_its_crossing_by_an_independent_passage_
     lo, hi = c["bracket"]
     base = {"eccentricity": y}
     assert not _passes(lo, "euler-vector", base) and _passes(hi, "euler-vector", base)
+
+
+class Shifted(Plane):
+    """The cheap level (rtol 1) misplaces the boundary by 0.3 — three grid steps: wrong labels
+    next to it, right ones far from it, as a loose tolerance does (one promotion pass is not
+    enough; without the repeat this test fails)."""
+
+    def run(self, tasks):
+        self.n += len(tasks)
+        out = []
+        for _, st, pt in tasks:
+            xb = boundary(pt["y"])
+            xb = None if xb is None else xb + (0.3 if st.get("rtol") == 1 else 0.0)
+            out.append({"label": "a" if xb is None or pt["x"] < xb else "b"})
+        return out
+
+
+def test_the_adaptive_grid_ends_with_the_accurate_labels_and_reruns_only_near_the_change():
+    grid = [[{"x": float(x), "y": float(y)} for x in np.linspace(0, 4, 41)]
+            for y in np.linspace(0.0, 0.2, 21)]
+    runner = Shifted()
+    labels, sure = maps.adaptive_grid(runner, "s", {"rtol": 1}, {"rtol": 1e-9}, grid)
+    truth = [[Plane().run([(None, {}, p)])[0]["label"] for p in row] for row in grid]
+    assert labels == truth
+    n, rerun = 41 * 21, sum(map(sum, sure))
+    assert rerun < 0.2 * n and runner.n == n + rerun
+
+
+@pytest.mark.parametrize("solver", ["quaternion"])
+def test_the_rotor_maps_adaptive_boundary_is_the_all_accurate_one(solver):
+    """The same map run accuracy-adaptive and accurate everywhere: identical crossings and
+    brackets; and cheap labels sampled hold at the accurate setting."""
+    def run(adaptive):
+        plan = maps.plan_map("rotor-spinup", "torque=1:5", "eccentricity=0:0.02",
+                             {"t_end": 10}, [solver], resolution=2e-2, coarse=(9, 3),
+                             y_resolution=0.49, adaptive=adaptive)
+        return maps.run_map(plan)
+    fast, slow = run(True), run(False)
+    assert fast["boundaries"] == slow["boundaries"]
+    assert fast["levels"][solver]["cheap"] > 0 and slow["levels"][solver]["cheap"] == 0
+    cheap = [p for p in fast["points"] if p["settings"] == "cheap"]
+    truth = {json.dumps(p["params"], sort_keys=True): p["regime"] for p in slow["points"]}
+    for p in cheap:
+        assert truth[json.dumps(p["params"], sort_keys=True)] == p["regime"], p

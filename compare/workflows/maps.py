@@ -215,6 +215,33 @@ def bisect_lines(runner, solver, settings, lines, x_axis, width, y_name=None):
         _fill(runner, solver, settings, lines, mids, x_axis.name, y_name, "label")
 
 
+def adaptive_grid(runner, solver, cheap, accurate, grid):
+    """Labels of a grid of points (rows of point dicts, neighbours along and across rows),
+    accuracy spent only where a regime changes: every point first at `cheap` (None: all at
+    `accurate`), then each point with a neighbour of another label rerun at `accurate`,
+    again until every point next to a change is an accurate one — so every bracket a map
+    bisects has accurate ends, and a cheap label stands only where all its neighbours read
+    the same. Returns (labels, accurate?) as lists of rows."""
+    first = cheap or accurate
+    flat = runner.run([(solver, first, pt) for row in grid for pt in row])
+    it = iter(flat)
+    labels = [[next(it)["label"] for _ in row] for row in grid]
+    sure = [[cheap is None] * len(row) for row in grid]
+    while True:
+        todo = set()
+        for i, row in enumerate(labels):
+            for j, lab in enumerate(row):
+                for a, b in ((i, j + 1), (i + 1, j)):
+                    if a < len(labels) and b < len(labels[a]) and labels[a][b] != lab:
+                        todo |= {(i, j), (a, b)}
+        todo = sorted((i, j) for i, j in todo if not sure[i][j])
+        if not todo:
+            return labels, sure
+        for (i, j), r in zip(todo, runner.run([(solver, accurate, grid[i][j])
+                                               for i, j in todo])):
+            labels[i][j], sure[i][j] = r["label"], True
+
+
 def _rows_differ(a: dict, b: dict, width: float) -> bool:
     """Two rows' crossings differ: in number or direction, or in place by more than `width`."""
     ca, cb = ([(0.5 * (xs[i] + xs[i + 1]), pts[xs[i]], pts[xs[i + 1]])
@@ -574,7 +601,7 @@ def estimate(sc, x_axis, y_axis, chosen, resolution, coarse, engines, params,
 
 def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolution=1e-3,
              coarse=None, observable=None, level=None, engines="boundary", max_jobs=None,
-             y_resolution=None, max_rows=MAX_ROWS):
+             y_resolution=None, max_rows=MAX_ROWS, adaptive=True):
     """Everything checked before a run (one line, BadInput): scene, axes, parameters,
     solvers, the work against the budget."""
     sc = get_scene(scene_name)
@@ -632,7 +659,8 @@ def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolutio
     return {"scene": sc, "x": x_axis, "y": y_axis, "overrides": overrides, "chosen": chosen,
             "resolution": resolution, "coarse": coarse, "observable": observable,
             "level": level, "engines": engines, "estimate": {"runs": runs, "seconds": secs},
-            "settings": pl.settings, "y_resolution": y_resolution, "max_rows": max_rows}
+            "settings": pl.settings, "y_resolution": y_resolution, "max_rows": max_rows,
+            "adaptive": bool(adaptive)}
 
 
 def is_engine(s):
@@ -661,15 +689,27 @@ def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=N
     everywhere = customs + (engines if plan["engines"] == "everywhere" else [])
     t0 = time.perf_counter()
     lines, found, unresolved = {}, {}, {}
+    cheap_at = {}               # (solver, y, x) -> the cheap settings that point's label is from
     for s in everywhere:
         log(f"map {sc.name}: {s.name} on the {nx} × {len(ys)} coarse grid …")
-        grid = [(float(x), y) for y in ys for x in xs]
-        rows = runner.run([(s.name, settings[s.name], _pt(xa.name, x, y_name, y))
-                           for x, y in grid])
-        lines[s.name] = {}
-        for (x, y), r in zip(grid, rows):
-            lines[s.name].setdefault(None if y is None else float(y), {})[x] = (
-                r["label"] if what is None else r["value"])
+        lines[s.name] = {None if y is None else float(y): {} for y in ys}
+        cheap = (s.info(sc).cheaper(settings[s.name])
+                 if what is None and plan.get("adaptive", True) else None)
+        if what is None:
+            grid = [[_pt(xa.name, float(x), y_name, y) for x in xs] for y in ys]
+            labels, sure = adaptive_grid(runner, s.name, cheap, settings[s.name], grid)
+            for y, row, ok in zip(ys, labels, sure):
+                key = None if y is None else float(y)
+                lines[s.name][key] = dict(zip(map(float, xs), row))
+                for x, good in zip(xs, ok):
+                    if not good:
+                        cheap_at[(s.name, key, float(x))] = cheap
+        else:
+            grid = [(float(x), y) for y in ys for x in xs]
+            rows = runner.run([(s.name, settings[s.name], _pt(xa.name, x, y_name, y))
+                               for x, y in grid])
+            for (x, y), r in zip(grid, rows):
+                lines[s.name][None if y is None else float(y)][x] = r["value"]
         log(f"map {sc.name}: {s.name} refining …")
         if what is None:
             bisect_lines(runner, s.name, settings[s.name], lines[s.name], xa, width, y_name)
@@ -725,11 +765,13 @@ def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=N
         for y, pts in ls.items():
             for x, v in sorted(pts.items()):
                 pt = _pt(xa.name, x, y_name, y)
-                row = runner.memo[runner._key(s, settings[s], pt)]
-                tight = runner.tight.get(runner._key(s, settings[s], pt))
+                st = cheap_at.get((s, y, x), settings[s])
+                row = runner.memo[runner._key(s, st, pt)]
+                tight = runner.tight.get(runner._key(s, st, pt))
                 points.append({"solver": s, "params": pt,
                                ("regime" if what is None else "value"): v,
                                "status": row["status"], "reason": row.get("reason"),
+                               "settings": "cheap" if (s, y, x) in cheap_at else "accurate",
                                # the point's own check: its regime rerun at tighter settings
                                # (points bracketing a crossing); None where not rerun
                                "error_estimate": tight})
@@ -744,6 +786,13 @@ def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=N
             "y_resolution": plan["y_resolution"] if ya else None,
             # rows per solver: the coarse grid's and those the boundary's tracing added
             "rows": {s: len(ls) for s, ls in lines.items()},
+            # per solver: points whose label stands at the cheap level (its settings) and runs
+            # at the accurate one (the coarse grid's points next to a change, every bisection)
+            "levels": {s: {"cheap": sum(1 for k in cheap_at if k[0] == s),
+                           "cheap_settings": next((v for k, v in cheap_at.items()
+                                                   if k[0] == s), None),
+                           "accurate": sum(1 for p in points if p["solver"] == s)
+                           - sum(1 for k in cheap_at if k[0] == s)} for s in lines},
             "unresolved_rows": unresolved,
             "coarse": list(plan["coarse"]), "engines": plan["engines"],
             "settings": settings, "estimate": plan["estimate"],
@@ -835,7 +884,10 @@ def throughput(scene_name, solver_names, overrides, n_points, workers=2, log=Non
     """Points per second of each solver over `n_points` of the scene's first default map
     (a grid over its axes), through the map's own batch path: the worker pool warmed up first
     (models loaded and compiled in every worker), then the points timed, one solver at a
-    time (`xval bench SCENE --points N`)."""
+    time (`xval bench SCENE --points N`) — at the accurate setting everywhere, and (regimes,
+    error-controlled solvers) accuracy-adaptive as a map runs them (`adaptive_grid`): the
+    points rerun, and the labels that differ from the all-accurate grid (the boundary's shift:
+    0 where none do)."""
     sc = get_scene(scene_name)
     if not sc.maps:
         raise BadInput(f"--points: scene {sc.name!r} declares no map to take points from")
@@ -847,25 +899,50 @@ def throughput(scene_name, solver_names, overrides, n_points, workers=2, log=Non
     nx = max(2, int(round(math.sqrt(n_points)))) if ya else n_points
     ny = max(1, int(math.ceil(n_points / nx))) if ya else 1
     ys = np.linspace(ya.lo, ya.hi, ny) if ya else [None]
-    pts = [_pt(xa.name, x, ya.name if ya else None, y)
-           for y in ys for x in np.linspace(xa.lo, xa.hi, nx)][:n_points]
+    grid = [[_pt(xa.name, x, ya.name if ya else None, y) for x in np.linspace(xa.lo, xa.hi, nx)]
+            for y in ys]
+    left = n_points                       # the last row cut to n_points in all
+    for row in grid:
+        del row[max(left, 0):]
+        left -= len(row)
+    grid = [row for row in grid if row]
+    pts = [p for row in grid for p in row]
     pool, client = make_executor("local", None, workers)
-    rows = []
+    rows, say = [], log or (lambda m: None)
+
+    def timed(st, adaptive=None):
+        runner = Runner(sc, base, spec.observable, pool, workers)
+        runner.run([(s.name, x, p) for x in (st, adaptive) if x for p in pts[:2 * workers]])
+        runner = Runner(sc, base, spec.observable, pool, workers)     # warm-up above
+        t0 = time.perf_counter()
+        if adaptive:
+            labels, sure = adaptive_grid(runner, s.name, adaptive, st, grid)
+            got = ([x for r in labels for x in r], sum(map(sum, sure)))
+        else:
+            got = ([r["label"] for r in runner.run([(s.name, st, p) for p in pts])], len(pts))
+        return got, time.perf_counter() - t0, sum(runner.wall.values())
+
     try:
         for s in plan["chosen"]:
             st = plan["settings"][s.name]
-            runner = Runner(sc, base, spec.observable, pool, workers)
-            runner.run([(s.name, st, p) for p in pts[:2 * workers]])        # warm-up
-            runner = Runner(sc, base, spec.observable, pool, workers)
-            t0 = time.perf_counter()
-            runner.run([(s.name, st, p) for p in pts])
-            wall = time.perf_counter() - t0
-            rows.append({"solver": s.name, "points": len(pts), "wall_s": wall,
-                         "points_per_second": len(pts) / wall,
-                         "points_per_core_second": len(pts) / runner.wall[s.name],
-                         "settings": st})
-            (log or (lambda m: None))(f"{s.name}: {len(pts)} points in {wall:.3g} s, "
-                                      f"{len(pts) / wall:.0f} points/s")
+            (labels, _), wall, core = timed(st)
+            row = {"solver": s.name, "points": len(pts), "wall_s": wall,
+                   "points_per_second": len(pts) / wall,
+                   "points_per_core_second": len(pts) / core, "settings": st,
+                   "accurate_points_per_second": len(pts) / wall}
+            cheap = s.info(sc).cheaper(st) if spec.observable is None else None
+            if cheap:
+                (fast, accurate), wall, core = timed(st, cheap)
+                row.update(wall_s=wall, points_per_second=len(pts) / wall,
+                           points_per_core_second=len(pts) / core, cheap_settings=cheap,
+                           rerun_fraction=accurate / len(pts),
+                           labels_differ=sum(a != b for a, b in zip(fast, labels)))
+            rows.append(row)
+            say(f"{s.name}: {len(pts)} points in {row['wall_s']:.3g} s, "
+                f"{row['points_per_second']:.0f} points/s"
+                + (f" (accurate everywhere {row['accurate_points_per_second']:.0f}; "
+                   f"{row['rerun_fraction']:.1%} rerun accurate, "
+                   f"{row['labels_differ']} labels differ)" if cheap else ""))
     finally:
         pool.shutdown(wait=True)
         if client is not None:

@@ -15,7 +15,7 @@ from scipy.optimize import brentq, linear_sum_assignment
 
 from .. import solvers
 from ..analysis import campbell, metrics
-from ..analysis.campbell import MAC_KEEP, mac
+from ..analysis.campbell import mac
 from ..analysis.trajectory import Modes
 from ..errors import BadInput
 from ..output import campbell_plot, mode_shapes
@@ -23,6 +23,8 @@ from ..output.study import write_study
 from ..scenes import Scene, get_scene
 from .plan import plan
 from .runner import new_run_dir
+
+SAME_MODE = 0.5     # a mode followed by label must share this much shape with its line (MAC)
 
 
 def sweep(scene: Scene, solver: solvers.Solver, params: dict, values: np.ndarray) -> list[Modes]:
@@ -158,10 +160,11 @@ def _linear(values, g, i):
 def _crossing(scene, solver, params, values, i, g, key, f0, shapes, exc, seen, near):
     """The crossing of line `key` in step i, on the solver: (value, whirl), or why not (str).
     The mode is followed by its label, else by the frequency nearest `f0`; where the line's
-    `shapes` at the step's ends are known, the mode must correlate with one of them: a leaf
-    that misses a mode renumbers the others (mstmm misses the shaft's forward whirl within
-    |ω*| < 1e-7 of its rotating-frame zero, and called the second bending mode 'forward whirl
-    1' there: brentq then stopped at that band's edge, 3.6e-8 off)."""
+    `shapes` at the step's ends are known, the mode must share half its shape with one of them
+    (MAC ≥ SAME_MODE): a leaf that misses a mode renumbers the others (mstmm misses the shaft's
+    forward whirl within |ω*| < 1e-7 of its rotating-frame zero and called the second bending
+    mode 'forward whirl 1' there, MAC 0.023 with the line: brentq then stopped at that band's
+    edge, 3.6e-8 off); half, not MAC_KEEP, so that a mode halfway through a veering holds."""
     cb = scene.campbell
     whirl = {}
 
@@ -173,7 +176,7 @@ def _crossing(scene, solver, params, values, i, g, key, f0, shapes, exc, seen, n
             raise ValueError(f"no mode {key!r} at {v}")
         else:
             j = int(np.argmin(np.abs(m.frequencies_hz - f0)))
-        if shapes and m.shapes is not None and np.max(mac(m.shapes[j], shapes)) < MAC_KEEP:
+        if shapes and m.shapes is not None and np.max(mac(m.shapes[j], shapes)) < SAME_MODE:
             raise ValueError(f"the mode called {key!r} at {v} is another (MAC "
                              f"{np.max(mac(m.shapes[j], shapes)):.2f} with the line's)")
         whirl["last"] = campbell.whirl(m, exc.frame, cb.excitation_hz(params, v))[j]

@@ -76,7 +76,7 @@ def signed_hz(m: Modes, frame: str) -> np.ndarray | None:
 def in_frame(m: Modes, spin_hz: float, src: str, dst: str) -> Modes:
     """The solver's modes (reported in `src`) as seen in `dst`: frequency |ν| and sense of
     ν_dst, labels and shapes unchanged. Raises ValueError where the modes carry no whirl."""
-    if src == dst or not _ok(m):
+    if src == dst or spin_hz == 0 or not _ok(m):        # at rest the frames coincide
         return m
     nu = signed_hz(m, src)
     if nu is None:

@@ -240,9 +240,7 @@ def track_lines(values: np.ndarray, results: list[Modes]) -> Diagram:
     lines that cross them."""
     n = len(values)
     open_: dict[int, int] = {}            # mode index at the current sample → line id
-    freq, macs, last_label, events_raw = [], [], [], []
-
-    index: list = []
+    freq, macs, index, last_label, events_raw = [], [], [], [], []
 
     def new_line():
         freq.append(np.full(n, np.nan))

@@ -118,17 +118,19 @@ def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol
 
 
 def modes(scene: str, solvers=None, *, out=None, params: dict | None = None,
-          log: Callable | None = None, **kw) -> ModesResult:
+          log: Callable | None = None, campbell_frame: str | None = None,
+          **kw) -> ModesResult:
     """Natural frequencies from every solver that linearises (default: all of the scene's),
-    matched mode by mode; the Campbell diagram and critical speeds where the scene sweeps, the
-    mode shapes where it draws them. Returns a `ModesResult`."""
+    matched mode by mode; the Campbell diagram and critical speeds where the scene sweeps (the
+    figure in `campbell_frame`, "fixed" or "rotating"; default: the solvers' frame), the mode
+    shapes where it draws them. Returns a `ModesResult`."""
     from .workflows.modes import run_modes
     overrides = _overrides(params, kw)
     names = _names(solvers)
     out, temporary = _out(out)
     with _removed_on_error(temporary):
         obj, results, comparisons = run_modes(scene, names, overrides, out,
-                                              log=log or _quiet)
+                                              log=log or _quiet, campbell_frame=campbell_frame)
     return ModesResult(obj, results, comparisons, Path(obj["report"]).parent, temporary)
 
 

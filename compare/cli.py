@@ -177,6 +177,9 @@ def build_parser():
     common(sp)
     sp.add_argument("--out", default="logs", metavar="DIR", help=out_help)
     sp.add_argument("--strict", action="store_true", help=STRICT)
+    sp.add_argument("--campbell-frame", choices=("fixed", "rotating"), default=None,
+                    help="draw the Campbell figure in this frame (default: the frame the "
+                         "scene's solvers report; the other where the modes whirl)")
 
     sp = sub.add_parser("campaign", help="run a campaign file (default: built-in) into a report",
                         description="Run every case of a campaign file (JSON or TOML; "
@@ -436,7 +439,7 @@ def cmd_modes(args):
     check_out(args.out)
     with stdout_to_stderr():
         r = api.modes(args.scene, args.solver, out=args.out, params=parse_sets(args.set),
-                      log=_log)
+                      log=_log, campbell_frame=args.campbell_frame)
     return _finish(args, r.as_json(), list(r.runs.values()), r.comparisons)
 
 

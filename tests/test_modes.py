@@ -8,7 +8,7 @@ from compare.analysis import metrics
 from compare.analysis.identify import fft_peak, matrix_pencil
 from compare.analysis.trajectory import Modes
 from compare.scenes import get_scene
-from compare.workflows.modes import critical_speeds, sweep, track
+from compare.workflows.modes import by_name, critical_speeds, sweep, track
 
 SCENE = get_scene("rotor-whirl")
 M, R, L, K, G = 5.0, 0.25, 0.5, 2000.0, 9.81
@@ -43,10 +43,14 @@ def test_critical_speeds_and_labels(gravity, k_eff):
     bwd_crit = np.sqrt(k_eff / (I_T + I_P))
     for name in ("euler-vector", "exudyn", "mujoco"):
         s = solvers.get_solver(name)
-        lines = track(sweep(SCENE, s, p, spins))
+        results = sweep(SCENE, s, p, spins)
+        lines = track(results)
         fwd, bwd = lines["forward whirl"], lines["backward whirl"]
         assert np.all(np.diff(fwd) > 0) and np.all(np.diff(bwd) < 0)        # fwd ↑, bwd ↓
-        crit = critical_speeds(SCENE, s, p, spins, lines)
+        entries = critical_speeds(SCENE, s, p, spins, results)
+        crit = by_name(entries)
+        assert {e["name"]: e["whirl"] for e in entries} == {"forward whirl": "Forward",
+                                                            "backward whirl": "Backward"}
         assert crit["forward whirl"] == pytest.approx(fwd_crit, rel=1e-8), name
         assert crit["backward whirl"] == pytest.approx(bwd_crit, rel=1e-8), name
     if gravity == "0,0,0":      # the spec's figure (scene-rotor.md: "≈ 41.3 rad/s for k_eff = k")
@@ -121,8 +125,8 @@ def test_reported_critical_speeds_are_crossings_of_the_solver_itself():
     p = sc.resolve()
     values = sc.campbell.values(p)
     unconfirmed = []
-    crit = critical_speeds(sc, s, p, values, track(sweep(sc, s, p, values)),
-                           unconfirmed=unconfirmed)
+    crit = by_name(critical_speeds(sc, s, p, values, sweep(sc, s, p, values),
+                                   unconfirmed=unconfirmed))
     assert crit
     assert sorted(u["name"] for u in unconfirmed) == ["fuselage 1", "fuselage 2"]
     for u in unconfirmed:

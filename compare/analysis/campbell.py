@@ -18,6 +18,11 @@ correlates with nothing ends its line (it left the computed set, or the solver m
 the next point) and a new line begins. Solvers without shapes are tracked by unique labels,
 else by nearest frequency (no MAC, no veering told).
 
+Frames (`in_frame`, `Diagram.lines_of`): the lines are tracked in the frame the solvers
+report (compare/scenes: `Campbell.frame`), where shapes and frequencies move smoothly; where the
+modes whirl, each sample's modes are re-expressed in the other frame (signed whirl rates,
+ν_fixed = ν_rot + Ω: compare.physics.whirl) and the same lines read there.
+
 Events (`Diagram.events`): a `crossing` where two lines swap order over a step while both keep
 their shapes (MAC ≥ 0.9); a `veering` where two lines adjacent in frequency come closest at a
 sample and hand their shapes over around it (the lower line's shape before is the upper
@@ -25,11 +30,12 @@ line's after), or where the hand-over happens within one step (above).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from ..physics.whirl import signed_in_frame, whirl_direction
 from .trajectory import Modes
 
 MAC_KEEP = 0.9            # a line continues on MAC ≥ this (the acceptance threshold)
@@ -52,6 +58,41 @@ def subspace_mac(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     a = np.atleast_2d(a)
     proj = np.conj(a) @ q
     return np.sum(np.abs(proj) ** 2, 1) / np.maximum(np.sum(np.abs(a) ** 2, 1), 1e-300)
+
+
+def signed_hz(m: Modes, frame: str) -> np.ndarray | None:
+    """The modes' signed whirl rates [Hz] in the solver's `frame`: the sense a leaf reports
+    (extra["whirl_sense"], +1 with the spin), else in the fixed frame the direction its labels
+    name (forward +, backward −); None where the modes do not whirl."""
+    f = np.asarray(m.frequencies_hz, float)
+    if "whirl_sense" in m.extra:
+        return np.asarray(m.extra["whirl_sense"], float)[:len(f)] * f
+    if frame == "fixed" and m.labels and all("forward" in lb or "backward" in lb
+                                             for lb in m.labels):
+        return np.array([1.0 if "forward" in lb else -1.0 for lb in m.labels]) * f
+    return None
+
+
+def in_frame(m: Modes, spin_hz: float, src: str, dst: str) -> Modes:
+    """The solver's modes (reported in `src`) as seen in `dst`: frequency |ν| and sense of
+    ν_dst, labels and shapes unchanged. Raises ValueError where the modes carry no whirl."""
+    if src == dst or spin_hz == 0 or not _ok(m):        # at rest the frames coincide
+        return m
+    nu = signed_hz(m, src)
+    if nu is None:
+        raise ValueError(f"{m.solver}: modes without a whirl sense cannot be seen from the "
+                         f"{dst} frame")
+    nu = signed_in_frame(nu, spin_hz, src, dst)
+    return replace(m, frequencies_hz=np.abs(nu),
+                   extra={**m.extra, "whirl_sense": np.where(nu < 0, -1.0, 1.0)})
+
+
+def whirl(m: Modes, frame: str, spin_hz: float) -> list:
+    """ROSS's whirl direction per mode ("Forward", "Backward"; None without whirl or spin)."""
+    nu = signed_hz(m, frame)
+    if nu is None:
+        return [None] * len(m.frequencies_hz)
+    return whirl_direction(signed_in_frame(nu, spin_hz, frame, "fixed"), spin_hz)
 
 
 def _ok(m: Modes) -> bool:
@@ -152,6 +193,13 @@ class Diagram:
     lines: dict = field(default_factory=dict)   # key → Hz at each value (nan: not on the line)
     mac: dict = field(default_factory=dict)     # key → MAC of each step (nan: no shapes / gap)
     events: list = field(default_factory=list)
+    index: dict = field(default_factory=dict)   # key → the mode's index at each value (−1: none)
+
+    def lines_of(self, results: list[Modes]) -> dict:
+        """The same lines read from `results` (the tracked samples re-expressed, e.g. in the
+        other frame: `in_frame`)."""
+        return {k: np.array([r.frequencies_hz[j] if j >= 0 else np.nan
+                             for r, j in zip(results, idx)]) for k, idx in self.index.items()}
 
     def min_mac_unmarked(self) -> float:
         """The least MAC between consecutive samples of a line over steps no event marks."""
@@ -192,11 +240,12 @@ def track_lines(values: np.ndarray, results: list[Modes]) -> Diagram:
     lines that cross them."""
     n = len(values)
     open_: dict[int, int] = {}            # mode index at the current sample → line id
-    freq, macs, last_label, events_raw = [], [], [], []
+    freq, macs, index, last_label, events_raw = [], [], [], [], []
 
     def new_line():
         freq.append(np.full(n, np.nan))
         macs.append(np.full(max(n - 1, 0), np.nan))
+        index.append(np.full(n, -1))
         last_label.append("")
         return len(freq) - 1
 
@@ -242,6 +291,7 @@ def track_lines(values: np.ndarray, results: list[Modes]) -> Diagram:
         for j in range(len(r.frequencies_hz)):
             line = nxt[j] if j in nxt else new_line()
             freq[line][k] = r.frequencies_hz[j]
+            index[line][k] = j
             last_label[line] = r.labels[j] if j < len(r.labels) else ""
             nxt[j] = line
         open_ = nxt
@@ -251,7 +301,7 @@ def track_lines(values: np.ndarray, results: list[Modes]) -> Diagram:
         key = lb or f"mode {i + 1}"
         keys.append(key if key not in keys else f"{key} #{keys.count(key) + 1}")
     d = Diagram(values=np.asarray(values, float), lines=dict(zip(keys, freq)),
-                mac=dict(zip(keys, macs)))
+                mac=dict(zip(keys, macs)), index=dict(zip(keys, index)))
     for kind, ids, k0, k1, gap in events_raw:
         d.events.append(Event(kind, tuple(keys[i] for i in ids), float(values[k0]),
                               float(values[k1]), float(values[k1]), gap))

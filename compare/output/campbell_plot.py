@@ -1,17 +1,24 @@
-"""The Campbell diagram of `xval modes`: campbell.png (every solver's mode lines, the
-excitation orders, critical speeds, veerings) and campbell.rrd (the lines in rerun)."""
+"""The Campbell diagram of `xval modes`: campbell.png (every solver's mode lines in the frame
+asked, the excitation lines labelled, critical speeds, veerings) and campbell.rrd (the lines in
+the solvers' frame, in rerun)."""
 from __future__ import annotations
 
 import numpy as np
 
 from ..atomic import atomic_path
+from ..physics.whirl import order_seen
 
 
-def png(path, scene, values, lines_by_solver, crit, params, events=None):
+def png(path, scene, values, lines_by_solver, entries, params, events=None, frame=None):
+    """The lines of every solver as seen in `frame` (default: the solvers' own), each
+    excitation line labelled with its order, name and frame — an excitation of the other frame
+    drawn where it meets forward and backward whirl in this one (compare.physics.whirl) — and
+    the critical speeds (`entries`: solver → the crossings of compare.workflows.modes)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     cb = scene.campbell
+    frame = frame or cb.frame
     fig, ax = plt.subplots(figsize=(7.5, 4.8))
     styles = ["-", "--", ":", "-."]
     keys = list(dict.fromkeys(k for lines in lines_by_solver.values() for k in lines))
@@ -21,20 +28,25 @@ def png(path, scene, values, lines_by_solver, crit, params, events=None):
             colour = f"C{j % 10}" if len(keys) <= 10 else plt.cm.tab20(j % 20)
             ax.plot(values, f, lw=1, ls=styles[k % len(styles)], color=colour,
                     marker=".", ms=2, label=key if k == 0 else None)   # dots: the samples
-    if cb.excitation_hz is not None:
-        for order in cb.orders:
-            ax.plot(values, [order * cb.excitation_hz(params, v) for v in values], "k:", lw=1,
-                    label=f"{order}× excitation")
-    for c in crit.values():
-        for v in c.values():
-            ax.plot([v], [cb.excitation_hz(params, v)], "ko", ms=3)
+    speed = np.array([cb.excitation_hz(params, v) for v in values])
+    grey = iter(np.linspace(0.0, 0.6, 2 * len(cb.excitations)))
+    for e in cb.excitations:
+        seen = {order_seen(e.order, e.frame, frame, w): w for w in ("Backward", "Forward")}
+        for order, w in sorted(seen.items()):
+            how = "" if e.frame == frame else f" ({e.order}× {e.frame}), {w.lower()} whirl"
+            ax.plot(values, order * speed, ls=":", lw=1, color=str(next(grey)),
+                    label=f"{order}× {e.name}{how}")
+    for es in entries.values():
+        for c in es:
+            y = order_seen(c["order"], c["frame"], frame, c["whirl"])
+            ax.plot([c["value"]], [y * cb.excitation_hz(params, c["value"])], "ko", ms=3)
     veer = [(e.at, np.nanmean([lines[k][np.searchsorted(values, e.at)] for k in e.lines]))
             for s, lines in lines_by_solver.items() for e in (events or {}).get(s, [])
             if e.kind != "crossing"]
     if veer:        # where two lines hand their shapes over without crossing
         ax.plot(*zip(*veer), "o", mfc="none", mec="k", ms=7, label="veering (shapes exchanged)")
     ax.set_xlabel(f"{cb.parameter} [{cb.unit or '–'}]")
-    ax.set_ylabel("frequency [Hz]")
+    ax.set_ylabel(f"frequency [Hz], {frame} frame")
     top = max(np.nanmax(f) for lines in lines_by_solver.values() for f in lines.values())
     ax.set_ylim(0, 1.1 * top)
     ax.grid(alpha=0.3)

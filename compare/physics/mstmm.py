@@ -34,7 +34,8 @@ def spinning_shaft_omega0(EI: float, m: float, L: float) -> float:
 
 def spinning_shaft_star(n_modes: int, spin_ratio: float) -> np.ndarray:
     """Nondimensional frequencies ω* of an isotropic cantilever Euler–Bernoulli shaft spinning
-    at Ω* = Ω/ω₀, ascending: the pairs λᵢ² − |Ω*| (backward) and λᵢ² + |Ω*| (forward).
+    at Ω* = Ω/ω₀, in the rotating frame, ascending: the pairs |λᵢ² − Ω*| (forward whirl: λᵢ²
+    seen from the ground, turning with the spin) and λᵢ² + Ω* (backward) — compare.physics.whirl.
 
     Exact: with w = u + iv the shaft equation EI w'''' + m(ẅ − 2iΩẇ − Ω²w) = 0 (rotating frame)
     has the non-rotating cantilever shapes with (ω ± Ω)² = ω_i²; the Ω² term cancels."""

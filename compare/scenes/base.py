@@ -8,28 +8,72 @@ import numpy as np
 
 from ..analysis.metrics import first_crossing, frequency_comparisons, pairwise
 from ..errors import BadInput
+from ..physics.whirl import FRAMES
 from .params import Param
+
+
+@dataclass(frozen=True)
+class Excitation:
+    """An excitation line of a Campbell diagram: `order` × the rotation frequency as seen in
+    `frame` ("fixed": from the ground, "rotating": from the rotor), `name` what excites it."""
+    order: int
+    frame: str
+    name: str
+
+    def __post_init__(self):
+        if self.frame not in FRAMES or self.order < 1:
+            raise ValueError(f"excitation {self.name!r}: order ≥ 1 in a frame of {FRAMES}")
+
+
+# a mass off the axis: a force turning with the rotor, fixed in it — 1× in the fixed frame
+UNBALANCE = Excitation(1, "fixed", "unbalance")
+
+
+def per_rev(n: int) -> Excitation:
+    """The n-th harmonic of the loads a blade meets once per revolution (the fan plot's n/rev
+    line, in the rotor's frame)."""
+    return Excitation(n, "rotating", "per-rev blade loads")
 
 
 @dataclass(frozen=True)
 class Campbell:
     """A frequency scene's sweep: `parameter` from `lo` to `hi` in `n` points (each a number or
     the name of a scene parameter that holds it). `excitation_hz(params, value)` gives the
-    frequency [Hz] of the 1× excitation line at a sweep value (a rotor speed in rad/s gives
-    value/2π); critical speeds are where a mode line crosses `orders` × that line, found on
-    these `n` points. The diagram adds at most `refine` points per solver, each halving a step
-    where lines come close, swap order or lose their shape, down to the step / 2**`depth`
-    (compare/analysis/campbell.py)."""
+    rotation frequency [Hz] at a sweep value (a rotor speed in rad/s gives value/2π): the 1×
+    line. The solvers report their lines in `frame`; `whirls`: their modes whirl about the
+    spin axis (a direction per mode: the whirl sense a rotating-frame leaf reports in
+    extra["whirl_sense"], the forward/backward label of a fixed-frame one), so that the lines
+    map to the other frame (compare.physics.whirl) and the diagram can be drawn in either.
+    Critical speeds are where a mode line crosses an `excitations` line in that excitation's
+    frame, found on these `n` points; the first excitation's crossings are named by the mode,
+    the others "<mode> (<order>×)" (orders are unique). The diagram adds at most `refine`
+    points per solver, each halving a step where lines come close, swap order or lose their
+    shape, down to the step / 2**`depth` (compare/analysis/campbell.py)."""
     parameter: str
     lo: float | str
     hi: float | str
     n: int | str
     excitation_hz: Callable | None = None
-    orders: tuple = (1,)
+    frame: str = "fixed"
+    excitations: tuple = (UNBALANCE,)
+    whirls: bool = False
     unit: str = "rad/s"
     refine: int = 12
     depth: int = 3
     solvers: tuple = ()     # the solvers that draw it (default: every solver of the run)
+
+    def __post_init__(self):
+        orders = [e.order for e in self.excitations]
+        if self.frame not in FRAMES or len(set(orders)) != len(orders):
+            raise ValueError(f"Campbell: frame in {FRAMES}, unique excitation orders {orders}")
+        if not self.whirls and any(e.frame != self.frame for e in self.excitations):
+            raise ValueError("Campbell: an excitation in another frame than the lines' needs "
+                             "whirling modes (whirls=True) to map them")
+
+    @property
+    def frames(self) -> tuple:
+        """The frames the diagram can be drawn in: its own, and the other where modes whirl."""
+        return FRAMES if self.whirls else (self.frame,)
 
     def values(self, params):
         get = lambda v: params[v] if isinstance(v, str) else v     # noqa: E731

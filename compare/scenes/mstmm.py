@@ -8,7 +8,7 @@ evidence is in custom_models/mstmm/helicopter.py and the spec.
 import numpy as np
 
 from . import mstmm_frames, mstmm_shapes
-from .base import Campbell, PublishedTiming, Scene
+from .base import UNBALANCE, Campbell, Excitation, PublishedTiming, Scene, per_rev
 from .params import Param, positive
 
 SOURCE = ("seed 002: Yao Song, Rui Xiaoting, Wang Jinghong, 'Calculation of helicopter "
@@ -97,6 +97,20 @@ def shaft_speed_hz(params, spin_ratio):
     return spin_ratio * np.sqrt(params["EI_xx"] / (params["m"] * params["L"] ** 4)) / (2 * np.pi)
 
 
+# Critical speeds. The shaft's leaves report whirl in the rotating frame; its lines cross
+# unbalance (1× fixed: the forward whirl at Ω* = λᵢ², its rotating-frame line reaching 0) and,
+# were EI_xx ≠ EI_yy, gravity (a static load on a shaft stiffer one way: 2× fixed, the forward
+# whirl at Ω* = λᵢ²/2, its rotating-frame line crossing 1×) — compare.physics.whirl. The sweep
+# reaches Ω* = 25 to hold λ₂² = 22.03. The blades' modes do not whirl: the fan plot's per-rev
+# lines in the rotor's frame, as the paper draws them; the single blade 1–4/rev (the 4-blade
+# rotor's harmonics up to its blade-passage 4/rev: 9 crossings per solver, ~5 modes runs each —
+# `xval modes rotating-beam` 27 → 37 s CPU, measured on a shared machine), the helicopters
+# 1/rev (each crossing costs ~10 modes runs of ~0.5 s on the whole aircraft).
+SHAFT_EXCITATIONS = (UNBALANCE, Excitation(2, "fixed", "gravity on an anisotropic shaft"))
+BLADE_EXCITATIONS = tuple(per_rev(n) for n in (1, 2, 3, 4))
+HELICOPTER_EXCITATIONS = (per_rev(1),)
+
+
 def n_modes(default):
     return Param("n_modes", default, "", "number of natural frequencies reported", kind="int",
                  lo=1, hi=200)
@@ -142,7 +156,8 @@ ROTATING_BEAM = Scene(
             "mujoco": "reference_models.mujoco.beam_modes"},
     energy_channel=None,
     tolerances=BLADE_TOLERANCES,
-    campbell=Campbell("speed", 0.0, 40.0, 21, excitation_hz=rotor_speed_hz),
+    campbell=Campbell("speed", 0.0, 40.0, 21, excitation_hz=rotor_speed_hz, frame="rotating",
+                      excitations=BLADE_EXCITATIONS),
     mode_shape_3d=mstmm_shapes.rotating_beam,
     campaign_cases=({"name": "rotating-beam"},),
     published_timings=(TABLE1_TIMING,),
@@ -167,7 +182,8 @@ SPINNING_SHAFT = Scene(
             "mujoco": "reference_models.mujoco.shaft_modes"},
     energy_channel=None,
     tolerances=SHAFT_TOLERANCES,
-    campbell=Campbell("spin_ratio", 0.0, 12.0, 25, excitation_hz=shaft_speed_hz, unit=""),
+    campbell=Campbell("spin_ratio", 0.0, 25.0, 26, excitation_hz=shaft_speed_hz, unit="",
+                      frame="rotating", whirls=True, excitations=SHAFT_EXCITATIONS),
     mode_shape_3d=mstmm_shapes.spinning_shaft,
     campaign_cases=({"name": "spinning-shaft"},),
     notes="frequencies_hz dimensional; extra['omega_star'] = ω/ω₀ (Table 2's 'Hz' is ω*).",
@@ -222,6 +238,7 @@ def helicopter_scene(name, title, system, n_modes, shapes, tolerances, **more):
                  leaves={**leaves(system), **engine_leaves(system)},
                  mode_shape_3d=shapes, energy_channel=None, tolerances=tolerances,
                  campbell=Campbell("speed", 0.0, 50.0, 11, excitation_hz=rotor_speed_hz,
+                                   frame="rotating", excitations=HELICOPTER_EXCITATIONS,
                                    solvers=CUSTOM),
                  bench_solvers=CUSTOM,     # the engines' aircraft is another model (the frame)
                  explain_frequencies=mstmm_frames.explain, campaign_cases=helicopter_cases(name),

@@ -306,8 +306,10 @@ WHIRL = Scene(
                 "wider": {p: "round-off floor: 1e-14 (45 machine ε); this pair met at 1–3 ε "
                           "(6.7e-16, 2.9e-16) at the measured spins"
                           for p in ("euler-vector|mujoco", "closed-form|exudyn")}},
+    # the whirl frequencies seen from the ground (fixed frame), labelled forward/backward:
+    # drawable in the rotor's frame too; unbalance meets them at √(k_eff/(I_t ∓ I_p))
     campbell=Campbell("spin", 0.0, "spin_max", "n_spin",
-                      excitation_hz=lambda p, spin: spin / (2 * np.pi)),
+                      excitation_hz=lambda p, spin: spin / (2 * np.pi), whirls=True),
     identify=lambda params, run, names=None: (
         identify_free_response(params, run, names) if params["spin"] == 0 else ([], [])),
     campaign_cases=({"name": "rotor-whirl"},),

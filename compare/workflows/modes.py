@@ -24,6 +24,8 @@ from ..scenes import Scene, get_scene
 from .plan import plan
 from .runner import new_run_dir
 
+SAME_MODE = 0.5     # a mode followed by label must share this much shape with its line (MAC)
+
 
 def sweep(scene: Scene, solver: solvers.Solver, params: dict, values: np.ndarray) -> list[Modes]:
     """The solver's modes at each value of the scene's sweep parameter."""
@@ -96,78 +98,129 @@ def _refine(gap, lo, hi, v0, d):
 
 
 def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: np.ndarray,
-                    lines: dict[str, np.ndarray], hint: dict | None = None,
-                    unconfirmed: list | None = None) -> dict[str, float]:
-    """Sweep values where a mode line crosses `order` × the excitation line, refined by root
-    finding on the solver itself (the mode followed by label, else by nearest frequency).
-    The first estimate is the lines' linear interpolation (±2 % of the step), or another
-    solver's critical speed of the same name in `hint` (±1e-4 relative: solvers that agree
-    save half the modes runs; one that does not falls back to the whole step). A crossing of
+                    results: list[Modes], hint: dict | None = None,
+                    unconfirmed: list | None = None) -> list[dict]:
+    """For each excitation of the scene's Campbell (compare/scenes/base.py `Excitation`): the
+    sweep values where a mode line, seen in the excitation's frame, crosses order × the
+    rotation frequency (the solver's `results` on the grid `values`, re-expressed in that frame
+    where the modes whirl: compare.physics.whirl), refined by root finding on the solver
+    itself (the mode followed by label, else by nearest frequency). The first estimate is the
+    lines' linear interpolation (±2 % of the step), or another solver's critical speed of the
+    same name in `hint` (±1e-4 relative: solvers that agree save half the modes runs; one that
+    does not falls back to the whole step). One entry per crossing (`entry`); a crossing of
     the lines the solver does not confirm is appended to `unconfirmed` with the reason."""
     cb = scene.campbell
     if cb.excitation_hz is None:
-        return {}
-    out = {}
-    for order in cb.orders:
-        exc = np.array([order * cb.excitation_hz(params, v) for v in values])
+        return []
+    out = []
+    for exc in cb.excitations:
+        def seen(m, v, exc=exc):
+            return campbell.in_frame(m, cb.excitation_hz(params, v), cb.frame, exc.frame)
+        lines = track([seen(m, v) for m, v in zip(results, values)])
+        on_line = np.array([exc.order * cb.excitation_hz(params, v) for v in values])
         for key, f in lines.items():
-            g = f - exc
+            g = f - on_line
             idx = np.nonzero(np.sign(g[:-1]) * np.sign(g[1:]) < 0)[0]
             for i in idx[:1]:                      # the first crossing of each line
-                def gap(v, key=key, f0=f[i], order=order):
-                    m = solvers.modes(scene, solver, {**params, cb.parameter: float(v)})
-                    if key in m.labels:
-                        fr = m.frequencies_hz[m.labels.index(key)]
-                    elif _unique(m.labels):     # the solver names its modes, none of them so
-                        raise ValueError(f"no mode {key!r} at {v}")
-                    else:
-                        fr = m.frequencies_hz[np.argmin(np.abs(m.frequencies_hz - f0))]
-                    return fr - order * cb.excitation_hz(params, v)
-                name = key if order == 1 else f"{key} ({order}×)"
-                lo, hi = values[i], values[i + 1]
-                v0 = lo - g[i] * (hi - lo) / (g[i + 1] - g[i])     # linear, from the lines
-                near = (hint or {}).get(name)
-                try:
-                    v = (_refine(gap, lo, hi, near, 1e-4 * abs(near))
-                         if near is not None and lo < near < hi
-                         else _refine(gap, lo, hi, v0, 0.02 * (hi - lo)))
-                except (ValueError, IndexError) as e:
-                    first = f"root finding on the solver: {e}"
-                    # a body-frame linearisation can lose the mode exactly at the crossing
-                    # (its body-frame frequency is 0 there): parabola through points beside it,
-                    # its root taken only among them. Else the solver does not confirm the
-                    # crossing and none is reported: the lines can pass between different
-                    # modes over a step (the hovering helicopter's whole-aircraft modes have no
-                    # 'fuselage' label below ~10 rad/s), and a root extrapolated from points
-                    # near the lines' estimate (4.54 rad/s) to 4.98 was no critical speed.
-                    x = v0 + 1e-3 * (hi - lo) * np.array([-3, -2, 2, 3.0])
-                    why = None
-                    try:
-                        y = np.array([gap(v) for v in x])
-                        roots = np.roots(np.polyfit(x - v0, y, 2)).real + v0
-                        v = float(roots[np.argmin(np.abs(roots - v0))])
-                        if not x[0] <= v <= x[-1]:
-                            why = (f"the parabola's root {v:.6g} lies outside the points "
-                                   f"beside the estimate [{x[0]:.6g}, {x[-1]:.6g}]")
-                    except (ValueError, IndexError) as e:
-                        why = f"parabola beside the estimate: {e}"
-                    if why:
-                        if unconfirmed is not None:
-                            unconfirmed.append({"name": name, "lines_estimate": float(v0),
-                                                "step": [float(lo), float(hi)],
-                                                "reason": f"{first}; {why}"})
-                        continue
-                out[name] = float(v)
+                name = key if exc is cb.excitations[0] else f"{key} ({exc.order}×)"
+                shapes = [r.shapes[r.labels.index(key)] for r in results[i:i + 2]
+                          if r.shapes is not None and key in r.labels]
+                found = _crossing(scene, solver, params, values, i, g, key, f[i], shapes, exc,
+                                  seen, (hint or {}).get(name))
+                if isinstance(found, str):
+                    if unconfirmed is not None:
+                        unconfirmed.append({"name": name, "order": exc.order,
+                                            "excitation": exc.name, "frame": exc.frame,
+                                            "lines_estimate": float(_linear(values, g, i)),
+                                            "step": [float(values[i]), float(values[i + 1])],
+                                            "reason": found})
+                    continue
+                out.append(entry(cb, params, name, exc, *found))
     return out
 
 
-def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print):
+def entry(cb, params, name, exc, value, whirl) -> dict:
+    """One critical speed as a ROSS user reads it: the sweep value, the speed in rad/s and
+    rpm, the crossing's frequency in Hz and rad/s (in `frame`, where the lines crossed the
+    excitation), the excitation, the mode's whirl ("Forward"/"Backward"; None: no whirl)."""
+    speed_hz = cb.excitation_hz(params, value)
+    return {"name": name, "value": float(value), "unit": cb.unit,
+            "speed_rad_s": 2 * np.pi * speed_hz, "speed_rpm": 60 * speed_hz,
+            "frequency_hz": exc.order * speed_hz,
+            "frequency_rad_s": 2 * np.pi * exc.order * speed_hz,
+            "order": exc.order, "excitation": exc.name, "frame": exc.frame, "whirl": whirl,
+            "solver_frame": cb.frame}
+
+
+def _linear(values, g, i):
+    lo, hi = values[i], values[i + 1]
+    return lo - g[i] * (hi - lo) / (g[i + 1] - g[i])
+
+
+def _crossing(scene, solver, params, values, i, g, key, f0, shapes, exc, seen, near):
+    """The crossing of line `key` in step i, on the solver: (value, whirl), or why not (str).
+    The mode is followed by its label, else by the frequency nearest `f0`; where the line's
+    `shapes` at the step's ends are known, the mode must share half its shape with one of them
+    (MAC ≥ SAME_MODE): a leaf that misses a mode renumbers the others (mstmm misses the shaft's
+    forward whirl within |ω*| < 1e-7 of its rotating-frame zero and called the second bending
+    mode 'forward whirl 1' there, MAC 0.023 with the line: brentq then stopped at that band's
+    edge, 3.6e-8 off); half, not MAC_KEEP, so that a mode halfway through a veering holds."""
+    cb = scene.campbell
+    whirl = {}
+
+    def gap(v):
+        m = seen(solvers.modes(scene, solver, {**params, cb.parameter: float(v)}), v)
+        if key in m.labels:
+            j = m.labels.index(key)
+        elif _unique(m.labels):          # the solver names its modes, none of them so
+            raise ValueError(f"no mode {key!r} at {v}")
+        else:
+            j = int(np.argmin(np.abs(m.frequencies_hz - f0)))
+        if shapes and m.shapes is not None and np.max(mac(m.shapes[j], shapes)) < SAME_MODE:
+            raise ValueError(f"the mode called {key!r} at {v} is another (MAC "
+                             f"{np.max(mac(m.shapes[j], shapes)):.2f} with the line's)")
+        whirl["last"] = campbell.whirl(m, exc.frame, cb.excitation_hz(params, v))[j]
+        return m.frequencies_hz[j] - exc.order * cb.excitation_hz(params, v)
+    lo, hi = values[i], values[i + 1]
+    v0 = _linear(values, g, i)                                 # linear, from the lines
+    try:
+        v = (_refine(gap, lo, hi, near, 1e-4 * abs(near)) if near is not None and lo < near < hi
+             else _refine(gap, lo, hi, v0, 0.02 * (hi - lo)))
+    except (ValueError, IndexError) as e:
+        first = f"root finding on the solver: {e}"
+        # a body-frame linearisation can lose the mode exactly at the crossing (its body-frame
+        # frequency is 0 there): parabola through points beside it, its root taken only among
+        # them. Else the solver does not confirm the crossing and none is reported: the lines
+        # can pass between different modes over a step (the hovering helicopter's whole-
+        # aircraft modes have no 'fuselage' label below ~10 rad/s), and a root extrapolated
+        # from points near the lines' estimate (4.54 rad/s) to 4.98 was no critical speed.
+        x = v0 + 1e-3 * (hi - lo) * np.array([-3, -2, 2, 3.0])
+        try:
+            y = np.array([gap(v) for v in x])
+            roots = np.roots(np.polyfit(x - v0, y, 2)).real + v0
+            v = float(roots[np.argmin(np.abs(roots - v0))])
+        except (ValueError, IndexError) as e:
+            return f"{first}; parabola beside the estimate: {e}"
+        if not x[0] <= v <= x[-1]:
+            return (f"{first}; the parabola's root {v:.6g} lies outside the points beside the "
+                    f"estimate [{x[0]:.6g}, {x[-1]:.6g}]")
+    return v, whirl.get("last")
+
+
+def by_name(entries: list[dict]) -> dict[str, float]:
+    """{name: value} of a solver's critical speeds (the JSON's `critical_speeds`)."""
+    return {e["name"]: e["value"] for e in entries}
+
+
+def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print, frame=None):
     """Critical speeds on the scene's grid (lines by label, refined on each solver's own mode:
     unchanged by the diagram), then the diagram: the grid refined where any solver's lines are
     uncertain, every solver on the same points, lines tracked by MAC with veerings and
-    crossings told apart (compare/analysis/campbell.py). Returns the JSON part, the critical
-    speeds and the report's lines."""
+    crossings told apart (compare/analysis/campbell.py) in the frame the solvers report, and
+    read in the other frame too where the modes whirl. The figure is drawn in `frame` (default:
+    the solvers'). Returns the JSON part, the critical speeds and the report's lines."""
     cb = sc.campbell
+    frame = frame or cb.frame
     chosen = [s for s in chosen if not cb.solvers or s.name in cb.solvers]
     values = cb.values(params)
     memo = {s.name: {} for s in chosen}
@@ -176,54 +229,81 @@ def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print):
         if v not in memo[s.name]:
             memo[s.name][v] = solvers.modes(sc, s, {**params, cb.parameter: float(v)})
         return memo[s.name][v]
-    crit, usable, unconfirmed, missing = {}, [], {}, []
+    entries, usable, unconfirmed, missing = {}, [], {}, []
     for s in chosen:
-        tracked = track([at(s, float(v)) for v in values])
-        if not tracked:
+        results = [at(s, float(v)) for v in values]
+        if not track(results):
             bad = next((m for m in memo[s.name].values() if m.status != "ok"), None)
             missing.append({"solver": s.name, "reason": "a sweep point failed: no lines"
                             + (f" ({bad.status}: {bad.reason})" if bad else "")})
             log(f"campbell {s.name}: {missing[-1]['reason']}")
             continue
         usable.append(s)
-        crit[s.name] = critical_speeds(sc, s, params, values, tracked,
-                                       hint=next(iter(crit.values()), None),
-                                       unconfirmed=unconfirmed.setdefault(s.name, []))
+        entries[s.name] = critical_speeds(sc, s, params, values, results,
+                                          hint=by_name(next(iter(entries.values()), [])),
+                                          unconfirmed=unconfirmed.setdefault(s.name, []))
+    crit = {s: by_name(es) for s, es in entries.items()}
     step = (values[-1] - values[0]) / max(len(values) - 1, 1)
     grid, per_point = campbell.sample(lambda v: [at(s, v) for s in usable], values,
                                       cb.refine if usable else 0, step / 2 ** cb.depth)
     diagrams = {s.name: campbell.track_lines(grid, [p[k] for p in per_point])
                 for k, s in enumerate(usable)}
-    lines = {s: d.lines for s, d in diagrams.items()}
+    by_frame = {f: {s.name: diagrams[s.name].lines_of(
+        [campbell.in_frame(p[k], cb.excitation_hz(params, v), cb.frame, f)
+         for p, v in zip(per_point, grid)]) for k, s in enumerate(usable)} for f in cb.frames}
+    lines = by_frame[cb.frame]
     events = {s: d.events for s, d in diagrams.items()}
     none = lambda f: [None if not np.isfinite(x) else float(x) for x in f]   # noqa: E731
     obj = {"parameter": cb.parameter, "values": list(grid), "grid_points": len(values),
-           "lines_hz": {s: {k: none(v) for k, v in ln.items()} for s, ln in lines.items()},
+           "frame": cb.frame, "lines_hz": {s: {k: none(v) for k, v in ln.items()}
+                                           for s, ln in lines.items()},
+           "lines_hz_by_frame": {f: {s: {k: none(v) for k, v in ln.items()}
+                                     for s, ln in by.items()} for f, by in by_frame.items()},
            "line_mac": {s: {k: none(v) for k, v in d.mac.items()} for s, d in diagrams.items()},
            "events": {s: [e.as_dict() for e in ev] for s, ev in events.items()},
            "min_mac_unmarked": {s: d.min_mac_unmarked() for s, d in diagrams.items()},
+           "excitations": [{"order": e.order, "frame": e.frame, "name": e.name}
+                           for e in cb.excitations],
+           "critical_speeds": entries,
            "unconfirmed_critical_speeds": {s: u for s, u in unconfirmed.items() if u},
            "incomplete": missing}
     if lines:
-        campbell_plot.png(out_dir / "campbell.png", sc, grid, lines, crit, params, events)
+        campbell_plot.png(out_dir / "campbell.png", sc, grid, by_frame[frame], entries, params,
+                          events, frame)
+        obj["figure_frame"] = frame
         obj["recording"] = str(campbell_plot.rrd(out_dir / "campbell.rrd", sc, grid, lines))
     md = ["", "## Campbell diagram", "",
           f"{len(grid)} values of {cb.parameter} ({len(values)} on the scene's grid, "
-          f"{len(grid) - len(values)} added where lines come close, swap or lose their shape).",
-          "Lines continue where consecutive mode shapes correlate (MAC ≥ "
+          f"{len(grid) - len(values)} added where lines come close, swap or lose their shape); "
+          f"the solvers report their lines in the {cb.frame} frame"
+          + (f", the figure shows them in the {frame} frame" if frame != cb.frame else "")
+          + ".", "Lines continue where consecutive mode shapes correlate (MAC ≥ "
           f"{campbell.MAC_KEEP}); least MAC on a line outside a marked veering: "
           + ", ".join(f"{s} {d.min_mac_unmarked():.3f}" for s, d in diagrams.items()) + ".", ""]
     md += [f"- {s} {e.kind}: {' / '.join(e.lines)} at {cb.parameter} ≈ {e.at:.4g} "
            f"({e.lo:.4g}–{e.hi:.4g}; least gap {e.gap_hz:.3g} Hz)"
            for s, ev in events.items() for e in ev]
-    md += ["", f"Critical {cb.parameter} [{cb.unit}] (a mode line crosses the excitation "
-           "line):", ""]
-    md += [f"- {n}: " + ", ".join(f"{k} {v:.6f}" for k, v in c.items()) for n, c in crit.items()]
+    md += [""] + critical_table(cb, entries)
     md += [f"- {n}: {u['name']} unconfirmed (the lines cross near {u['lines_estimate']:.6g}): "
            f"{u['reason']}" for n, us in unconfirmed.items() for u in us]
     md += [f"- {m['solver']}: no critical speeds — {m['reason']}" for m in missing]
     md += ["", "![campbell](campbell.png)"]
     return obj, crit, md
+
+
+def critical_table(cb, entries: dict) -> list[str]:
+    """The critical speeds as ROSS tabulates them: speed in rad/s and rpm side by side, the
+    frequency met in Hz and rad/s, the excitation, whirl and frame of each crossing."""
+    p = f"{cb.parameter} [{cb.unit}]" if cb.unit else cb.parameter
+    md = [f"Critical speeds (a mode line crosses an excitation line, both seen in the frame "
+          f"given; the solvers' lines are in the {cb.frame} frame):", "",
+          f"| solver | crossing | excitation | whirl | frame | {p} | rad/s | rpm | Hz | rad/s |",
+          "|---|---|---|---|---|---|---|---|---|---|"]
+    md += [f"| {s} | {e['name']} | {e['order']}× {e['excitation']} | {e['whirl'] or '—'} | "
+           f"{e['frame']} | {e['value']:.6f} | {e['speed_rad_s']:.6g} | {e['speed_rpm']:.6g} | "
+           f"{e['frequency_hz']:.6g} | {e['frequency_rad_s']:.6g} |"
+           for s, es in entries.items() for e in es]
+    return md
 
 
 def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float):
@@ -237,11 +317,17 @@ def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float):
 
 
 def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_sweep=True,
-              identify=True, out_dir=None):
-    """`out_dir` given: write there (a campaign case); else a new run folder under `out`."""
+              identify=True, out_dir=None, campbell_frame=None):
+    """`out_dir` given: write there (a campaign case); else a new run folder under `out`.
+    `campbell_frame`: the frame the Campbell figure is drawn in (default: the solvers')."""
     sc = get_scene(scene_name)
     if not sc.is_modes:
         raise BadInput(f"scene {sc.name!r} is a time-domain scene: use `xval run {sc.name}`")
+    if campbell_frame is not None and campbell_frame not in (
+            sc.campbell.frames if sc.campbell else ()):
+        raise BadInput(f"--campbell-frame {campbell_frame}: {sc.name} draws its Campbell "
+                       + (f"diagram in the {' or '.join(sc.campbell.frames)} frame"
+                          if sc.campbell else "diagram nowhere: it sweeps nothing"))
     pl = plan(sc, overrides, solver_names)
     params, chosen = pl.params, list(pl.solvers)
     out_dir = Path(out_dir or new_run_dir(out, sc.name))
@@ -289,7 +375,7 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
         md += [""] + lines_md
     if sc.campbell and campbell_sweep and any(
             not sc.campbell.solvers or s.name in sc.campbell.solvers for s in chosen):
-        obj_cb, crit, text = campbell_diagram(sc, chosen, params, out_dir, log)
+        obj_cb, crit, text = campbell_diagram(sc, chosen, params, out_dir, log, campbell_frame)
         obj["critical_speeds"] = crit
         obj["campbell"] = obj_cb
         if "recording" in obj_cb:

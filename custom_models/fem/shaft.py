@@ -11,6 +11,7 @@ from scipy.linalg import eig
 
 from compare.contract import ModesResult, merge_settings
 from compare.physics.mstmm import spinning_shaft_omega0
+from compare.physics.whirl import whirl_labels
 
 from .beam import bending
 
@@ -70,7 +71,7 @@ def modes(params: dict, settings: dict) -> ModesResult:
         change = np.abs(ext - w2) / (2 * np.pi)     # the mesh change: the error estimate
         w = ext
     step = (2 if s["richardson"] else 1) * n_el // k
-    labels, shapes, count = [], [], {"forward whirl": 0, "backward whirl": 0, "whirl": 0}
+    shapes, sense = [], []
     for j in range(len(w)):
         x = V[:, j]
         u = np.concatenate([[0.0], x[0:n:2]])
@@ -79,16 +80,13 @@ def modes(params: dict, settings: dict) -> ModesResult:
             v[np.argmax(np.abs(v))]
         u, v = u / big, v / big
         U, Vs = u.real, -v.imag                       # u = U cos ωt, v = V sin ωt
-        if spin == 0:
-            kind = "whirl"
+        if spin == 0:                                 # planes decoupled: no whirl sense
             U, Vs = u.real, v.real
-        else:
-            sense = np.sign(U @ Vs)                   # +1: counter-clockwise (rotating frame)
-            kind = "forward whirl" if sense * w[j] + spin > 0 else "backward whirl"
-        count[kind] += 1
-        labels.append(f"{kind} {count[kind]}")
+        # +1: counter-clockwise about the spin axis in the rotating frame
+        sense.append(1.0 if spin == 0 else float(np.sign(U @ Vs)))
         sh = np.concatenate([U[::step], Vs[::step]])
         shapes.append(sh / sh[np.argmax(np.abs(sh))])
+    labels = whirl_labels(w / (2 * np.pi), sense, spin / (2 * np.pi))
     notes = [f"ω₀ = {w0:.6g} rad/s; elements {n_el} and {2 * n_el}, Richardson error estimate "
              f"{err:.1e}"]
     if unstable:
@@ -96,4 +94,5 @@ def modes(params: dict, settings: dict) -> ModesResult:
     return ModesResult(frequencies_hz=w / (2 * np.pi), labels=labels, shapes=np.array(shapes),
                        settings=dict(s, elements=n_el), notes=notes,
                        extra={"omega_star": (w / w0).tolist(), "unstable": unstable,
+                              "whirl_sense": sense,
                               **({"frequency_error_hz": change} if change is not None else {})})

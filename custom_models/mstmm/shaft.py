@@ -15,14 +15,16 @@ basis re-orthonormalised after each, as for the blade.
 
 ω > 0 covers both whirl senses (ω < 0 is ω > 0 with V → −V). The fixed-frame whirl rate is
 sense·ω + Ω with sense = sign(∫U V) (+1: counter-clockwise about the spin axis in the rotating
-frame): forward whirl if > 0. Inside an anisotropic instability band a mode has no real ω: it
-is missing from the real roots and reported in notes.
+frame, reported in extra["whirl_sense"]): forward whirl if > 0, each direction numbered by
+that fixed-frame frequency (compare.physics.whirl). Inside an anisotropic instability band a
+mode has no real ω: it is missing from the real roots and reported in notes.
 """
 import numpy as np
 from scipy.linalg import expm
 
 from compare.contract import ModesResult, merge_settings
 from compare.physics.mstmm import spinning_shaft_omega0
+from compare.physics.whirl import whirl_labels
 
 from .elements import coupled_fourth_order_transfer, orthonormalize, shaft_coupling
 from .roots import find_roots, root_error_hz
@@ -107,23 +109,16 @@ def modes(params: dict, settings: dict) -> ModesResult:
             break
         omega_max *= 1.6
     roots = roots[:p["n_modes"]]
-    shapes, labels, count = [], [], {"forward whirl": 0, "backward whirl": 0, "whirl": 0}
-    for w in roots:
-        sh = shape(p, w, spin, s["stations"])
-        n = s["stations"]
-        uv = float(sh[:n] @ sh[n:])
-        if spin == 0:                                # planes decoupled: no whirl sense
-            kind = "whirl"
-        else:
-            kind = "forward whirl" if np.sign(uv) * w + spin > 0 else "backward whirl"
-        count[kind] += 1
-        labels.append(f"{kind} {count[kind]}")
-        shapes.append(sh)
+    n = s["stations"]
+    shapes = [shape(p, w, spin, n) for w in roots]
+    sense = [1.0 if spin == 0 else float(np.sign(sh[:n] @ sh[n:])) for sh in shapes]
+    labels = whirl_labels(np.array(roots) / (2 * np.pi), sense, spin / (2 * np.pi))
     notes = [f"ω₀ = {w0:.6g} rad/s; shapes [U, V] at {s['stations']} stations; rotating frame"]
     if p["EI_xx"] != p["EI_yy"]:
         notes.append("anisotropic: modes inside an instability band have no real frequency")
     return ModesResult(frequencies_hz=np.array(roots) / (2 * np.pi), labels=labels,
                        shapes=np.array(shapes), settings=s, notes=notes,
                        extra={"omega_star": (np.array(roots) / w0).tolist(),
+                              "whirl_sense": sense,
                               "frequency_error_hz": root_error_hz(np.array(roots) / (2 * np.pi),
                                                                   s["rtol"])})

@@ -1,0 +1,168 @@
+"""Critical speeds by excitation order (issue 28): each solver's crossings against the closed
+form, the whirl seen from both frames, the Campbell JSON and figure in either frame.
+
+The isotropic Euler–Bernoulli cantilever shaft has no gyroscopic term: seen from the ground
+every whirl mode turns at λᵢ²ω₀ (λᵢ the roots of cos λ cosh λ = −1, solved here), forward and
+backward alike, at every speed. Unbalance (1× in the fixed frame) therefore meets both at
+Ω* = λᵢ² (3.5160, 22.0345), gravity on an anisotropic shaft (2×) at Ω* = λᵢ²/2. In the rotating
+frame the solvers report, the forward line reaches 0 there and the backward line crosses 2×
+(COMSOL Rotordynamics manual, "Determination of the Critical Speed": in the corotating frame the
+forward critical is the forward curve's intersection with the abscissa, the backward one the
+backward curve's with ω = 2Ω) — a rule stated outside this code, checked on the solvers' own
+rotating-frame frequencies.
+"""
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import xval
+from scipy.optimize import brentq
+
+from compare import solvers
+from compare.analysis.campbell import in_frame
+from compare.scenes import get_scene
+from compare.scenes.base import UNBALANCE
+from compare.workflows.modes import critical_speeds, sweep
+
+SHAFT = get_scene("spinning-shaft")
+LAMBDA2 = np.array([brentq(lambda x: np.cos(x) * np.cosh(x) + 1, a, b)
+                    for a, b in ((1.5, 2.5), (4.0, 5.0), (7.5, 8.2))]) ** 2
+# Measured relative deviation from the closed form, all 8 crossings (grid 1.5, 2, 3, 4, 10.5,
+# 11.5, 21.5, 22.5: the scene's excitations) and every mode
+# mapped to the fixed frame at Ω* = 2 and 25: mstmm 4.4e-13 / 3.0e-13 (the transfer matrix is
+# exact: its root finding), fem 4.7e-10 / 2.6e-9 (Hermite elements, Richardson), exudyn 7.43e-7
+# / 7.94e-7, mujoco 7.46e-7 / 7.92e-7 (the rigid-segment chain, N = 40/20 extrapolated: its
+# λ² as in tests/test_beam_engines.py). Tolerances ≤ 10× those.
+TOL = {"mstmm": 4e-12, "fem": 2e-8, "exudyn": 3e-6, "mujoco": 3e-6}
+W0 = np.sqrt(582.996 / (2.87 * 1.29 ** 4))         # ω₀ = √(EI/(m L⁴)) of the defaults [rad/s]
+
+
+def crossings(solver, excitations, grid):
+    """The solver's crossings of the scene's excitations that are listed, on `grid`."""
+    sc = replace(SHAFT, campbell=replace(SHAFT.campbell, excitations=excitations))
+    s, p = solvers.get_solver(solver), SHAFT.resolve()
+    return critical_speeds(sc, s, p, grid, sweep(sc, s, p, grid))
+
+
+@pytest.mark.parametrize("solver", ["mstmm", "fem", "exudyn", "mujoco"])
+def test_shaft_unbalance_critical_speeds_are_the_cantilever_roots(solver):
+    """Every solver's unbalance crossings, refined on the solver, on steps around them (the
+    scene's grid costs 26 points per solver): λᵢ² forward and backward, labelled with order,
+    excitation, whirl and frame; beside each the solver's own rotating-frame line (signed by
+    its whirl sense, interpolated to the critical) is at 0 (forward) or −2× (backward)."""
+    entries = crossings(solver, (UNBALANCE,), np.array([3.0, 4.0, 21.5, 22.5]))
+    got = {(e["name"], e["order"], e["excitation"], e["whirl"], e["frame"]): e["value"]
+           for e in entries}
+    want = {(f"{w} whirl {k}", 1, "unbalance", w.title(), "fixed"): LAMBDA2[k - 1]
+            for k in (1, 2) for w in ("forward", "backward")}
+    assert got.keys() == want.keys()
+    for key, v in want.items():
+        assert got[key] == pytest.approx(v, rel=TOL[solver]), key
+    s, p = solvers.get_solver(solver), SHAFT.resolve()
+    for e in entries:
+        assert e["solver_frame"] == "rotating"
+        assert e["speed_rad_s"] == pytest.approx(e["value"] * W0, rel=1e-12)
+        assert e["speed_rpm"] == pytest.approx(e["speed_rad_s"] * 60 / (2 * np.pi), rel=1e-12)
+        if e["name"].endswith("2"):
+            continue
+        # at the critical the forward mode has no frequency (a leaf may miss it): beside it
+        x = e["value"] * np.array([1 - 1e-4, 1 + 1e-4])
+        f = []
+        for v in x:
+            m = solvers.modes(SHAFT, s, {**p, "spin_ratio": float(v)})
+            j = m.labels.index(e["name"])
+            f.append(m.extra["whirl_sense"][j] * m.frequencies_hz[j])
+        spin_hz = e["value"] * W0 / (2 * np.pi)
+        rot = 0.0 if e["whirl"] == "Forward" else -2 * spin_hz
+        assert np.interp(e["value"], x, f) == pytest.approx(
+            rot, abs=TOL[solver] * 2 * spin_hz), e["name"]
+
+
+@pytest.mark.parametrize("solver", ["mstmm", pytest.param("fem", marks=pytest.mark.slow),
+                                    pytest.param("exudyn", marks=pytest.mark.slow),
+                                    pytest.param("mujoco", marks=pytest.mark.slow)])
+def test_shaft_2x_crossings_are_half_the_roots(solver):
+    """The scene's excitations as declared: the 2× line (gravity on a shaft stiffer one way)
+    meets both whirls at λᵢ²/2, named "<mode> (2×)". Slow but for mstmm: ~40 modes runs."""
+    grid = np.array([1.5, 2.0, 10.5, 11.5])
+    entries = crossings(solver, SHAFT.campbell.excitations, grid)
+    got = {(e["name"], e["excitation"], e["whirl"]): e["value"] for e in entries
+           if e["order"] == 2}
+    want = {(f"{w} whirl {k} (2×)", "gravity on an anisotropic shaft", w.title()):
+            LAMBDA2[k - 1] / 2 for k in (1, 2) for w in ("forward", "backward")}
+    assert got == pytest.approx(want, rel=TOL[solver])
+
+
+@pytest.mark.parametrize("solver", ["mstmm", "fem", "exudyn", "mujoco"])
+def test_every_whirl_seen_from_the_ground_turns_at_the_cantilever_frequency(solver):
+    """The frame mapping (compare.physics.whirl) on every solver's rotating-frame modes: each
+    mode, forward or backward, below or beyond its forward critical (Ω* = 2, 25), is λᵢ²ω₀ in
+    the fixed frame, turning with the spin (forward) or against it (backward)."""
+    s = solvers.get_solver(solver)
+    for ratio in (2.0, 25.0):
+        m = solvers.modes(SHAFT, s, SHAFT.resolve({"spin_ratio": str(ratio)}))
+        fixed = in_frame(m, ratio * W0 / (2 * np.pi), "rotating", "fixed")
+        want = [LAMBDA2[int(lb.split()[-1]) - 1] * W0 / (2 * np.pi) for lb in m.labels]
+        np.testing.assert_allclose(fixed.frequencies_hz, want, rtol=TOL[solver])
+        sense = dict(zip(m.labels, fixed.extra["whirl_sense"]))
+        assert all(v == (1 if lb.startswith("forward") else -1) for lb, v in sense.items())
+
+
+@pytest.mark.parametrize("solver", ["exudyn", "mujoco"])
+def test_engines_extrapolate_the_forward_whirl_through_its_rotating_frame_zero(solver):
+    """Just past a forward critical the chains of N and N/2 segments sit on opposite sides of
+    the rotating-frame zero; extrapolated with its sign the forward whirl is λ² − Ω* (here
+    −1e-3 and −1.5e-2). Measured deviation 2.5e-7 and 1.64e-5 (in ω*; the chain's λ² error);
+    extrapolating magnitudes gave +2.96e-4 and −3.4e-3 (as a frequency!)."""
+    s = solvers.get_solver(solver)
+    for k, past in ((1, 1e-3), (2, 1.5e-2)):
+        ratio = LAMBDA2[k - 1] + past
+        m = solvers.modes(SHAFT, s, SHAFT.resolve({"spin_ratio": str(float(ratio))}))
+        j = m.labels.index(f"forward whirl {k}")
+        signed = m.extra["whirl_sense"][j] * m.frequencies_hz[j] * 2 * np.pi / W0
+        assert signed == pytest.approx(-past, abs=5e-5), (k, signed)
+
+
+def test_campbell_json_in_both_frames_and_the_figure_in_the_frame_asked(tmp_path):
+    """rotor-whirl (the closed-form leaf; lines in the fixed frame): the JSON keeps
+    `critical_speeds` as {solver: {name: value}}, the Campbell's entries carry order, whirl and
+    frame, and the lines are given in both frames: in the rotor's frame the forward whirl is
+    f − Ω/2π in magnitude, the backward f + Ω/2π (J_t λ² ∓ J_p Ω λ − k_eff = 0 written here)."""
+    rc, out, err = xval("modes", "rotor-whirl", "--solver", "closed-form", "--set",
+                        "n_spin=16", "--campbell-frame", "rotating", "--out", str(tmp_path),
+                        "--json")
+    assert rc == 0, err
+    obj = json.loads(out)
+    cb = obj["campbell"]
+    m, R, L, k = 5.0, 0.25, 0.5, 2000.0 - 5.0 * 9.81 * 0.5
+    jt, jp = m * R**2 / 4 + m * L**2, m * R**2 / 2
+    crit = {"forward whirl": np.sqrt(k / (jt - jp)), "backward whirl": np.sqrt(k / (jt + jp))}
+    assert obj["critical_speeds"]["closed-form"] == pytest.approx(crit, rel=1e-9)
+    assert [(e["name"], e["order"], e["excitation"], e["whirl"], e["frame"])
+            for e in cb["critical_speeds"]["closed-form"]] == [
+        ("backward whirl", 1, "unbalance", "Backward", "fixed"),
+        ("forward whirl", 1, "unbalance", "Forward", "fixed")]
+    assert cb["frame"] == "fixed" and cb["figure_frame"] == "rotating"
+    spin = np.array(cb["values"])
+    lines = cb["lines_hz_by_frame"]
+    assert lines["fixed"] == cb["lines_hz"]
+    root = np.sqrt((jp * spin) ** 2 + 4 * jt * k)
+    fwd, bwd = (root + jp * spin) / (2 * jt), (root - jp * spin) / (2 * jt)
+    np.testing.assert_allclose(lines["rotating"]["closed-form"]["forward whirl"],
+                               np.abs(fwd - spin) / (2 * np.pi), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(lines["rotating"]["closed-form"]["backward whirl"],
+                               (bwd + spin) / (2 * np.pi), rtol=1e-12)
+    assert (Path(obj["report"]).parent / "campbell.png").exists()
+
+
+def test_a_frame_the_scene_cannot_draw_is_bad_input(tmp_path):
+    """Blade modes do not whirl: a fixed-frame fan plot is refused in one line, exit 2, before
+    anything runs."""
+    rc, _, err = xval("modes", "rotating-beam", "--campbell-frame", "fixed", "--out",
+                      str(tmp_path / "o"))
+    assert rc == 2
+    line = err.strip()
+    assert "\n" not in line and "--campbell-frame fixed" in line and "rotating" in line
+    assert not (tmp_path / "o").exists()

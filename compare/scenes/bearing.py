@@ -3,9 +3,10 @@ motor (seed 001; spec scene-bearing-rotor.md). The force laws and observables li
 compare/physics/bearing_rotor.py."""
 import numpy as np
 
+from ..analysis.identify import pencil_poles
 from ..errors import BadInput
 from ..physics import bearing_rotor as physics
-from .base import Extreme, Finding, MapSpec, Scene
+from .base import Extreme, Finding, Linearisation, MapSpec, Scene
 from .params import Param, positive
 
 SOURCE = ("seed 001 (001_d37db2f6f0246403.txt): shaft in Rodrigues–Hamilton parameters in the "
@@ -117,6 +118,93 @@ def plots(params, trajectories, fig):
     orbit.legend(fontsize=7)
 
 
+# ------------------------------------------------------------------ ring-down (xval modes)
+# The free responses the time solvers confirm the linearisation with: from the steady spin,
+# motor as ever, no defect, two releases, RING_T of record at RING_DT (≥ 60 samples a period of
+# the fastest mode). "whirl": the centre shifted RING_OFFSET in x and the shaft turned
+# RING_TILT about x (line orbits: both whirl senses of the cylindrical and conical modes);
+# "axial": the centre shifted RING_OFFSET in z. Apart because the axial spring acts at journal a
+# only: its force times the tilt is a moment, and the tilt squared moves journal a's z — one
+# release of all three put sidebands (987 ± 408 rad/s, 2 × 987) into both records and moved the
+# conical fit by 1.8e-7 and the axial by 9e-8 (ζ 6.5e-8) in all three solvers alike.
+RING_OFFSET, RING_TILT, RING_T, RING_DT = 1e-6, 1e-5, 0.04, 5e-5
+RELEASES = {"whirl": {"offset0": [RING_OFFSET, 0.0, 0.0], "tilt0": RING_TILT},
+            "axial": {"offset0": [0.0, 0.0, RING_OFFSET], "tilt0": 0.0}}
+
+
+def _fit(p, tr, release, n):
+    """Modes of the first n samples of a ring-down by the matrix pencil: "whirl" — the
+    centre's orbit x + iy (cylindrical; Im λ > 0 whirls forward) and the shaft axis'
+    (l/2)(θy, −θx) from the journals' difference (conical); "axial" — the centre's z."""
+    ja, jb = tr.extra["journal_a"][:n], tr.extra["journal_b"][:n]
+    centre = 0.5 * (ja + jb) - physics.static_sag(p)
+    if release == "axial":
+        lam = pencil_poles(centre[:, 2], RING_DT, 2)
+        return {"axial": complex(lam[np.argmax(lam.imag)])}
+    tilt = 0.5 * (ja - jb)
+    return {f"{kind} {'forward' if lam.imag > 0 else 'backward'}": complex(lam.real,
+                                                                            abs(lam.imag))
+            for kind, x in (("cylindrical", centre[:, 0] + 1j * centre[:, 1]),
+                            ("conical", tilt[:, 0] + 1j * tilt[:, 1]))
+            for lam in pencil_poles(x, RING_DT, 2)}
+
+
+def _zeta(lam):
+    return -lam.real / abs(lam)
+
+
+def ring_down(params, run, solver_names=None):
+    """Every time solver released at the operating point (module comment above); damped
+    frequency and ζ of each mode by the matrix pencil, its error estimate the change from the
+    records' first two thirds to the whole. Returns (rows, Markdown lines); the modes
+    workflow sets each row against the same solver's eigenvalues."""
+    names = {q.name for q in BEARING_ROTOR.params}
+    spin = physics.steady_spin_rate(params)
+    base = {**{k: v for k, v in params.items() if k in names}, "defect_height": 0.0,
+            "spin0": spin, "t_end": RING_T, "output_dt": RING_DT}
+    rows = []
+    for name in BEARING_ROTOR.leaves:
+        if solver_names and name not in solver_names:
+            continue
+        whole, part, bad = {}, {}, None
+        for release, initial in RELEASES.items():
+            p = BEARING_ROTOR.resolve({**base, **initial})
+            tr = run(BEARING_ROTOR, name, p, RING_DT / 5)
+            if tr.status != "ok":
+                bad = {"solver": name, "status": tr.status, "reason": f"{release}: {tr.reason}"}
+                break
+            whole.update(_fit(p, tr, release, len(tr.t)))
+            part.update(_fit(p, tr, release, 2 * len(tr.t) // 3))
+        if bad:
+            rows.append(bad)
+            continue
+        modes = sorted(whole.items(), key=lambda kv: (kv[1].imag, "forward" in kv[0]))
+        rows.append({"solver": name, "status": "ok", "labels": [k for k, _ in modes],
+                     "frequencies_hz": [lam.imag / (2 * np.pi) for _, lam in modes],
+                     "damping": [_zeta(lam) for _, lam in modes],
+                     "whirl": [k.split()[-1].capitalize() if " " in k else "—" for k, _ in modes],
+                     "frequency_error_hz": [abs(lam.imag - part[k].imag) / (2 * np.pi)
+                                            for k, lam in modes],
+                     "damping_error": [abs(_zeta(lam) - _zeta(part[k])) for k, lam in modes]})
+    md = ["## Ring-down of every time solver", "",
+          f"Released at the steady spin {spin:.10g} rad/s, no defect: the centre shifted "
+          f"{RING_OFFSET:g} m in x and the shaft turned {RING_TILT:g} rad about x (whirl), and "
+          f"apart the centre shifted {RING_OFFSET:g} m in z (axial); {RING_T:g} s at "
+          f"{RING_DT:g} s, matrix pencil per mode (error: change from the first two thirds "
+          "of the record).", "",
+          "| solver | mode | ω_d [rad/s] | ζ | error ω_d [rad/s] | error ζ |",
+          "|---|---|---|---|---|---|"]
+    for r in rows:
+        if r["status"] != "ok":
+            md.append(f"| {r['solver']} | {r['status']}: {r['reason']} | | | | |")
+            continue
+        md += [f"| {r['solver']} | {lb} | {2 * np.pi * f:.10g} | {z:.8g} | "
+               f"{2 * np.pi * ef:.1e} | {ez:.1e} |" for lb, f, z, ef, ez in zip(
+                   r["labels"], r["frequencies_hz"], r["damping"], r["frequency_error_hz"],
+                   r["damping_error"])]
+    return rows, md
+
+
 BEARING_ROTOR = Scene(
     name="bearing-rotor",
     title="Two-bearing rotor with a bearing defect, spun up by a DC motor",
@@ -147,6 +235,14 @@ BEARING_ROTOR = Scene(
               hi=1e4),
         Param("mu", 0.05, "", "journal friction coefficient", lo=0.0, hi=10.0),
         positive("r_j", 0.02, "m", "journal radius (friction arm)"),
+        # initial conditions (a ring-down starts at the steady spin, slightly displaced); not
+        # physical: zero by default, where a relative perturbation changes nothing
+        Param("spin0", 0.0, "rad/s", "initial spin rate about the shaft axis", lo=-1e4, hi=1e4,
+              physical=False),
+        Param("offset0", np.zeros(3), "m", "initial displacement of the centre of mass from "
+              "the static sag", kind="vector", lo=-0.01, hi=0.01, physical=False),
+        Param("tilt0", 0.0, "rad", "initial turn of the shaft about the fixed x axis",
+              lo=-0.1, hi=0.1, physical=False),
         positive("t_end", 3.0, "s", "horizon", hi=1e5),
         positive("output_dt", 0.0005, "s", "common output grid step"),
     ),
@@ -184,6 +280,12 @@ BEARING_ROTOR = Scene(
     # engines' runs are the curve's check; its slope near zero defect from each of them)
     maps=(MapSpec("ripple-vs-defect", x="defect_height=0:4e-5", resolution=0.05, coarse=(5, 1),
                   observable="spin_ripple", engines="everywhere"),),
+    linearisation=Linearisation(
+        "the steady spin (motor/friction balance) at the defect-free static sag",
+        held={"defect_height": 0.0, **dict.fromkeys((
+            "defect_width", "defect_angle", "spin0", "offset0", "tilt0", "t_end", "output_dt"))},
+        tolerances={"frequency": 1e-9, "damping": 1e-9},
+        identify=ring_down),
     notes="Force laws, spin angle (swing–twist about the shaft axis) and every observable are "
           "computed by compare/physics/bearing_rotor.py for all solvers; all start at the "
           "defect-free static sag, unrotated, at rest.",

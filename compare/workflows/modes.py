@@ -17,7 +17,6 @@ from .. import solvers
 from ..analysis import campbell, metrics
 from ..analysis.campbell import mac
 from ..analysis.trajectory import Modes
-from ..errors import BadInput
 from ..output import campbell_plot, mode_shapes
 from ..output.study import write_study
 from ..scenes import Scene, get_scene
@@ -239,9 +238,7 @@ def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float):
 def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_sweep=True,
               identify=True, out_dir=None):
     """`out_dir` given: write there (a campaign case); else a new run folder under `out`."""
-    sc = get_scene(scene_name)
-    if not sc.is_modes:
-        raise BadInput(f"scene {sc.name!r} is a time-domain scene: use `xval run {sc.name}`")
+    sc = get_scene(scene_name).modal()       # a time scene answers by its linearisation
     pl = plan(sc, overrides, solver_names)
     params, chosen = pl.params, list(pl.solvers)
     out_dir = Path(out_dir or new_run_dir(out, sc.name))
@@ -254,7 +251,7 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
     obj = {"scene": sc.name, "params": params,
            "runs": [{"solver": r.solver, "status": r.status, "wall_s": round(r.wall_s, 6),
                      "frequencies_hz": list(r.frequencies_hz), "labels": r.labels,
-                     "versions": r.versions,
+                     "versions": r.versions, **damped_json(r),
                      **({"notes": r.notes} if r.notes else {}),
                      **({k: list(np.ravel(v)) for k, v in r.extra.items()}),
                      **({"reason": r.reason} if r.reason else {})} for r in results],
@@ -266,6 +263,9 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
           "| solver | status | frequencies [Hz] | labels | notes |", "|---|---|---|---|---|"]
     md += [f"| {r.solver} | {r.status} | {', '.join(f'{f:.8g}' for f in r.frequencies_hz)} | "
            f"{', '.join(r.labels)} | {'; '.join(r.notes) or r.reason or ''} |" for r in results]
+    if any(r.damping is not None for r in results):
+        md += ["", "Damped modes (ζ: damping ratio, log dec δ = 2πζ/√(1 − ζ²); whirl about the "
+               "spin as ROSS names it):", "", *markdown_table(DAMPED_HEADER, damped_rows(results))]
     md += ["", "| a | b | mode | rel. difference | verdict |", "|---|---|---|---|---|"]
     md += [f"| {c.a} | {c.b} | {c.channel} | {c.max_rel:.2e} | {c.verdict} |"
            for c in comparisons]
@@ -300,12 +300,82 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
         if rows:
             obj["identified_from_free_response"] = rows
             md += [""] + lines_md
+            fitted = identified_against_eigenvalues(sc, params, rows, results)
+            for row in rows:
+                row.update(damped_json(next((m for m in fitted
+                                             if m.solver == f"{row['solver']} ring-down"),
+                                            None)))
+            more = [c for m in fitted for c in sc.verdicts(params, [
+                next(r for r in results if f"{r.solver} ring-down" == m.solver), m])]
+            comparisons = comparisons + more
+            obj["comparisons"] += [c.as_dict() for c in more]
+            md += ["", "| a | b | mode | |Δ| | bound | verdict |", "|---|---|---|---|---|---|"]
+            md += [f"| {c.a} | {c.b} | {c.channel} | {c.deviation:.2e} | "
+                   f"{c.tolerance * c.scale:.2e} | {c.verdict} |" for c in more]
     failed = {m["solver"] for m in obj["incomplete"]}
     obj["incomplete"] += [m for m in (obj.get("campbell") or {}).get("incomplete", [])
                           if m["solver"] not in failed]
     obj["status"], obj["summary"] = modes_status(comparisons, obj)
     md[1:1] = ["", f"**{obj['summary']}**"]
     return write_study(out_dir, md, obj), results, comparisons
+
+
+DAMPED_HEADER = ["solver", "mode", "whirl", "f_d [Hz]", "ω_d [rad/s]", "ω_d [rpm]", "ζ",
+                 "log dec"]
+
+
+def log_dec(zeta):
+    """The logarithmic decrement δ = 2πζ/√(1 − ζ²) (inf for ζ ≥ 1: no oscillation)."""
+    z = np.asarray(zeta, float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(z < 1, 2 * np.pi * z / np.sqrt(np.maximum(1 - z * z, 0.0)), np.inf)
+
+
+def damped_json(m: Modes | None) -> dict:
+    """A run's damped modes as `xval modes --json` lists them (contract.md, "Rotordynamic
+    results"): ω_d [rad/s] and rpm beside frequencies_hz, ζ, log dec, whirl; {} without ζ."""
+    if m is None or m.damping is None:
+        return {}
+    w = 2 * np.pi * np.asarray(m.frequencies_hz, float)
+    return {"omega_d": list(w), "rpm": list(w * 30 / np.pi), "zeta": list(map(float, m.damping)),
+            "log_dec": list(map(float, log_dec(m.damping))),
+            **({"whirl": list(m.whirl)} if m.whirl is not None else {})}
+
+
+def damped_rows(results: list[Modes]) -> list[list[str]]:
+    """One row per mode of every solver that gives damping ratios (DAMPED_HEADER): Hz, rad/s
+    and rpm side by side, ζ and log dec (ROSS's conventions)."""
+    rows = []
+    for m in results:
+        if m.status != "ok" or m.damping is None:
+            continue
+        whirl = m.whirl or ["—"] * len(m.labels)
+        for f, lb, wh, z, d in zip(m.frequencies_hz, m.labels, whirl, m.damping,
+                                   log_dec(m.damping)):
+            rows.append([m.solver, lb, wh, f"{f:.10g}", f"{2 * np.pi * f:.10g}",
+                         f"{60 * f:.8g}", f"{z:.8g}", f"{d:.6g}"])
+    return rows
+
+
+def markdown_table(header, rows) -> list[str]:
+    return (["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+            + ["| " + " | ".join(r) + " |" for r in rows])
+
+
+def identified_against_eigenvalues(sc: Scene, params, rows, results) -> list[Modes]:
+    """The modes an identification hook fitted from a time solver's free response (a row with
+    labels, frequencies_hz, damping and whirl, errors in frequency_error_hz / damping_error), as
+    `Modes` of "<solver> ring-down", for each solver whose eigenvalues ran here: the
+    verdicts set them against those eigenvalues."""
+    ran = {r.solver for r in results if r.status == "ok"}
+    return [Modes(scene=sc.name, solver=f"{r['solver']} ring-down",
+                  frequencies_hz=np.asarray(r["frequencies_hz"], float), labels=r["labels"],
+                  damping=np.asarray(r["damping"], float),
+                  whirl=r.get("whirl"),
+                  extra={k: np.asarray(r[k], float) for k in ("frequency_error_hz",
+                                                               "damping_error") if k in r})
+            for r in rows if r.get("status") == "ok" and "damping" in r
+            and r["solver"] in ran]
 
 
 def modes_status(comparisons, obj) -> tuple[str, str]:

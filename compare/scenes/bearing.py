@@ -120,33 +120,47 @@ def plots(params, trajectories, fig):
 
 # ------------------------------------------------------------------ ring-down (xval modes)
 # The free responses the time solvers confirm the linearisation with: from the steady spin,
-# motor as ever, no defect, two releases, RING_T of record at RING_DT (≥ 60 samples a period of
-# the fastest mode). "whirl": the centre shifted RING_OFFSET in x and the shaft turned
-# RING_TILT about x (line orbits: both whirl senses of the cylindrical and conical modes);
-# "axial": the centre shifted RING_OFFSET in z. Apart because the axial spring acts at journal a
-# only: its force times the tilt is a moment, and the tilt squared moves journal a's z — one
-# release of all three put sidebands (987 ± 408 rad/s, 2 × 987) into both records and moved the
-# conical fit by 1.8e-7 and the axial by 9e-8 (ζ 6.5e-8) in all three solvers alike.
-RING_OFFSET, RING_TILT, RING_T, RING_DT = 1e-6, 1e-5, 0.04, 5e-5
-RELEASES = {"whirl": {"offset0": [RING_OFFSET, 0.0, 0.0], "tilt0": RING_TILT},
-            "axial": {"offset0": [0.0, 0.0, RING_OFFSET], "tilt0": 0.0}}
+# motor as ever, no defect, two releases, RING_T of record fitted at FIT_EVERY × RING_DT (≥ 60
+# samples a period of the fastest default mode). "whirl": the centre shifted by the amplitude a
+# in x and the shaft turned so that the journals move by a (line orbits: both whirl senses of
+# the cylindrical and conical modes); "axial": the centre shifted by a in z. Apart because the
+# axial spring acts at journal a only: its force times the tilt is a moment, and the tilt
+# squared moves journal a's z — one release of all three put sidebands (987 ± 408 rad/s) into
+# the records and moved the conical fit by 1.8e-7 and the axial ζ to 6.5e-8 in all three
+# solvers alike. a = RING_SHARE of the static sag: the release changes the bearing loads
+# |F_a|, |F_b| (the friction's) by 1 %, so second-order effects stay small: the conical fit
+# moves as a² (quaternion, against the closed form: 1.8e-10 at a = 3.4 % of the sag, 1.6e-11
+# at 1 %, 1.8e-12 at 0.34 %); below 1 % the engines' own integration errors take over.
+# Recorded every RING_DT, which caps the adaptive engines' steps (Exudyn's DOPRI5 took the
+# output step 5e-5 s whatever its tolerance: the conical fit 1.4e-10 off, its tighter rerun
+# identical; at 1e-5 s 1.6e-11), fitted every FIT_EVERY-th sample (SVD cost).
+RING_SHARE, RING_T, RING_DT, FIT_EVERY = 0.01, 0.04, 1e-5, 5
+
+
+def _releases(params):
+    """The two releases' initial conditions (module comment above)."""
+    sag = physics.static_sag(params)
+    a = RING_SHARE * (np.hypot(sag[0], sag[1]) or 1e-5)
+    return {"whirl": {"offset0": [a, 0.0, 0.0], "tilt0": a / (0.5 * params["l"])},
+            "axial": {"offset0": [0.0, 0.0, a], "tilt0": 0.0}}
 
 
 def _fit(p, tr, release, n):
     """Modes of the first n samples of a ring-down by the matrix pencil: "whirl" — the
     centre's orbit x + iy (cylindrical; Im λ > 0 whirls forward) and the shaft axis'
     (l/2)(θy, −θx) from the journals' difference (conical); "axial" — the centre's z."""
-    ja, jb = tr.extra["journal_a"][:n], tr.extra["journal_b"][:n]
+    ja, jb = tr.extra["journal_a"][:n:FIT_EVERY], tr.extra["journal_b"][:n:FIT_EVERY]
     centre = 0.5 * (ja + jb) - physics.static_sag(p)
+    dt = FIT_EVERY * RING_DT
     if release == "axial":
-        lam = pencil_poles(centre[:, 2], RING_DT, 2)
+        lam = pencil_poles(centre[:, 2], dt, 2)
         return {"axial": complex(lam[np.argmax(lam.imag)])}
     tilt = 0.5 * (ja - jb)
     return {f"{kind} {'forward' if lam.imag > 0 else 'backward'}": complex(lam.real,
                                                                             abs(lam.imag))
             for kind, x in (("cylindrical", centre[:, 0] + 1j * centre[:, 1]),
                             ("conical", tilt[:, 0] + 1j * tilt[:, 1]))
-            for lam in pencil_poles(x, RING_DT, 2)}
+            for lam in pencil_poles(x, dt, 2)}
 
 
 def _zeta(lam):
@@ -155,43 +169,55 @@ def _zeta(lam):
 
 def ring_down(params, run, solver_names=None):
     """Every time solver released at the operating point (module comment above); damped
-    frequency and ζ of each mode by the matrix pencil, its error estimate the change from the
-    records' first two thirds to the whole. Returns (rows, Markdown lines); the modes
-    workflow sets each row against the same solver's eigenvalues."""
+    frequency and ζ of each mode by the matrix pencil. Its error estimate: the solver's own
+    (factor × the change of the fit on a rerun at the settings of its error estimate) plus the
+    fit's (the change from the records' first two thirds to the whole). Returns (rows,
+    Markdown lines); the modes workflow sets each row against the same solver's
+    eigenvalues."""
     names = {q.name for q in BEARING_ROTOR.params}
     spin = physics.steady_spin_rate(params)
     base = {**{k: v for k, v in params.items() if k in names}, "defect_height": 0.0,
             "spin0": spin, "t_end": RING_T, "output_dt": RING_DT}
+    releases = _releases(params)
     rows = []
     for name in BEARING_ROTOR.leaves:
         if solver_names and name not in solver_names:
             continue
-        whole, part, bad = {}, {}, None
-        for release, initial in RELEASES.items():
+        fits, bad = {"whole": {}, "part": {}, "tight": {}}, None
+        for release, initial in releases.items():
             p = BEARING_ROTOR.resolve({**base, **initial})
-            tr = run(BEARING_ROTOR, name, p, RING_DT / 5)
-            if tr.status != "ok":
-                bad = {"solver": name, "status": tr.status, "reason": f"{release}: {tr.reason}"}
+            tr, tt = (run(BEARING_ROTOR, name, p, RING_DT, tighter=t) for t in (False, True))
+            if tr.status != "ok" or tt.status != "ok":
+                bad = next(t for t in (tr, tt) if t.status != "ok")
                 break
-            whole.update(_fit(p, tr, release, len(tr.t)))
-            part.update(_fit(p, tr, release, 2 * len(tr.t) // 3))
-        if bad:
-            rows.append(bad)
+            factor = tt.stats["error_factor"]
+            for key, (t, n) in (("whole", (tr, len(tr.t))), ("part", (tr, 2 * len(tr.t) // 3)),
+                                ("tight", (tt, len(tt.t)))):
+                fits[key].update(_fit(p, t, release, n))
+        if bad is not None:
+            rows.append({"solver": name, "status": bad.status,
+                         "reason": f"{release}: {bad.reason}"})
             continue
+        whole, part, tight = fits["whole"], fits["part"], fits["tight"]
         modes = sorted(whole.items(), key=lambda kv: (kv[1].imag, "forward" in kv[0]))
         rows.append({"solver": name, "status": "ok", "labels": [k for k, _ in modes],
                      "frequencies_hz": [lam.imag / (2 * np.pi) for _, lam in modes],
                      "damping": [_zeta(lam) for _, lam in modes],
                      "whirl": [k.split()[-1].capitalize() if " " in k else "—" for k, _ in modes],
-                     "frequency_error_hz": [abs(lam.imag - part[k].imag) / (2 * np.pi)
+                     "frequency_error_hz": [(factor * abs(lam.imag - tight[k].imag)
+                                             + abs(lam.imag - part[k].imag)) / (2 * np.pi)
                                             for k, lam in modes],
-                     "damping_error": [abs(_zeta(lam) - _zeta(part[k])) for k, lam in modes]})
+                     "damping_error": [factor * abs(_zeta(lam) - _zeta(tight[k]))
+                                       + abs(_zeta(lam) - _zeta(part[k])) for k, lam in modes]})
     md = ["## Ring-down of every time solver", "",
           f"Released at the steady spin {spin:.10g} rad/s, no defect: the centre shifted "
-          f"{RING_OFFSET:g} m in x and the shaft turned {RING_TILT:g} rad about x (whirl), and "
-          f"apart the centre shifted {RING_OFFSET:g} m in z (axial); {RING_T:g} s at "
-          f"{RING_DT:g} s, matrix pencil per mode (error: change from the first two thirds "
-          "of the record).", "",
+          f"{releases['whirl']['offset0'][0]:.3g} m in x and the shaft turned "
+          f"{releases['whirl']['tilt0']:.3g} rad about x (whirl), and apart the centre "
+          f"shifted {releases['axial']['offset0'][2]:.3g} m in z (axial); {RING_T:g} s at "
+          f"{FIT_EVERY * RING_DT:g} s, matrix pencil per mode (error: the solver's own, from a "
+          "rerun at its tighter settings, plus the change from the first two thirds of the "
+          "record).",
+          "",
           "| solver | mode | ω_d [rad/s] | ζ | error ω_d [rad/s] | error ζ |",
           "|---|---|---|---|---|---|"]
     for r in rows:

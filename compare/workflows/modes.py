@@ -225,14 +225,24 @@ def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print):
     return obj, crit, md
 
 
-def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float):
+def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float,
+              tighter: bool = False):
     """A time-domain run for an identification hook: the solver's accurate defaults, its fixed
-    step capped so that it fits the record's grid."""
+    step capped so that it fits the record's grid; `tighter`: at the settings of its own error
+    estimate instead (`LeafInfo.tighter`), the factor on |y − y_tight| in
+    stats["error_factor"]."""
     s = solvers.get_solver(solver_name)
     settings = solvers.settings_for(s, scene.name)
     if isinstance(settings.get("dt"), float) and settings["dt"] > max_dt:
         settings["dt"] = max_dt
-    return solvers.simulate(scene, s, params, settings)
+    factor = None
+    if tighter:
+        tight, factor, _ = s.info(scene).tighter(settings)
+        settings = tight if tight is not None else settings
+    tr = solvers.simulate(scene, s, params, settings)
+    if factor is not None:
+        tr.stats["error_factor"] = factor
+    return tr
 
 
 def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_sweep=True,

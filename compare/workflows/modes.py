@@ -363,7 +363,7 @@ def damped_rows(results: list[Modes]) -> list[list[str]]:
         for f, lb, wh, z, d in zip(m.frequencies_hz, m.labels, whirl, m.damping,
                                    log_dec(m.damping)):
             rows.append([m.solver, lb, wh, f"{f:.10g}", f"{2 * np.pi * f:.10g}",
-                         f"{60 * f:.8g}", f"{z:.8g}", f"{d:.6g}"])
+                         f"{60 * f:.8g}", f"{z + 0.0:.8g}", f"{d + 0.0:.6g}"])   # no −0
     return rows
 
 

@@ -149,8 +149,8 @@ def test_ring_down_confirms_the_eigenvalues(name):
     p, rows, _ = ring_down_of([name])
     (row,) = rows
     assert row["status"] == "ok", row.get("reason")
-    (fit,) = identified_against_eigenvalues(SCENE, p, rows, [modes_of(name, p)])
-    comps = SCENE.verdicts(p, [modes_of(name, p), fit])
+    eig, fit = identified_against_eigenvalues(SCENE, row, [modes_of(name, p)])
+    comps = SCENE.verdicts(p, [eig, fit])
     assert len(comps) == 10 and {c.verdict for c in comps} == {"agree"}
     cf = phys.modal_closed_form(p)
     for label, (w, z, whirl) in roots(fit).items():
@@ -172,9 +172,8 @@ def test_allowances_are_within_10x_of_measured():
         runs = [modes_of(n, p) for n in SOLVERS]
         rows, _ = SCENE.identify(p, _run_time, None)
         comps = SCENE.verdicts(p, runs) + [
-            c for fit in identified_against_eigenvalues(SCENE, p, rows, runs)
-            for c in SCENE.verdicts(p, [next(r for r in runs if f"{r.solver} ring-down"
-                                             == fit.solver), fit])]
+            c for row in rows
+            for c in SCENE.verdicts(p, list(identified_against_eigenvalues(SCENE, row, runs)))]
         assert {c.verdict for c in comps} == {"agree"}, ov
         for c in comps:
             key = ("ring" if "ring-down" in c.b else "eig") + (" ζ" if c.channel.endswith("ζ")

@@ -325,5 +325,6 @@ BEARING_ROTOR = Scene(
         identify=ring_down),
     notes="Force laws, spin angle (swing–twist about the shaft axis) and every observable are "
           "computed by compare/physics/bearing_rotor.py for all solvers; all start at the "
-          "defect-free static sag, unrotated, at rest.",
+          "defect-free static sag, unrotated, at rest (unless spin0, offset0, tilt0 say "
+          "otherwise). `xval modes bearing-rotor`: damped modes about the steady spin.",
 )

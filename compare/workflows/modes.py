@@ -310,13 +310,12 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
         if rows:
             obj["identified_from_free_response"] = rows
             md += [""] + lines_md
-            fitted = identified_against_eigenvalues(sc, params, rows, results)
+            more = []
             for row in rows:
-                row.update(damped_json(next((m for m in fitted
-                                             if m.solver == f"{row['solver']} ring-down"),
-                                            None)))
-            more = [c for m in fitted for c in sc.verdicts(params, [
-                next(r for r in results if f"{r.solver} ring-down" == m.solver), m])]
+                eig, fit = identified_against_eigenvalues(sc, row, results)
+                if fit is not None:
+                    row.update(damped_json(fit))
+                    more += sc.verdicts(params, [eig, fit])
             comparisons = comparisons + more
             obj["comparisons"] += [c.as_dict() for c in more]
             md += ["", "| a | b | mode | |Δ| | bound | verdict |", "|---|---|---|---|---|---|"]
@@ -372,20 +371,22 @@ def markdown_table(header, rows) -> list[str]:
             + ["| " + " | ".join(r) + " |" for r in rows])
 
 
-def identified_against_eigenvalues(sc: Scene, params, rows, results) -> list[Modes]:
-    """The modes an identification hook fitted from a time solver's free response (a row with
-    labels, frequencies_hz, damping and whirl, errors in frequency_error_hz / damping_error), as
-    `Modes` of "<solver> ring-down", for each solver whose eigenvalues ran here: the
-    verdicts set them against those eigenvalues."""
-    ran = {r.solver for r in results if r.status == "ok"}
-    return [Modes(scene=sc.name, solver=f"{r['solver']} ring-down",
-                  frequencies_hz=np.asarray(r["frequencies_hz"], float), labels=r["labels"],
-                  damping=np.asarray(r["damping"], float),
-                  whirl=r.get("whirl"),
-                  extra={k: np.asarray(r[k], float) for k in ("frequency_error_hz",
-                                                               "damping_error") if k in r})
-            for r in rows if r.get("status") == "ok" and "damping" in r
-            and r["solver"] in ran]
+def identified_against_eigenvalues(sc: Scene, row: dict, results: list[Modes]):
+    """(the solver's eigenvalue run, the fit as `Modes` of "<solver> ring-down") for a row of
+    an identification hook that fitted modes to the solver's free response (labels,
+    frequencies_hz, damping, whirl; errors in frequency_error_hz / damping_error), the
+    verdicts to set them against each other; (None, None) where the row has no such fit or
+    the solver's eigenvalues did not run here."""
+    eig = next((r for r in results if r.solver == row["solver"] and r.status == "ok"), None)
+    if eig is None or row.get("status") != "ok" or "damping" not in row:
+        return None, None
+    return eig, Modes(scene=sc.name, solver=f"{row['solver']} ring-down",
+                      frequencies_hz=np.asarray(row["frequencies_hz"], float),
+                      labels=row["labels"], damping=np.asarray(row["damping"], float),
+                      whirl=row.get("whirl"),
+                      extra={k: np.asarray(row[k], float) for k in ("frequency_error_hz",
+                                                                     "damping_error")
+                             if k in row})
 
 
 def modes_status(comparisons, obj) -> tuple[str, str]:

@@ -318,7 +318,8 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
                     more += sc.verdicts(params, [eig, fit])
             comparisons = comparisons + more
             obj["comparisons"] += [c.as_dict() for c in more]
-            md += ["", "| a | b | mode | deviation | bound | verdict |", "|---|---|---|---|---|---|"]
+            md += ["", "| a | b | mode | deviation | bound | verdict |",
+                   "|---|---|---|---|---|---|"]
             md += [f"| {c.a} | {c.b} | {c.channel} | {c.deviation:.2e} | "
                    f"{c.tolerance * c.scale:.2e} | {c.verdict} |" for c in more]
     failed = {m["solver"] for m in obj["incomplete"]}

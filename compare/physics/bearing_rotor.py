@@ -36,6 +36,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from ..contract import ModesResult
+
 OMEGA_SMOOTH = 0.1     # rad/s, the tanh width of the friction moment's sign (spec)
 
 # Layout of the packed parameter array (pack()).
@@ -450,75 +452,69 @@ def _circular(v, kind, half):
     return abs(x + 1j * y), abs(x - 1j * y)
 
 
-def linear_modes(A: np.ndarray, params: dict) -> list[dict]:
+def linear_modes(A: np.ndarray, params: dict) -> tuple[list[dict], np.ndarray]:
     """The oscillatory modes of ẋ = A x (the state ordered as above), each a dict: label,
     λ (Im λ > 0), whirl ("Forward", "Backward", "Mixed" as ROSS names them; "—" for the axial
-    mode), in ascending damped frequency; and the real roots (spin: label "spin"). A mode's
-    kind is the largest journal motion of its shape: centre (x, y), tilt (l/2)(θx, θy), or z.
-    Two roots of one kind within DEGENERATE of each other are a repeated root (an isotropic
-    rotor's translation at any spin, its tilt at rest): their eigenspace holds one forward and
-    one backward circular whirl, so it is reported as that pair at the roots' mean."""
+    mode), in ascending damped frequency; and the nonzero real roots (the spin rate's). A
+    mode's kind is the largest journal motion of its shape: centre (x, y), tilt
+    (l/2)(θx, θy), or z. Two roots of one kind within DEGENERATE of each other are a repeated
+    root (an isotropic rotor's translation at any spin, its tilt at rest): their eigenspace
+    holds one forward and one backward circular whirl, reported as that pair at their mean."""
     lam, V = np.linalg.eig(np.asarray(A, float))
-    big = float(np.max(np.abs(lam)))
+    tiny = 1e-9 * float(np.max(np.abs(lam)))
     half = 0.5 * params["l"]
-    modes, real = [], []
-    for i in np.nonzero(lam.imag > 1e-9 * big)[0]:
+    shapes = []                                   # (kind, λ, positions of the shape)
+    for i in np.nonzero(lam.imag > tiny)[0]:
         v = V[:6, i]
-        kind = WHIRL_TYPES[int(np.argmax([np.hypot(abs(v[0]), abs(v[1])),
-                                          half * np.hypot(abs(v[3]), abs(v[4])), abs(v[2])]))]
-        modes.append({"kind": kind, "lam": complex(lam[i]), "v": v})
-    for i in np.nonzero(np.abs(lam.imag) <= 1e-9 * big)[0]:
-        if abs(lam[i]) > 1e-9 * big:
-            real.append({"label": "spin", "lam": complex(lam[i].real, 0.0), "whirl": "—"})
+        motion = (np.hypot(abs(v[0]), abs(v[1])), half * np.hypot(abs(v[3]), abs(v[4])),
+                  abs(v[2]))
+        shapes.append((WHIRL_TYPES[int(np.argmax(motion))], complex(lam[i]), v))
     out = []
     for kind in WHIRL_TYPES:
-        mine = sorted((m for m in modes if m["kind"] == kind), key=lambda m: m["lam"].imag)
+        mine = sorted((m for m in shapes if m[0] == kind), key=lambda m: m[1].imag)
         if kind == "axial":
-            out += [{"label": "axial" if len(mine) == 1 else f"axial {j + 1}", "lam": m["lam"],
+            out += [{"label": "axial" if len(mine) == 1 else f"axial {j + 1}", "lam": m[1],
                      "whirl": "—"} for j, m in enumerate(mine)]
             continue
         j = 0
         while j < len(mine):
-            a = mine[j]
-            b = mine[j + 1] if j + 1 < len(mine) else None
-            if b is not None and abs(b["lam"] - a["lam"]) <= DEGENERATE * abs(a["lam"]):
-                mean = 0.5 * (a["lam"] + b["lam"])
-                out += [{"label": f"{kind} backward", "lam": mean, "whirl": "Backward"},
-                        {"label": f"{kind} forward", "lam": mean, "whirl": "Forward"}]
+            (_, a, v), b = mine[j], mine[j + 1][1] if j + 1 < len(mine) else None
+            if b is not None and abs(b - a) <= DEGENERATE * abs(a):
+                out += [{"label": f"{kind} {w.lower()}", "lam": 0.5 * (a + b), "whirl": w}
+                        for w in ("Backward", "Forward")]
                 j += 2
                 continue
-            f, bw = _circular(a["v"], kind, half)
+            f, bw = _circular(v, kind, half)
             whirl = ("Mixed" if abs(f - bw) <= 0.01 * (f + bw) else
                      "Forward" if f > bw else "Backward")
-            out.append({"label": f"{kind} {whirl.lower()}", "lam": a["lam"], "whirl": whirl})
+            out.append({"label": f"{kind} {whirl.lower()}", "lam": a, "whirl": whirl})
             j += 1
     out.sort(key=lambda m: (m["lam"].imag, m["whirl"] != "Backward"))
-    return out + real
+    real = lam.real[(np.abs(lam.imag) <= tiny) & (np.abs(lam) > tiny)]
+    return out, np.sort(real)
 
 
 def modes_result(A: np.ndarray, A_check: np.ndarray, params: dict, settings: dict,
-                 how: str):
+                 how: str) -> ModesResult:
     """A solver's `ModesResult` from its linearisation A and a second one, A_check, at half its
     finite-difference step: damped frequencies (Hz), ζ, labels, whirl, and as each mode's error
     estimate |Δ| between the two (extra "frequency_error_hz", "damping_error"); the real roots
     (the spin rate's) in extra "real_roots_per_s". `how` says how A was made."""
-    from compare.contract import ModesResult
-    modes, check = linear_modes(A, params), linear_modes(A_check, params)
-    osc = [m for m in modes if m["label"] != "spin"]
-    other = {m["label"]: m["lam"] for m in check}
+    modes, real = linear_modes(A, params)
+    other = {m["label"]: m["lam"] for m in linear_modes(A_check, params)[0]}
 
     def zeta(lam):
         return -lam.real / abs(lam)
-    err_f = [abs(m["lam"].imag - other[m["label"]].imag) / (2 * np.pi)
-             if m["label"] in other else np.inf for m in osc]
-    err_z = [abs(zeta(m["lam"]) - zeta(other[m["label"]])) if m["label"] in other else np.inf
-             for m in osc]
+
+    def error(fn, m):
+        return abs(fn(m["lam"]) - fn(other[m["label"]])) if m["label"] in other else np.inf
     return ModesResult(
-        frequencies_hz=np.array([m["lam"].imag for m in osc]) / (2 * np.pi),
-        labels=[m["label"] for m in osc], damping=np.array([zeta(m["lam"]) for m in osc]),
-        whirl=[m["whirl"] for m in osc], settings={**settings, "linearisation": how},
+        frequencies_hz=np.array([m["lam"].imag for m in modes]) / (2 * np.pi),
+        labels=[m["label"] for m in modes], damping=np.array([zeta(m["lam"]) for m in modes]),
+        whirl=[m["whirl"] for m in modes], settings={**settings, "linearisation": how},
         notes=[f"about the steady spin {steady_spin_rate(params):.10g} rad/s (motor/friction "
                "balance), defect-free static sag"],
-        extra={"frequency_error_hz": np.array(err_f), "damping_error": np.array(err_z),
-               "real_roots_per_s": np.array([m["lam"].real for m in modes
-                                             if m["label"] == "spin"])})
+        extra={"frequency_error_hz": np.array([error(lambda x: x.imag / (2 * np.pi), m)
+                                               for m in modes]),
+               "damping_error": np.array([error(zeta, m) for m in modes]),
+               "real_roots_per_s": real})

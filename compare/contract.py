@@ -120,14 +120,17 @@ class LeafResult:
 
 @dataclass
 class ModesResult:
-    """What `modes(params, settings)` returns: frequencies in Hz (ascending), one label each
-    ("flap 1", "forward whirl", …), optional damping ratios, optional mode shapes (any array
-    with one row per mode, used for tracking modes across a sweep by MAC), and notes (e.g.
-    "approximate: eccentric rotor at spin ≠ 0")."""
+    """What `modes(params, settings)` returns: frequencies in Hz (ascending; damped where the
+    leaf linearises with damping), one label each ("flap 1", "forward whirl", …), optional
+    damping ratios ζ, optional whirl directions ("Forward", "Backward", "Mixed" as ROSS names
+    them, "—" for a mode without whirl), optional mode shapes (any array with one row per mode,
+    used for tracking modes across a sweep by MAC), and notes (e.g. "approximate: eccentric
+    rotor at spin ≠ 0")."""
     frequencies_hz: np.ndarray
     labels: list
     damping: np.ndarray | None = None
     shapes: np.ndarray | None = None
+    whirl: list | None = None
     settings: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
     extra: dict = field(default_factory=dict)
@@ -138,7 +141,7 @@ class ModesResult:
             return res
         if not isinstance(res, dict) or "frequencies_hz" not in res:
             raise TypeError(f"leaf returned {type(res).__name__}, not a ModesResult")
-        known = {k: res[k] for k in ("frequencies_hz", "labels", "damping", "shapes",
+        known = {k: res[k] for k in ("frequencies_hz", "labels", "damping", "shapes", "whirl",
                                      "settings", "notes", "extra") if k in res}
         return cls(**known)
 
@@ -148,4 +151,8 @@ class ModesResult:
             return f"{len(f)} frequencies but {len(self.labels)} labels"
         if not np.all(np.isfinite(f)):
             return "non-finite frequency"
+        for name in ("damping", "whirl"):
+            given = getattr(self, name)
+            if given is not None and len(given) != len(f):
+                return f"{len(f)} frequencies but {len(given)} {name} values"
         return None

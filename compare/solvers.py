@@ -445,5 +445,6 @@ def modes(scene: Scene, solver: Solver, params: dict, settings: dict | None = No
         return Modes(frequencies_hz=np.array([]), labels=[], status="error",
                      reason=f"leaf broke the contract: {broken}", **base)
     return Modes(frequencies_hz=np.asarray(res.frequencies_hz, float), labels=list(res.labels),
-                 damping=res.damping, shapes=res.shapes, notes=list(res.notes),
+                 damping=None if res.damping is None else np.asarray(res.damping, float),
+                 shapes=res.shapes, whirl=res.whirl, notes=list(res.notes),
                  extra=res.extra, settings=res.settings or s, wall_s=wall, **base)

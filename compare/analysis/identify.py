@@ -1,26 +1,35 @@
 """Natural frequencies identified from a free-response time series of any solver, so
 time-domain-only models can be checked against modal results.
 
-- `matrix_pencil`: Hua & Sarkar's matrix-pencil fit of damped exponentials (exact for a noise-free
-  sum of modes, whatever the record length);
+- `pencil_poles` / `matrix_pencil`: Hua & Sarkar's matrix-pencil fit of damped exponentials
+  (exact for a noise-free sum of modes, whatever the record length): poles of a real or complex
+  record, or frequencies and damping ratios of a real one;
 - `fft_peak`: Hann-windowed FFT with a parabola through the log-magnitude peak (its bias shrinks
   as the record lengthens).
 """
 import numpy as np
 
 
-def matrix_pencil(x: np.ndarray, dt: float, n_modes: int = 2,
-                  pencil: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Frequencies [rad/s] (≥ 0, sorted) and damping ratios of the strongest modes in x."""
-    x = np.asarray(x, float)
-    N = len(x)
-    L = pencil or N // 3
+def pencil_poles(x: np.ndarray, dt: float, n_poles: int,
+                 pencil: int | None = None) -> np.ndarray:
+    """Continuous-time poles λ [1/s] of the `n_poles` strongest damped exponentials in x (real:
+    poles in conjugate pairs; complex, e.g. x + iy of an orbit: a pole with Im λ > 0 turns
+    counter-clockwise, one with Im λ < 0 clockwise), x(t) = Σ a_k e^{λ_k t}."""
+    x = np.asarray(x)
+    x = x.astype(complex if np.iscomplexobj(x) else float)
+    L = pencil or len(x) // 3
     Y = np.lib.stride_tricks.sliding_window_view(x, L + 1)       # (N − L) × (L + 1) Hankel
     _, s, Vh = np.linalg.svd(Y, full_matrices=False)
-    M = min(2 * n_modes, int(np.sum(s > s[0] * 1e-10)))
-    V = Vh[:M].conj().T
+    M = min(n_poles, int(np.sum(s > s[0] * 1e-10)))
+    V = Vh[:M].T              # the rows of Vh span the windows (z_k^j)_j: shift-invariant
     z = np.linalg.eigvals(np.linalg.pinv(V[:-1]) @ V[1:])
-    lam = np.log(z.astype(complex)) / dt
+    return np.log(z.astype(complex)) / dt
+
+
+def matrix_pencil(x: np.ndarray, dt: float, n_modes: int = 2,
+                  pencil: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Frequencies [rad/s] (≥ 0, sorted) and damping ratios of the strongest modes in real x."""
+    lam = pencil_poles(np.asarray(x, float), dt, 2 * n_modes, pencil)
     keep = lam.imag >= 0
     w = np.abs(lam[keep].imag)
     zeta = -lam[keep].real / np.maximum(np.abs(lam[keep]), 1e-300)

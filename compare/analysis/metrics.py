@@ -299,3 +299,33 @@ def frequency_comparisons(results: list[Modes], tolerances: dict) -> list[Compar
                        + ("one discrete model: its discretisation error cancels" if shared
                           else "no error estimate") + ")"), d, err, tol * scale))
     return out
+
+
+def damping_comparisons(results: list[Modes], tolerances: dict) -> list[Comparison]:
+    """Every pair of solvers that give damping ratios, mode by mode (paired as the
+    frequencies), as Comparisons on ζ (channel "<label> ζ"). ζ is already a fraction of
+    critical damping, so its difference is compared as it is (scale 1): |Δζ| ≤ the allowance
+    ("damping", raised by a "damping_by_solver" entry of either solver) + both solvers' error
+    estimates (extra["damping_error"]) where both give one."""
+    out = []
+    ok = [r for r in results if r.status == "ok" and r.damping is not None]
+    for i, a in enumerate(ok):
+        for b in ok[i + 1:]:
+            by = tolerances.get("damping_by_solver", {})
+            tol = max([tolerances["damping"]] + [by.get(s, 0.0) for s in (a.solver, b.solver)])
+            ea, eb = (m.extra.get("damping_error") for m in (a, b))
+            for ia, ib in match_modes(list(a.frequencies_hz), a.labels,
+                                      list(b.frequencies_hz), b.labels):
+                za, zb = float(a.damping[ia]), float(b.damping[ib])
+                d = abs(za - zb)
+                err = (float(abs(ea[ia]) + abs(eb[ib])) if ea is not None and eb is not None
+                       else None)
+                bound = tol + (err or 0.0)
+                v = "agree" if d <= bound else "disagree"
+                out.append(Comparison(
+                    a.solver, b.solver, f"{a.labels[ia] or f'mode {ia + 1}'} ζ", d, d, d, 1.0,
+                    bound, v, f"ζ {za:.8g} vs {zb:.8g}: |Δ| {d:.2e} "
+                    f"{'≤' if v == 'agree' else '>'} "
+                    + (f"error estimates {err:.1e} + allowance {tol:.1e}" if err is not None
+                       else f"allowance {tol:.1e} (no error estimate)"), d, err, tol))
+    return out

@@ -25,7 +25,8 @@ force law puts no reaction moment on the shaft, so the lift is not conservative;
 booked in D ("dissipated" = dampers + friction + defect lift) so the balance closes exactly
 (D need not grow monotonically: the lift can feed energy in).
 
-For solvers: every one starts from `initial_state` (defect-free static sag, unrotated, at rest);
+For solvers: every one starts from `initial_state` (defect-free static sag, unrotated, at rest,
+unless the scene's initial-condition parameters say otherwise);
 `body_loads` gives everything but gravity reduced to the centre of mass plus Ẇ_motor and Ḋ,
 which each solver integrates along with its state; `channels` turns the common kinematic output
 into the scene's channels.
@@ -34,6 +35,8 @@ from __future__ import annotations
 
 import numba as nb
 import numpy as np
+
+from ..contract import ModesResult
 
 OMEGA_SMOOTH = 0.1     # rad/s, the tanh width of the friction moment's sign (spec)
 
@@ -366,8 +369,14 @@ def static_sag(params: dict) -> np.ndarray:
 
 
 def initial_state(params: dict):
-    """The common start: (r_cm, q, v_cm, ω) — static sag, unrotated, at rest."""
-    return static_sag(params), np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), np.zeros(3)
+    """The common start: (r_cm, q, v_cm, ω) — the defect-free static sag shifted by `offset0`,
+    turned by `tilt0` about the fixed x axis, spinning at `spin0` about the shaft axis (all
+    zero by default: at the sag, unrotated, at rest; a ring-down starts at the steady spin)."""
+    tilt, spin = float(params["tilt0"]), float(params["spin0"])
+    q = np.array([np.cos(0.5 * tilt), np.sin(0.5 * tilt), 0.0, 0.0])
+    axis = np.array([0.0, -np.sin(tilt), np.cos(tilt)])          # R(q)·(0, 0, 1)
+    return (static_sag(params) + np.asarray(params["offset0"], float), q, np.zeros(3),
+            spin * axis)
 
 
 def steady_spin_rate(params: dict) -> float:
@@ -388,3 +397,124 @@ def steady_spin_rate(params: dict) -> float:
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if net(lo) * net(mid) > 0 else (lo, mid)
     return 0.5 * (lo + hi)
+
+
+# ---------------------------------------------------------------- linearisation about the spin
+# Small motions about the steady spin Ω = steady_spin_rate (the defect-free shaft at its static
+# sag; the defect is a periodic forcing, not part of the linear system), in the fixed frame:
+# centre offset (x, y, z) from the sag, tilt (θx, θy) (rotation vector of the shaft axis,
+# e3 ≈ (θy, −θx, 1)), spin-angle perturbation θz. The state of every solver's first-order
+# linearisation is ordered (x, y, z, θx, θy, θz, then six velocities of any kind); whirl is
+# counted about +z, the motor's sense (Ω ≥ 0 at the balance).
+WHIRL_TYPES = ("cylindrical", "conical", "axial")
+DEGENERATE = 1e-8       # relative gap below which two roots of one type are one repeated root
+
+
+def modal_closed_form(params: dict) -> dict:
+    """The damped modes about the steady spin in closed form: label -> (λ, whirl), λ the
+    complex root (1/s) with Im λ = the damped frequency ≥ 0; plus "spin" -> (λ, "—"), the real
+    root of the spin rate. Derivation (journals at ±(l/2)e3 in isotropic bearings k_b, c_b):
+
+    - cylindrical (x, y): m ẍ + 2c_b ẋ + 2k_b x = 0, so ω_n = √(2k_b/m), ζ = 2c_b/(2√(2k_b m)),
+      ω_d = ω_n√(1 − ζ²), forward and backward alike (no gyroscopic term on translation);
+    - axial: m z̈ + k_axial z = 0 (no axial damper): ω = √(k_axial/m), ζ = 0;
+    - conical: the journals move by ±(l/2)(θy, −θx), so the bearings give a tilt stiffness
+      k_θ = k_b l²/2 and damping c_θ = c_b l²/2; with H ≈ J_t(θ̇x, θ̇y, 0) + J_p Ω e3,
+      J_t θ̈x + J_p Ω θ̇y + c_θ θ̇x + k_θ θx = 0, J_t θ̈y − J_p Ω θ̇x + c_θ θ̇y + k_θ θy = 0,
+      i.e. for φ = θx + iθy ∝ e^{st}: J_t s² + (c_θ − i J_p Ω) s + k_θ = 0. Its root with
+      Im s > 0 whirls forward (with the spin), the other backward (ω_d = |Im s|,
+      ζ = −Re s/|s|); at Ω = 0 both are ω = √(k_b l²/(2J_t)) damped by ζ = c_θ/(2√(k_θ J_t));
+    - spin: J_p δΩ̇ = −(M_stall/ω_0 + c_drag + μ r_j m|g_xy| sech²(Ω/0.1)/0.1) δΩ (motor and
+      friction slopes; the friction's dependence on the bearing loads feeds the lateral motion
+      into the spin, but nothing feeds back: block-triangular, the roots above stand)."""
+    m, l, jt, jp = params["m"], params["l"], params["J_t"], params["J_p"]
+    kb, cb = params["k_b"], params["c_b"]
+    spin = steady_spin_rate(params)
+    zc, wn = cb / np.sqrt(2 * kb * m), np.sqrt(2 * kb / m)
+    cyl = complex(-zc * wn, wn * np.sqrt(1 - zc * zc)) if zc < 1 else complex(-zc * wn, 0.0)
+    s = np.roots([jt, 0.5 * cb * l * l - 1j * jp * spin, 0.5 * kb * l * l])
+    fwd, bwd = sorted(s, key=lambda r: -r.imag)
+    g = np.asarray(params["gravity"], float)
+    slope = (params["motor_stall_torque"] / params["motor_no_load_speed"]
+             + params["bearing_drag"] + params["mu"] * params["r_j"] * m * np.hypot(g[0], g[1])
+             * (1.0 - np.tanh(spin / OMEGA_SMOOTH) ** 2) / OMEGA_SMOOTH)
+    return {"cylindrical backward": (cyl, "Backward"), "cylindrical forward": (cyl, "Forward"),
+            "axial": (complex(0.0, np.sqrt(params["k_axial"] / m)), "—"),
+            "conical backward": (complex(bwd.real, -bwd.imag), "Backward"),
+            "conical forward": (complex(fwd), "Forward"),
+            "spin": (complex(-slope / jp, 0.0), "—")}
+
+
+def _circular(v, kind, half):
+    """(forward, backward) amplitudes of a mode's orbit: the whirling point's complex offset
+    u = x + iy = ½(x̂ + iŷ)e^{iωt} + ½(x̂* + iŷ*)e^{−iωt} for Re(v e^{iωt})."""
+    x, y = (v[0], v[1]) if kind == "cylindrical" else (half * v[4], -half * v[3])
+    return abs(x + 1j * y), abs(x - 1j * y)
+
+
+def linear_modes(A: np.ndarray, params: dict) -> tuple[list[dict], np.ndarray]:
+    """The oscillatory modes of ẋ = A x (the state ordered as above), each a dict: label,
+    λ (Im λ > 0), whirl ("Forward", "Backward", "Mixed" as ROSS names them; "—" for the axial
+    mode), in ascending damped frequency; and the nonzero real roots (the spin rate's). A
+    mode's kind is the largest journal motion of its shape: centre (x, y), tilt
+    (l/2)(θx, θy), or z. Two roots of one kind within DEGENERATE of each other are a repeated
+    root (an isotropic rotor's translation at any spin, its tilt at rest): their eigenspace
+    holds one forward and one backward circular whirl, reported as that pair at their mean."""
+    lam, V = np.linalg.eig(np.asarray(A, float))
+    tiny = 1e-9 * float(np.max(np.abs(lam)))
+    half = 0.5 * params["l"]
+    shapes = []                                   # (kind, λ, positions of the shape)
+    for i in np.nonzero(lam.imag > tiny)[0]:
+        v = V[:6, i]
+        motion = (np.hypot(abs(v[0]), abs(v[1])), half * np.hypot(abs(v[3]), abs(v[4])),
+                  abs(v[2]))
+        shapes.append((WHIRL_TYPES[int(np.argmax(motion))], complex(lam[i]), v))
+    out = []
+    for kind in WHIRL_TYPES:
+        mine = sorted((m for m in shapes if m[0] == kind), key=lambda m: m[1].imag)
+        if kind == "axial":
+            out += [{"label": "axial" if len(mine) == 1 else f"axial {j + 1}", "lam": m[1],
+                     "whirl": "—"} for j, m in enumerate(mine)]
+            continue
+        j = 0
+        while j < len(mine):
+            (_, a, v), b = mine[j], mine[j + 1][1] if j + 1 < len(mine) else None
+            if b is not None and abs(b - a) <= DEGENERATE * abs(a):
+                out += [{"label": f"{kind} {w.lower()}", "lam": 0.5 * (a + b), "whirl": w}
+                        for w in ("Backward", "Forward")]
+                j += 2
+                continue
+            f, bw = _circular(v, kind, half)
+            whirl = ("Mixed" if abs(f - bw) <= 0.01 * (f + bw) else
+                     "Forward" if f > bw else "Backward")
+            out.append({"label": f"{kind} {whirl.lower()}", "lam": a, "whirl": whirl})
+            j += 1
+    out.sort(key=lambda m: (m["lam"].imag, m["whirl"] != "Backward"))
+    real = lam.real[(np.abs(lam.imag) <= tiny) & (np.abs(lam) > tiny)]
+    return out, np.sort(real)
+
+
+def modes_result(A: np.ndarray, A_check: np.ndarray, params: dict, settings: dict,
+                 how: str) -> ModesResult:
+    """A solver's `ModesResult` from its linearisation A and a second one, A_check, at half its
+    finite-difference step: damped frequencies (Hz), ζ, labels, whirl, and as each mode's error
+    estimate |Δ| between the two (extra "frequency_error_hz", "damping_error"); the real roots
+    (the spin rate's) in extra "real_roots_per_s". `how` says how A was made."""
+    modes, real = linear_modes(A, params)
+    other = {m["label"]: m["lam"] for m in linear_modes(A_check, params)[0]}
+
+    def zeta(lam):
+        return -lam.real / abs(lam)
+
+    def error(fn, m):
+        return abs(fn(m["lam"]) - fn(other[m["label"]])) if m["label"] in other else np.inf
+    return ModesResult(
+        frequencies_hz=np.array([m["lam"].imag for m in modes]) / (2 * np.pi),
+        labels=[m["label"] for m in modes], damping=np.array([zeta(m["lam"]) for m in modes]),
+        whirl=[m["whirl"] for m in modes], settings={**settings, "linearisation": how},
+        notes=[f"about the steady spin {steady_spin_rate(params):.10g} rad/s (motor/friction "
+               "balance), defect-free static sag"],
+        extra={"frequency_error_hz": np.array([error(lambda x: x.imag / (2 * np.pi), m)
+                                               for m in modes]),
+               "damping_error": np.array([error(zeta, m) for m in modes]),
+               "real_roots_per_s": real})

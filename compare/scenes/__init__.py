@@ -13,7 +13,7 @@ import sys
 
 from ..errors import BadInput
 from . import bearing, mstmm, press, rotor, sail
-from .base import Campbell, Extreme, Finding, MapSpec, Scene
+from .base import Campbell, Extreme, Finding, Linearisation, MapSpec, Scene
 
 GROUP = "xval.scenes"
 
@@ -74,5 +74,5 @@ def get_scene(name: str) -> Scene:
 
 load_plugins()
 
-__all__ = ["SCENES", "Scene", "Campbell", "Extreme", "Finding", "MapSpec", "get_scene",
-           "ORIGIN", "PLUGIN_SOLVERS", "load_plugins"]
+__all__ = ["SCENES", "Scene", "Campbell", "Extreme", "Finding", "Linearisation", "MapSpec",
+           "get_scene", "ORIGIN", "PLUGIN_SOLVERS", "load_plugins"]

@@ -2,11 +2,11 @@
 which leaf serves it for each solver, and its hooks (Campbell sweep, 3D drawing, default
 campaign cases, findings). Nothing in `compare/` outside `compare/scenes/` names a scene."""
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..analysis.metrics import first_crossing, frequency_comparisons, pairwise
+from ..analysis.metrics import damping_comparisons, first_crossing, frequency_comparisons, pairwise
 from ..errors import BadInput
 from ..physics.whirl import FRAMES
 from .params import Param
@@ -164,6 +164,21 @@ class AllowanceCase:
 
 
 @dataclass(frozen=True)
+class Linearisation:
+    """A time scene's modal answer (`xval modes` on it, `Scene.modal()`): its leaves'
+    `modes(params, settings)` linearise the system about `operating_point` (a steady state of
+    the scene's own parameters, in words) and return damped frequencies and damping ratios.
+    `held`: the parameters the linear system does not take (how a run is made, initial
+    conditions, a forcing it leaves out), name -> the value held (None: the default);
+    `tolerances`: the frequency and damping allowances (as a frequency scene's); `identify`:
+    the identification hook of frequency scenes, e.g. ring-downs of the time solvers."""
+    operating_point: str
+    tolerances: dict
+    held: dict = field(default_factory=dict)
+    identify: Callable | None = None
+
+
+@dataclass(frozen=True)
 class Scene:
     name: str
     title: str
@@ -237,6 +252,10 @@ class Scene:
     map_observables: dict = field(default_factory=dict)
     maps: tuple = ()
     notes: str = ""
+    # a time scene's answer to `xval modes` (Linearisation; `modal()`), and a frequency scene's
+    # parameters held at fixed values (name -> value: its leaves get them, `--set` refuses them)
+    linearisation: "Linearisation | None" = None
+    held: dict = field(default_factory=dict)
 
     @property
     def is_time(self) -> bool:
@@ -252,12 +271,15 @@ class Scene:
         for p in self.params:
             if p.name == name:
                 return p
+        if name in self.held:
+            raise BadInput(f"{name}: held at {self.held[name]!r} by the linearisation of scene "
+                           f"{self.name} (not a parameter of its modes)")
         raise BadInput(f"{name}: unknown parameter of scene {self.name} "
                        f"(known: {', '.join(p.name for p in self.params)})")
 
     def resolve(self, overrides=None):
         """Defaults with `--set` overrides applied; every value validated. Raises BadInput."""
-        values = {p.name: p.default for p in self.params}
+        values = {**self.held, **{p.name: p.default for p in self.params}}
         for name, text in (overrides or {}).items():
             values[name] = self.param(name).parse(text)
         for p in self.params:                      # defaults are checked too (campaign files)
@@ -276,9 +298,35 @@ class Scene:
 
     def verdicts(self, params, runs):
         """Every pair of `runs` (Trajectories, or Modes for a frequency scene) compared and
-        judged against the allowances of `params` — the one way a scene judges its solvers."""
+        judged against the allowances of `params` — the one way a scene judges its solvers;
+        damping ratios too where the scene has an allowance for them ("damping")."""
         tol = self.tolerances_for(params)
-        return frequency_comparisons(runs, tol) if self.is_modes else pairwise(runs, tol)
+        if not self.is_modes:
+            return pairwise(runs, tol)
+        return frequency_comparisons(runs, tol) + (damping_comparisons(runs, tol)
+                                                    if "damping" in tol else [])
+
+    def modal(self) -> "Scene":
+        """The frequency scene `xval modes` runs: this one, or a time scene's linearisation
+        about its operating point (`Linearisation`) as a frequency scene of the same name —
+        the same leaves (their `modes`), the parameters less those the linearisation holds,
+        its allowances and identification hook. Raises BadInput for a time scene that does
+        not linearise."""
+        if self.is_modes:
+            return self
+        lin = self.linearisation
+        if lin is None:
+            raise BadInput(f"scene {self.name!r} is a time-domain scene: use `xval run "
+                           f"{self.name}`")
+        held = {p.name: p.default if lin.held[p.name] is None else lin.held[p.name]
+                for p in self.params if p.name in lin.held}
+        return replace(self, kind="modes", linearisation=None, held=held,
+                       title=f"{self.title}: damped modes about {lin.operating_point}",
+                       params=tuple(p for p in self.params if p.name not in held),
+                       tolerances=lin.tolerances, allowance_cases=(), identify=lin.identify,
+                       energy_channel=None, findings=None, draw_3d=None, plots=None,
+                       campaign_cases=(), extremes=(), regime=None, map_observables={},
+                       maps=())
 
     def output_grid(self, params):
         t_end, dt = params["t_end"], params["output_dt"]

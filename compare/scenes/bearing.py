@@ -3,11 +3,15 @@ motor (seed 001; spec scene-bearing-rotor.md). The force laws and observables li
 compare/physics/bearing_rotor.py."""
 import numpy as np
 
+from ..analysis.identify import pencil_poles
 from ..errors import BadInput
 from ..physics import bearing_rotor as physics
-from .base import Extreme, Finding, MapSpec, Scene
+from .base import Extreme, Finding, Linearisation, MapSpec, Scene
 from .params import Param, positive
 
+LEAVES = {"quaternion": "custom_models.bearing.quaternion",
+          "exudyn": "reference_models.exudyn.bearing_rotor",
+          "mujoco": "reference_models.mujoco.bearing_rotor"}
 SOURCE = ("seed 001 (001_d37db2f6f0246403.txt): shaft in Rodrigues–Hamilton parameters in the "
           "fixed frame, journals a/b with state-dependent bearing forces, DC motor, defect at a")
 
@@ -117,14 +121,128 @@ def plots(params, trajectories, fig):
     orbit.legend(fontsize=7)
 
 
+# ------------------------------------------------------------------ ring-down (xval modes)
+# The free responses the time solvers confirm the linearisation with: from the steady spin,
+# motor as ever, no defect, two releases, RING_T of record fitted at FIT_EVERY × RING_DT (≥ 60
+# samples a period of the fastest default mode). "whirl": the centre shifted by the amplitude a
+# in x and the shaft turned so that the journals move by a (line orbits: both whirl senses of
+# the cylindrical and conical modes); "axial": the centre shifted by a in z. Apart because the
+# axial spring acts at journal a only: its force times the tilt is a moment, and the tilt
+# squared moves journal a's z — one release of all three put sidebands (987 ± 408 rad/s) into
+# the records and moved the conical fit by 1.8e-7 and the axial ζ to 6.5e-8 in all three
+# solvers alike. a = RING_SHARE of the static sag: the release changes the bearing loads
+# |F_a|, |F_b| (the friction's) by 1 %, so second-order effects stay small: the conical fit
+# moves as a² (quaternion, against the closed form: 1.8e-10 at a = 3.4 % of the sag, 1.6e-11
+# at 1 %, 1.8e-12 at 0.34 %); below 1 % the engines' own integration errors take over.
+# Recorded every RING_DT, which caps the adaptive engines' steps (Exudyn's DOPRI5 took the
+# output step 5e-5 s whatever its tolerance: the conical fit 1.4e-10 off, its tighter rerun
+# identical; at 1e-5 s 1.6e-11), fitted every FIT_EVERY-th sample with a pencil of PENCIL
+# columns: against the closed form as close as the default N/3 = 134 (conical 1.2e-11 against
+# 1.6e-11, quaternion), at a fraction of the SVD's cost (2 s against 24 s for two solvers on
+# a loaded machine).
+RING_SHARE, RING_T, RING_DT, FIT_EVERY, PENCIL = 0.01, 0.04, 1e-5, 10, 20
+
+
+def _releases(params):
+    """The two releases' initial conditions (module comment above)."""
+    sag = physics.static_sag(params)
+    a = RING_SHARE * (np.hypot(sag[0], sag[1]) or 1e-5)
+    return {"whirl": {"offset0": [a, 0.0, 0.0], "tilt0": a / (0.5 * params["l"])},
+            "axial": {"offset0": [0.0, 0.0, a], "tilt0": 0.0}}
+
+
+def _fit(p, tr, release, n):
+    """Modes of the first n samples of a ring-down by the matrix pencil: "whirl" — the
+    centre's orbit x + iy (cylindrical; Im λ > 0 whirls forward) and the shaft axis'
+    (l/2)(θy, −θx) from the journals' difference (conical); "axial" — the centre's z."""
+    ja, jb = tr.extra["journal_a"][:n:FIT_EVERY], tr.extra["journal_b"][:n:FIT_EVERY]
+    centre = 0.5 * (ja + jb) - physics.static_sag(p)
+    dt = FIT_EVERY * RING_DT
+    if release == "axial":
+        lam = pencil_poles(centre[:, 2], dt, 2, PENCIL)
+        return {"axial": complex(lam[np.argmax(lam.imag)])}
+    tilt = 0.5 * (ja - jb)
+    return {f"{kind} {'forward' if lam.imag > 0 else 'backward'}": complex(lam.real,
+                                                                            abs(lam.imag))
+            for kind, x in (("cylindrical", centre[:, 0] + 1j * centre[:, 1]),
+                            ("conical", tilt[:, 0] + 1j * tilt[:, 1]))
+            for lam in pencil_poles(x, dt, 2, PENCIL)}
+
+
+def _zeta(lam):
+    return -lam.real / abs(lam)
+
+
+def ring_down(params, run, solver_names=None):
+    """Every time solver released at the operating point (module comment above); damped
+    frequency and ζ of each mode by the matrix pencil. Its error estimate: the solver's own
+    (factor × the change of the fit on a rerun at the settings of its error estimate) plus the
+    fit's (the change from the records' first two thirds to the whole). Returns (rows,
+    Markdown lines); the modes workflow sets each row against the same solver's
+    eigenvalues."""
+    names = {q.name for q in BEARING_ROTOR.params}
+    spin = physics.steady_spin_rate(params)
+    base = {**{k: v for k, v in params.items() if k in names}, "defect_height": 0.0,
+            "spin0": spin, "t_end": RING_T, "output_dt": RING_DT}
+    releases = _releases(params)
+    rows = []
+    for name in BEARING_ROTOR.leaves:
+        if solver_names and name not in solver_names:
+            continue
+        fits, bad = {"whole": {}, "part": {}, "tight": {}}, None
+        for release, initial in releases.items():
+            p = BEARING_ROTOR.resolve({**base, **initial})
+            tr, tt = (run(BEARING_ROTOR, name, p, RING_DT, tighter=t) for t in (False, True))
+            if tr.status != "ok" or tt.status != "ok":
+                bad = next(t for t in (tr, tt) if t.status != "ok")
+                break
+            factor = tt.stats["error_factor"]
+            for key, (t, n) in (("whole", (tr, len(tr.t))), ("part", (tr, 2 * len(tr.t) // 3)),
+                                ("tight", (tt, len(tt.t)))):
+                fits[key].update(_fit(p, t, release, n))
+        if bad is not None:
+            rows.append({"solver": name, "status": bad.status,
+                         "reason": f"{release}: {bad.reason}"})
+            continue
+        whole, part, tight = fits["whole"], fits["part"], fits["tight"]
+        modes = sorted(whole.items(), key=lambda kv: (kv[1].imag, "forward" in kv[0]))
+        rows.append({"solver": name, "status": "ok", "labels": [k for k, _ in modes],
+                     "frequencies_hz": [lam.imag / (2 * np.pi) for _, lam in modes],
+                     "damping": [_zeta(lam) for _, lam in modes],
+                     "whirl": [k.split()[-1].capitalize() if " " in k else "—" for k, _ in modes],
+                     "frequency_error_hz": [(factor * abs(lam.imag - tight[k].imag)
+                                             + abs(lam.imag - part[k].imag)) / (2 * np.pi)
+                                            for k, lam in modes],
+                     "damping_error": [factor * abs(_zeta(lam) - _zeta(tight[k]))
+                                       + abs(_zeta(lam) - _zeta(part[k])) for k, lam in modes]})
+    md = ["## Ring-down of every time solver", "",
+          f"Released at the steady spin {spin:.10g} rad/s, no defect: the centre shifted "
+          f"{releases['whirl']['offset0'][0]:.3g} m in x and the shaft turned "
+          f"{releases['whirl']['tilt0']:.3g} rad about x (whirl), and apart the centre "
+          f"shifted {releases['axial']['offset0'][2]:.3g} m in z (axial); {RING_T:g} s at "
+          f"{FIT_EVERY * RING_DT:g} s, matrix pencil per mode (error: the solver's own, from a "
+          "rerun at its tighter settings, plus the change from the first two thirds of the "
+          "record).",
+          "",
+          "| solver | mode | ω_d [rad/s] | ζ | error ω_d [rad/s] | error ζ |",
+          "|---|---|---|---|---|---|"]
+    for r in rows:
+        if r["status"] != "ok":
+            md.append(f"| {r['solver']} | {r['status']}: {r['reason']} | | | | |")
+            continue
+        md += [f"| {r['solver']} | {lb} | {2 * np.pi * f:.10g} | {z:.8g} | "
+               f"{2 * np.pi * ef:.1e} | {ez:.1e} |" for lb, f, z, ef, ez in zip(
+                   r["labels"], r["frequencies_hz"], r["damping"], r["frequency_error_hz"],
+                   r["damping_error"])]
+    return rows, md
+
+
 BEARING_ROTOR = Scene(
     name="bearing-rotor",
     title="Two-bearing rotor with a bearing defect, spun up by a DC motor",
     source=SOURCE,
     kind="time",
-    leaves={"quaternion": "custom_models.bearing.quaternion",
-            "exudyn": "reference_models.exudyn.bearing_rotor",
-            "mujoco": "reference_models.mujoco.bearing_rotor"},
+    leaves=LEAVES,
     params=(
         positive("m", 6.0, "kg", "shaft mass"),
         positive("l", 0.6, "m", "distance between the journals a (+l/2) and b (−l/2)"),
@@ -147,6 +265,14 @@ BEARING_ROTOR = Scene(
               hi=1e4),
         Param("mu", 0.05, "", "journal friction coefficient", lo=0.0, hi=10.0),
         positive("r_j", 0.02, "m", "journal radius (friction arm)"),
+        # initial conditions (a ring-down starts at the steady spin, slightly displaced); not
+        # physical: zero by default, where a relative perturbation changes nothing
+        Param("spin0", 0.0, "rad/s", "initial spin rate about the shaft axis", lo=-1e4, hi=1e4,
+              physical=False),
+        Param("offset0", np.zeros(3), "m", "initial displacement of the centre of mass from "
+              "the static sag", kind="vector", lo=-0.01, hi=0.01, physical=False),
+        Param("tilt0", 0.0, "rad", "initial turn of the shaft about the fixed x axis",
+              lo=-0.1, hi=0.1, physical=False),
         positive("t_end", 3.0, "s", "horizon", hi=1e5),
         positive("output_dt", 0.0005, "s", "common output grid step"),
     ),
@@ -184,7 +310,24 @@ BEARING_ROTOR = Scene(
     # engines' runs are the curve's check; its slope near zero defect from each of them)
     maps=(MapSpec("ripple-vs-defect", x="defect_height=0:4e-5", resolution=0.05, coarse=(5, 1),
                   observable="spin_ripple", engines="everywhere"),),
+    linearisation=Linearisation(
+        "the steady spin (motor/friction balance) at the defect-free static sag",
+        held={"defect_height": 0.0, **dict.fromkeys((
+            "defect_width", "defect_angle", "spin0", "offset0", "tilt0", "t_end", "output_dt"))},
+        # Allowances ≤ 10 × the deviation left beyond both error estimates, measured at the
+        # defaults, spin 627 rad/s (motor_no_load_speed 2000), c_b 0 and k_b 1e7
+        # (tests/test_bearing_modes.py::test_allowances_are_within_10x_of_measured): two
+        # solvers' eigenvalues 1.3e-13 relative (quaternion–exudyn conical, k_b 1e7; max|Δ|
+        # 4.6e-12 on the axial root, within the estimates), ζ 1.1e-11 (exudyn–mujoco conical,
+        # k_b 1e7); a ring-down against its solver's eigenvalues 4.9e-11 relative (quaternion
+        # conical, c_b 0: the release's a², module comment above), ζ 3.1e-11 (exudyn conical,
+        # k_b 1e7). ζ differences are absolute.
+        tolerances={"frequency": 1e-12, "damping": 1e-10,
+                    "frequency_by_solver": {f"{s} ring-down": 4e-10 for s in LEAVES},
+                    "damping_by_solver": {f"{s} ring-down": 2e-10 for s in LEAVES}},
+        identify=ring_down),
     notes="Force laws, spin angle (swing–twist about the shaft axis) and every observable are "
           "computed by compare/physics/bearing_rotor.py for all solvers; all start at the "
-          "defect-free static sag, unrotated, at rest.",
+          "defect-free static sag, unrotated, at rest (unless spin0, offset0, tilt0 say "
+          "otherwise). `xval modes bearing-rotor`: damped modes about the steady spin.",
 )

@@ -306,23 +306,31 @@ def critical_table(cb, entries: dict) -> list[str]:
     return md
 
 
-def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float):
+def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float,
+              tighter: bool = False):
     """A time-domain run for an identification hook: the solver's accurate defaults, its fixed
-    step capped so that it fits the record's grid."""
+    step capped so that it fits the record's grid; `tighter`: at the settings of its own error
+    estimate instead (`LeafInfo.tighter`), the factor on |y − y_tight| in
+    stats["error_factor"]."""
     s = solvers.get_solver(solver_name)
     settings = solvers.settings_for(s, scene.name)
     if isinstance(settings.get("dt"), float) and settings["dt"] > max_dt:
         settings["dt"] = max_dt
-    return solvers.simulate(scene, s, params, settings)
+    factor = None
+    if tighter:
+        tight, factor, _ = s.info(scene).tighter(settings)
+        settings = tight if tight is not None else settings
+    tr = solvers.simulate(scene, s, params, settings)
+    if factor is not None:
+        tr.stats["error_factor"] = factor
+    return tr
 
 
 def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_sweep=True,
               identify=True, out_dir=None, campbell_frame=None):
     """`out_dir` given: write there (a campaign case); else a new run folder under `out`.
     `campbell_frame`: the frame the Campbell figure is drawn in (default: the solvers')."""
-    sc = get_scene(scene_name)
-    if not sc.is_modes:
-        raise BadInput(f"scene {sc.name!r} is a time-domain scene: use `xval run {sc.name}`")
+    sc = get_scene(scene_name).modal()       # a time scene answers by its linearisation
     if campbell_frame is not None and campbell_frame not in (
             sc.campbell.frames if sc.campbell else ()):
         raise BadInput(f"--campbell-frame {campbell_frame}: {sc.name} draws its Campbell "
@@ -340,7 +348,7 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
     obj = {"scene": sc.name, "params": params,
            "runs": [{"solver": r.solver, "status": r.status, "wall_s": round(r.wall_s, 6),
                      "frequencies_hz": list(r.frequencies_hz), "labels": r.labels,
-                     "versions": r.versions,
+                     "versions": r.versions, **damped_json(r),
                      **({"notes": r.notes} if r.notes else {}),
                      **({k: list(np.ravel(v)) for k, v in r.extra.items()}),
                      **({"reason": r.reason} if r.reason else {})} for r in results],
@@ -352,6 +360,9 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
           "| solver | status | frequencies [Hz] | labels | notes |", "|---|---|---|---|---|"]
     md += [f"| {r.solver} | {r.status} | {', '.join(f'{f:.8g}' for f in r.frequencies_hz)} | "
            f"{', '.join(r.labels)} | {'; '.join(r.notes) or r.reason or ''} |" for r in results]
+    if any(r.damping is not None for r in results):
+        md += ["", "Damped modes (ζ: damping ratio, log dec δ = 2πζ/√(1 − ζ²); whirl about the "
+               "spin as ROSS names it):", "", *markdown_table(DAMPED_HEADER, damped_rows(results))]
     md += ["", "| a | b | mode | rel. difference | verdict |", "|---|---|---|---|---|"]
     md += [f"| {c.a} | {c.b} | {c.channel} | {c.max_rel:.2e} | {c.verdict} |"
            for c in comparisons]
@@ -386,12 +397,84 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
         if rows:
             obj["identified_from_free_response"] = rows
             md += [""] + lines_md
+            more = []
+            for row in rows:
+                eig, fit = identified_against_eigenvalues(sc, row, results)
+                if fit is not None:
+                    row.update(damped_json(fit))
+                    more += sc.verdicts(params, [eig, fit])
+            comparisons = comparisons + more
+            obj["comparisons"] += [c.as_dict() for c in more]
+            md += ["", "| a | b | mode | deviation | bound | verdict |",
+                   "|---|---|---|---|---|---|"]
+            md += [f"| {c.a} | {c.b} | {c.channel} | {c.deviation:.2e} | "
+                   f"{c.tolerance * c.scale:.2e} | {c.verdict} |" for c in more]
     failed = {m["solver"] for m in obj["incomplete"]}
     obj["incomplete"] += [m for m in (obj.get("campbell") or {}).get("incomplete", [])
                           if m["solver"] not in failed]
     obj["status"], obj["summary"] = modes_status(comparisons, obj)
     md[1:1] = ["", f"**{obj['summary']}**"]
     return write_study(out_dir, md, obj), results, comparisons
+
+
+DAMPED_HEADER = ["solver", "mode", "whirl", "f_d [Hz]", "ω_d [rad/s]", "ω_d [rpm]", "ζ",
+                 "log dec"]
+
+
+def log_dec(zeta):
+    """The logarithmic decrement δ = 2πζ/√(1 − ζ²) (inf for ζ ≥ 1: no oscillation)."""
+    z = np.asarray(zeta, float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(z < 1, 2 * np.pi * z / np.sqrt(np.maximum(1 - z * z, 0.0)), np.inf)
+
+
+def damped_json(m: Modes | None) -> dict:
+    """A run's damped modes as `xval modes --json` lists them (contract.md, "Rotordynamic
+    results"): ω_d [rad/s] and rpm beside frequencies_hz, ζ, log dec, whirl; {} without ζ."""
+    if m is None or m.damping is None:
+        return {}
+    w = 2 * np.pi * np.asarray(m.frequencies_hz, float)
+    return {"omega_d": list(w), "rpm": list(w * 30 / np.pi), "zeta": list(map(float, m.damping)),
+            "log_dec": list(map(float, log_dec(m.damping))),
+            **({"whirl": list(m.whirl)} if m.whirl is not None else {})}
+
+
+def damped_rows(results: list[Modes]) -> list[list[str]]:
+    """One row per mode of every solver that gives damping ratios (DAMPED_HEADER): Hz, rad/s
+    and rpm side by side, ζ and log dec (ROSS's conventions)."""
+    rows = []
+    for m in results:
+        if m.status != "ok" or m.damping is None:
+            continue
+        whirl = m.whirl or ["—"] * len(m.labels)
+        for f, lb, wh, z, d in zip(m.frequencies_hz, m.labels, whirl, m.damping,
+                                   log_dec(m.damping)):
+            rows.append([m.solver, lb, wh, f"{f:.10g}", f"{2 * np.pi * f:.10g}",
+                         f"{60 * f:.8g}", f"{z + 0.0:.8g}", f"{d + 0.0:.6g}"])   # no −0
+    return rows
+
+
+def markdown_table(header, rows) -> list[str]:
+    return (["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+            + ["| " + " | ".join(r) + " |" for r in rows])
+
+
+def identified_against_eigenvalues(sc: Scene, row: dict, results: list[Modes]):
+    """(the solver's eigenvalue run, the fit as `Modes` of "<solver> ring-down") for a row of
+    an identification hook that fitted modes to the solver's free response (labels,
+    frequencies_hz, damping, whirl; errors in frequency_error_hz / damping_error), the
+    verdicts to set them against each other; (None, None) where the row has no such fit or
+    the solver's eigenvalues did not run here."""
+    eig = next((r for r in results if r.solver == row["solver"] and r.status == "ok"), None)
+    if eig is None or row.get("status") != "ok" or "damping" not in row:
+        return None, None
+    return eig, Modes(scene=sc.name, solver=f"{row['solver']} ring-down",
+                      frequencies_hz=np.asarray(row["frequencies_hz"], float),
+                      labels=row["labels"], damping=np.asarray(row["damping"], float),
+                      whirl=row.get("whirl"),
+                      extra={k: np.asarray(row[k], float) for k in ("frequency_error_hz",
+                                                                     "damping_error")
+                             if k in row})
 
 
 def modes_status(comparisons, obj) -> tuple[str, str]:

@@ -18,6 +18,7 @@ from ..atomic import write_json
 from ..errors import BadInput
 from .guard import mark_incomplete
 from .inputs import make_out
+from .modes import DAMPED_HEADER, damped_rows
 from .runner import RunResult, write_outputs
 
 # --- tables --------------------------------------------------------------------------------
@@ -298,8 +299,14 @@ class ModesResult:
         return [f"critical {s}: " + ", ".join(f"{k} {v:.6f}" for k, v in c.items())
                 for s, c in self.critical_speeds.items() if c]
 
+    def _damped(self, table):
+        """The damped modes (ζ, log dec, rad/s and rpm beside Hz), where a solver gives ζ."""
+        rows = damped_rows(list(self.runs.values()))
+        return [table(DAMPED_HEADER, rows)] if rows else []
+
     def __str__(self):
         return "\n\n".join([self._title(), _text(self.FREQ_HEADER, self._freq_rows()),
+                            *self._damped(_text),
                             _text(VERDICT_HEADER, verdict_rows(self.comparisons))]
                            + (["\n".join(self._crit())] if self._crit() else []))
 
@@ -308,6 +315,7 @@ class ModesResult:
     def _repr_markdown_(self):
         return "\n\n".join([f"**{self._title()}**", _markdown(self.FREQ_HEADER,
                                                              self._freq_rows()),
+                            *self._damped(_markdown),
                             _markdown(VERDICT_HEADER, verdict_rows(self.comparisons))]
                            + ["\n".join(f"- {x}" for x in self._crit())])
 

@@ -116,10 +116,14 @@ def _build(params: dict, adaptive: bool):
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     r0, q0, v0, w0 = br.initial_state(params)
-    assert np.allclose(q0, [1, 0, 0, 0]) and not np.any(w0), "start is unrotated and at rest"
+    # the common start turns the shaft about the fixed x axis only: Rx(α), α = 2 atan2(x, w)
+    assert q0[2] == q0[3] == 0.0, "the start is a turn about the fixed x axis"
+    angles = np.array([2.0 * math.atan2(q0[1], q0[0]), 0.0, 0.0])
+    _, G, _ = rxyz_kinematics(np.r_[r0, angles], np.zeros(6))
+    rates = np.linalg.solve(G, w0)                     # ω = G·(α̇, β̇, γ̇)
     nb = mbs.AddNode(NodeRigidBodyRxyz(referenceCoordinates=[0.0] * 6,
-                                       initialCoordinates=[*map(float, r0), 0.0, 0.0, 0.0],
-                                       initialVelocities=[*map(float, v0), 0.0, 0.0, 0.0]))
+                                       initialCoordinates=[*map(float, r0), *map(float, angles)],
+                                       initialVelocities=[*map(float, v0), *map(float, rates)]))
     jt, jp = float(params["J_t"]), float(params["J_p"])
     body = mbs.AddObject(ObjectRigidBody(nodeNumber=nb, mass=float(params["m"]),
                                          inertia=[jt, jt, jp, 0.0, 0.0, 0.0]))
@@ -304,3 +308,41 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> LeafResult:
     stats = {"steps": steps, "rhs_evals": fail["calls"], "integrate_s": wall}
     return bc.result(params, t_out, q[:, :3], qt[:, :3], quat, omega, wd[:, 0], wd[:, 1],
                      status, t_fail, reason, stats, used, None if adaptive else h)
+
+
+# ------------------------------------------------------------------ linearisation (xval modes)
+# Exudyn differentiates the forces numerically with the step relativeEpsilon × max(minimum
+# coordinate size, |q|). Against the closed form (`bearing_rotor.modal_closed_form`) the
+# defaults (1e-7, 0.01: steps of 1e-9 m) leave the axial root 1.4e-8 off (round-off of
+# z_a − l/2); steps of 1e-6 (1e-6, 1) leave every root within 1.3e-11, steps of 1e-5 the
+# conical ones 4.3e-10 off (truncation).
+FD_RELATIVE, FD_MINIMUM = 1e-6, 1.0
+
+
+def _linearised(params: dict, relative: float) -> np.ndarray:
+    """A (12 × 12) of the shaft's coordinates (x, y, z, α, β, γ) and their rates about the
+    steady spin: `ComputeLinearizedSystem` at the sag spinning at γ̇ = Ω (defect-free), the
+    work node left out (the mechanics does not depend on it)."""
+    mbs, _, _, _, _ = _build({**params, "defect_height": 0.0}, False)
+    n = mbs.systemData.ODE2Size()
+    q, qt = np.zeros(n), np.zeros(n)
+    q[:3] = br.static_sag(params)
+    qt[5] = br.steady_spin_rate(params)
+    mbs.systemData.SetODE2Coordinates(list(q), exu.ConfigurationType.Initial)
+    mbs.systemData.SetODE2Coordinates_t(list(qt), exu.ConfigurationType.Initial)
+    ss = exu.SimulationSettings()
+    nd = ss.staticSolver.newton.numericalDifferentiation
+    nd.relativeEpsilon, nd.minimumCoordinateSize = relative, FD_MINIMUM
+    M, K, D = (np.asarray(x, float)[:6, :6] for x in mbs.ComputeLinearizedSystem(ss)[:3])
+    Minv = np.linalg.inv(M)
+    return np.block([[np.zeros((6, 6)), np.eye(6)], [-Minv @ K, -Minv @ D]])
+
+
+def modes(params: dict, settings: dict | None = None):
+    """Damped modes about the steady spin from Exudyn's linearisation (M, K, D with the
+    gyroscopic terms in D); for small tilts (α, β) are the fixed-frame tilt (θx, θy) and γ the
+    spin angle. Error estimate: the linearisation at half the differentiation step."""
+    return br.modes_result(_linearised(params, FD_RELATIVE),
+                           _linearised(params, 0.5 * FD_RELATIVE), params,
+                           {"relativeEpsilon": FD_RELATIVE, "minimumCoordinateSize": FD_MINIMUM},
+                           "exudyn ComputeLinearizedSystem → [[0, I], [−M⁻¹K, −M⁻¹D]]")

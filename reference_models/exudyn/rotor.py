@@ -580,8 +580,9 @@ def modes(params, settings=None):
     model = _modes_model(params)
     M, K, D = _linearised(model, spin)
     w, labels, re = _whirl_pair(M, K, D, spin)
+    re = np.asarray(re, float)
     return ModesResult(frequencies_hz=np.array(w) / (2 * math.pi), labels=labels,
-                       damping=np.array(re, float),
+                       damping=-re / np.hypot(re, w),           # ζ = −Re λ / |λ|
                        settings={"method": "exudyn ComputeLinearizedSystem + dense quadratic "
                                            "eigenproblem", "drive_torque": 0.0},
                        notes=_approximate_note(params))

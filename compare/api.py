@@ -204,7 +204,8 @@ def map(scene: str, x: str, y: str | None = None, solvers=None, *,
     """A map (`xval map`): the scene's regimes, or `observable`, over `x` (and `y`), each
     "NAME=LO:HI"; every solver's crossings with brackets ≤ resolution × the x range, their
     error estimates and the pairwise verdicts (`s["boundaries"]`, `s["verdicts"]`); a 2-D
-    map traces its boundary in y down to `y_resolution` × the y range (default resolution).
+    map traces its boundary in y down to `y_resolution` × the y range (default 1/64, or the
+    resolution where coarser).
     `adaptive=False`: every coarse point at the accurate setting (not only those next to a
     regime change)."""
     from .workflows.maps import map_to_folder, plan_map

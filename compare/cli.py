@@ -244,7 +244,8 @@ def build_parser():
                          "(default 1e-3)")
     sp.add_argument("--y-resolution", type=_positive("--y-resolution"), default=None,
                     help="a 2-D map adds rows where neighbouring rows' crossings differ, down "
-                         "to this fraction of the y range (default: --resolution)")
+                         "to this fraction of the y range (default: 1/64, or --resolution "
+                         "where coarser)")
     sp.add_argument("--coarse", metavar="NX[,NY]",
                     help="the coarse grid: points along x and rows along y (default 17,9)")
     sp.add_argument("--accurate-everywhere", action="store_true",

@@ -49,6 +49,9 @@ from .executors import (
 NONE = "none"                     # an observable's label where its event did not happen
 MAX_JOBS = 100_000                # runs a map may plan before it is refused (--max-jobs)
 MAX_ROWS = 257                    # rows a 2-D map's boundary tracing may reach per solver
+# the rows' default spacing where the boundary bends, of the y range: the x bracket (1e-3 by
+# default) taken for y too hit MAX_ROWS on the rotor map (197 rows, 144 gaps left, 180 s)
+Y_RESOLUTION = 1 / 64
 # the estimate before anything runs: seconds per output sample and per run, by solver engine,
 # measured on rotor-spinup over 10 s at 1001 samples (quaternion 3.3 ms, euler-vector 5 ms,
 # MuJoCo 86 ms, Exudyn 316 ms per run) plus a fixed cost per run; rough for other scenes
@@ -619,7 +622,7 @@ def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolutio
                        f"(known: {', '.join(sc.map_observables) or 'none'})")
     if not (isinstance(resolution, (int, float)) and 0 < resolution < 0.5):
         raise BadInput(f"--resolution must be in (0, 0.5), got {resolution!r}")
-    y_resolution = resolution if y_resolution is None else y_resolution
+    y_resolution = max(resolution, Y_RESOLUTION) if y_resolution is None else y_resolution
     if not (isinstance(y_resolution, (int, float)) and 0 < y_resolution < 0.5):
         raise BadInput(f"--y-resolution must be in (0, 0.5), got {y_resolution!r}")
     if engines not in ("boundary", "everywhere"):

@@ -122,10 +122,10 @@ class LeafResult:
 class ModesResult:
     """What `modes(params, settings)` returns: frequencies in Hz (ascending; damped where the
     leaf linearises with damping), one label each ("flap 1", "forward whirl", …), optional
-    damping ratios ζ, optional whirl directions ("Forward", "Backward", "Mixed" as ROSS names
-    them, "—" for a mode without whirl), optional mode shapes (any array with one row per mode,
-    used for tracking modes across a sweep by MAC), and notes (e.g. "approximate: eccentric
-    rotor at spin ≠ 0")."""
+    damping ratios ζ, optional whirl directions ("forward", "backward", "mixed": ROSS's words
+    in the contract's lower case; "—" for a mode without whirl), optional mode shapes (any
+    array with one row per mode, used for tracking modes across a sweep by MAC), and notes
+    (e.g. "approximate: eccentric rotor at spin ≠ 0")."""
     frequencies_hz: np.ndarray
     labels: list
     damping: np.ndarray | None = None

@@ -42,7 +42,7 @@ def test_closed_form_cylindrical_mode_is_the_issues_number():
     lam, whirl = phys.modal_closed_form(SCENE.resolve({}))["cylindrical forward"]
     assert lam.imag == pytest.approx(575.181, abs=5e-4)
     assert -lam.real / abs(lam) == pytest.approx(0.0866, abs=5e-5)
-    assert whirl == "Forward"
+    assert whirl == "forward"
 
 
 @pytest.mark.parametrize("case", CASES)
@@ -228,9 +228,9 @@ def test_modes_json_lists_the_damped_modes(tmp_path, capsys, monkeypatch):
     assert run["zeta"][i] == pytest.approx(0.0866, abs=5e-5)
     z = run["zeta"][i]
     assert run["log_dec"][i] == pytest.approx(2 * np.pi * z / np.sqrt(1 - z * z), rel=1e-14)
-    assert run["whirl"][i] == "Forward"
+    assert run["whirl"][i] == "forward"
     (ring,) = obj["identified_from_free_response"]
-    assert ring["whirl"][ring["labels"].index("conical backward")] == "Backward"
+    assert ring["whirl"][ring["labels"].index("conical backward")] == "backward"
     assert any(c["b"] == "quaternion ring-down" and c["channel"] == "cylindrical forward ζ"
                for c in obj["comparisons"])
     assert "| log dec |" in open(obj["report"]).read()

@@ -49,8 +49,8 @@ def test_critical_speeds_and_labels(gravity, k_eff):
         assert np.all(np.diff(fwd) > 0) and np.all(np.diff(bwd) < 0)        # fwd ↑, bwd ↓
         entries = critical_speeds(SCENE, s, p, spins, results)
         crit = by_name(entries)
-        assert {e["name"]: e["whirl"] for e in entries} == {"forward whirl": "Forward",
-                                                            "backward whirl": "Backward"}
+        assert {e["name"]: e["whirl"] for e in entries} == {"forward whirl": "forward",
+                                                            "backward whirl": "backward"}
         assert crit["forward whirl"] == pytest.approx(fwd_crit, rel=1e-8), name
         assert crit["backward whirl"] == pytest.approx(bwd_crit, rel=1e-8), name
     if gravity == "0,0,0":      # the spec's figure (scene-rotor.md: "≈ 41.3 rad/s for k_eff = k")

@@ -88,7 +88,7 @@ def in_frame(m: Modes, spin_hz: float, src: str, dst: str) -> Modes:
 
 
 def whirl(m: Modes, frame: str, spin_hz: float) -> list:
-    """ROSS's whirl direction per mode ("Forward", "Backward"; None without whirl or spin)."""
+    """ROSS's whirl direction per mode ("forward", "backward"; None without whirl or spin)."""
     nu = signed_hz(m, frame)
     if nu is None:
         return [None] * len(m.frequencies_hz)

@@ -64,7 +64,7 @@ class Modes:
     labels: list
     damping: np.ndarray | None = None
     shapes: np.ndarray | None = None       # one row per mode (for MAC tracking across a sweep)
-    whirl: list | None = None              # "Forward" / "Backward" / "Mixed" / "—" per mode
+    whirl: list | None = None              # "forward" / "backward" / "mixed" / "—" per mode
     notes: list = field(default_factory=list)   # e.g. "approximate: …"
     extra: dict = field(default_factory=dict)
     status: str = "ok"

@@ -31,7 +31,7 @@ def png(path, scene, values, lines_by_solver, entries, params, events=None, fram
     speed = np.array([cb.excitation_hz(params, v) for v in values])
     grey = iter(np.linspace(0.0, 0.6, 2 * len(cb.excitations)))
     for e in cb.excitations:
-        seen = {order_seen(e.order, e.frame, frame, w): w for w in ("Backward", "Forward")}
+        seen = {order_seen(e.order, e.frame, frame, w): w for w in ("backward", "forward")}
         for order, w in sorted(seen.items()):
             how = "" if e.frame == frame else f" ({e.order}× {e.frame}), {w.lower()} whirl"
             ax.plot(values, order * speed, ls=":", lw=1, color=str(next(grey)),

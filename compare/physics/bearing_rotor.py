@@ -438,10 +438,10 @@ def modal_closed_form(params: dict) -> dict:
     slope = (params["motor_stall_torque"] / params["motor_no_load_speed"]
              + params["bearing_drag"] + params["mu"] * params["r_j"] * m * np.hypot(g[0], g[1])
              * (1.0 - np.tanh(spin / OMEGA_SMOOTH) ** 2) / OMEGA_SMOOTH)
-    return {"cylindrical backward": (cyl, "Backward"), "cylindrical forward": (cyl, "Forward"),
+    return {"cylindrical backward": (cyl, "backward"), "cylindrical forward": (cyl, "forward"),
             "axial": (complex(0.0, np.sqrt(params["k_axial"] / m)), "—"),
-            "conical backward": (complex(bwd.real, -bwd.imag), "Backward"),
-            "conical forward": (complex(fwd), "Forward"),
+            "conical backward": (complex(bwd.real, -bwd.imag), "backward"),
+            "conical forward": (complex(fwd), "forward"),
             "spin": (complex(-slope / jp, 0.0), "—")}
 
 
@@ -454,7 +454,7 @@ def _circular(v, kind, half):
 
 def linear_modes(A: np.ndarray, params: dict) -> tuple[list[dict], np.ndarray]:
     """The oscillatory modes of ẋ = A x (the state ordered as above), each a dict: label,
-    λ (Im λ > 0), whirl ("Forward", "Backward", "Mixed" as ROSS names them; "—" for the axial
+    λ (Im λ > 0), whirl ("forward", "backward", "mixed" as ROSS names them; "—" for the axial
     mode), in ascending damped frequency; and the nonzero real roots (the spin rate's). A
     mode's kind is the largest journal motion of its shape: centre (x, y), tilt
     (l/2)(θx, θy), or z. Two roots of one kind within DEGENERATE of each other are a repeated
@@ -481,15 +481,15 @@ def linear_modes(A: np.ndarray, params: dict) -> tuple[list[dict], np.ndarray]:
             (_, a, v), b = mine[j], mine[j + 1][1] if j + 1 < len(mine) else None
             if b is not None and abs(b - a) <= DEGENERATE * abs(a):
                 out += [{"label": f"{kind} {w.lower()}", "lam": 0.5 * (a + b), "whirl": w}
-                        for w in ("Backward", "Forward")]
+                        for w in ("backward", "forward")]
                 j += 2
                 continue
             f, bw = _circular(v, kind, half)
-            whirl = ("Mixed" if abs(f - bw) <= 0.01 * (f + bw) else
-                     "Forward" if f > bw else "Backward")
+            whirl = ("mixed" if abs(f - bw) <= 0.01 * (f + bw) else
+                     "forward" if f > bw else "backward")
             out.append({"label": f"{kind} {whirl.lower()}", "lam": a, "whirl": whirl})
             j += 1
-    out.sort(key=lambda m: (m["lam"].imag, m["whirl"] != "Backward"))
+    out.sort(key=lambda m: (m["lam"].imag, m["whirl"] != "backward"))
     real = lam.real[(np.abs(lam.imag) <= tiny) & (np.abs(lam) > tiny)]
     return out, np.sort(real)
 

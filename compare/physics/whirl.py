@@ -7,7 +7,7 @@ seen from the ground: the signed whirl rates of the two frames differ by the spi
 
     ν_fixed = ν_rot + Ω.
 
-The mode whirls forward (ROSS: "Forward") where ν_fixed > 0, backward where ν_fixed < 0; its
+The mode whirls forward (ROSS: "forward") where ν_fixed > 0, backward where ν_fixed < 0; its
 frequency in a frame is |ν| of that frame. With f = |ν|/2π, s the sense and F = Ω/2π:
 
     forward:   f_fixed = s·f_rot + F   (the signed rotating-frame line s·f_rot = f_fixed − F)
@@ -37,11 +37,11 @@ def signed_in_frame(signed_hz, spin_hz, src: str, dst: str):
 
 
 def whirl_direction(signed_fixed_hz, spin_hz) -> list:
-    """ROSS's words per mode from its signed fixed-frame rate: "Forward" turning with the spin,
-    "Backward" against it, None at rest (no spin, no direction)."""
+    """ROSS's words per mode from its signed fixed-frame rate: "forward" turning with the spin,
+    "backward" against it, None at rest (no spin, no direction)."""
     if spin_hz == 0:
         return [None] * len(np.atleast_1d(signed_fixed_hz))
-    return ["Forward" if v * spin_hz > 0 else "Backward" for v in np.atleast_1d(signed_fixed_hz)]
+    return ["forward" if v * spin_hz > 0 else "backward" for v in np.atleast_1d(signed_fixed_hz)]
 
 
 def whirl_labels(rot_hz, sense, spin_hz) -> list[str]:
@@ -54,7 +54,7 @@ def whirl_labels(rot_hz, sense, spin_hz) -> list[str]:
     if spin_hz == 0:
         return [f"whirl {k + 1}" for k in range(len(rot_hz))]
     fixed = signed_in_frame(np.asarray(sense) * rot_hz, spin_hz, "rotating", "fixed")
-    kinds = ["forward whirl" if d == "Forward" else "backward whirl"
+    kinds = ["forward whirl" if d == "forward" else "backward whirl"
              for d in whirl_direction(fixed, spin_hz)]
     labels = [""] * len(rot_hz)
     for kind in set(kinds):
@@ -71,6 +71,6 @@ def order_seen(order: int, src: str, dst: str, whirl) -> int:
     forward n + 1, backward |n − 1|."""
     if src == dst:
         return order
-    if (src == "fixed") == (whirl == "Forward"):
+    if (src == "fixed") == (whirl == "forward"):
         return abs(order - 1)
     return order + 1

@@ -209,7 +209,7 @@ def ring_down(params, run, solver_names=None):
         rows.append({"solver": name, "status": "ok", "labels": [k for k, _ in modes],
                      "frequencies_hz": [lam.imag / (2 * np.pi) for _, lam in modes],
                      "damping": [_zeta(lam) for _, lam in modes],
-                     "whirl": [k.split()[-1].capitalize() if " " in k else "—" for k, _ in modes],
+                     "whirl": [k.split()[-1] if " " in k else "—" for k, _ in modes],
                      "frequency_error_hz": [(factor * abs(lam.imag - tight[k].imag)
                                              + abs(lam.imag - part[k].imag)) / (2 * np.pi)
                                             for k, lam in modes],

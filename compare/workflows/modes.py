@@ -142,7 +142,7 @@ def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: 
 def entry(cb, params, name, exc, value, whirl) -> dict:
     """One critical speed as a ROSS user reads it: the sweep value, the speed in rad/s and
     rpm, the crossing's frequency in Hz and rad/s (in `frame`, where the lines crossed the
-    excitation), the excitation, the mode's whirl ("Forward"/"Backward"; None: no whirl)."""
+    excitation), the excitation, the mode's whirl ("forward"/"backward"; None: no whirl)."""
     speed_hz = cb.excitation_hz(params, value)
     return {"name": name, "value": float(value), "unit": cb.unit,
             "speed_rad_s": 2 * np.pi * speed_hz, "speed_rpm": 60 * speed_hz,

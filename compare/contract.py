@@ -119,7 +119,7 @@ class LeafResult:
 
 
 @dataclass
-class ModesResult:
+class LeafModes:
     """What `modes(params, settings)` returns: frequencies in Hz (ascending), one label each
     ("flap 1", "forward whirl", …), optional damping ratios, optional mode shapes (any array
     with one row per mode, used for tracking modes across a sweep by MAC), and notes (e.g.
@@ -133,11 +133,11 @@ class ModesResult:
     extra: dict = field(default_factory=dict)
 
     @classmethod
-    def coerce(cls, res) -> ModesResult:
+    def coerce(cls, res) -> LeafModes:
         if isinstance(res, cls):
             return res
         if not isinstance(res, dict) or "frequencies_hz" not in res:
-            raise TypeError(f"leaf returned {type(res).__name__}, not a ModesResult")
+            raise TypeError(f"leaf returned {type(res).__name__}, not a LeafModes")
         known = {k: res[k] for k in ("frequencies_hz", "labels", "damping", "shapes",
                                      "settings", "notes", "extra") if k in res}
         return cls(**known)
@@ -149,3 +149,8 @@ class ModesResult:
         if not np.all(np.isfinite(f)):
             return "non-finite frequency"
         return None
+
+
+# Deprecated: the name earlier leaves and plug-ins import. It is the same class; the name
+# `ModesResult` now belongs to what `xval.modes` returns (compare/results/modes.py).
+ModesResult = LeafModes

@@ -1,7 +1,6 @@
 """The Python API (`import xval`) against numbers it did not make: the command line's own files,
 closed forms written out here, the paper's passage case; bad arguments give the command's
 one-line messages."""
-import gc
 import json
 import os
 import subprocess
@@ -82,15 +81,19 @@ def test_save_writes_what_the_command_writes(tmp_path, xval_run):
         assert np.array_equal(z["omega_norm"], r["quaternion"].channels["omega_norm"])
 
 
-def test_a_run_without_out_leaves_nothing_behind(tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)
+def test_a_run_or_modes_without_out_writes_nothing(tmp_path, monkeypatch):
+    """Held in memory: no file in the working folder nor in the temporary folder (a run made
+    its .npz in a temporary folder and `.save()` wrote them again)."""
+    import tempfile
+    cwd, tmp = tmp_path / "cwd", tmp_path / "tmp"
+    cwd.mkdir(), tmp.mkdir()
+    monkeypatch.chdir(cwd)
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp))
     r = xval.run("rotor-spinup", "euler-vector", t_end=0.5)
-    assert r.out_dir is None and r.files == {} and list(tmp_path.iterdir()) == []
-    folder = r._folder.temporary
-    assert folder.exists()
-    del r
-    gc.collect()
-    assert not folder.exists()
+    m = xval.modes("rotor-whirl", ["closed-form", "euler-vector"], spin=41.3)
+    assert r.out_dir is None and r.files == {} and m.out_dir is None and m.files == {}
+    assert list(cwd.iterdir()) == [] and list(tmp.iterdir()) == []
+    assert len(r["euler-vector"].t) == 51 and len(m.critical_speeds["euler-vector"]) == 2
 
 
 def test_settings_for_all_solvers_or_per_solver():
@@ -187,9 +190,10 @@ def test_result_views_hold_the_same_numbers(xval_run):
 def test_extremes_and_a_campaign_from_a_dict(tmp_path):
     s = xval.extremes("rotor-spinup", "euler-vector")
     cases = {r["case"] for r in s["results"]}
-    assert len(cases) >= 2 and str(s).endswith(f"report: {s.report}")
+    assert len(cases) >= 2 and s.report is None and s.out_dir is None      # in memory
     saved = s.save(tmp_path / "ext")
     assert (saved / "report.md").exists() and s.report == saved / "report.md"
+    assert str(s).endswith(f"report: {s.report}") and xval.load(saved).data == s.data
     c = xval.campaign({"name": "tiny", "cases": [
         {"scene": "rotor-spinup", "solvers": ["euler-vector", "quaternion"],
          "set": {"t_end": 1}}]}, out=tmp_path / "camp")
@@ -262,7 +266,7 @@ def test_a_failing_modes_solver_is_incomplete_and_assert_agree_fails(monkeypatch
     obj = r.as_json()
     assert obj["status"] == "incomplete" and obj["incomplete"][0]["solver"] == "mujoco"
     assert obj["summary"] == f"2 of 2 comparisons agree; {why}"
-    assert why in Path(obj["report"]).read_text() and why in str(r)
+    assert why in (r.save(tmp_path / "m") / "report.md").read_text() and why in str(r)
     with pytest.raises(AssertionError, match=why.replace("(", r"\(").replace(")", r"\)")):
         xval.assert_agree(r)
     main(["modes", "rotor-whirl", *[f"--solver={s}" for s in both + ["mujoco"]],

@@ -22,6 +22,7 @@ from ..errors import BadInput
 from ..leafinfo import ORDERS, Adaptive, Fixed, snap  # noqa: F401  (ORDERS: the tests' table)
 from ..output.report import fmt_value
 from ..output.study import write_study
+from ..results import BenchResult
 from ..scenes import get_scene
 from . import budget
 from .bench_modes import run_bench_modes
@@ -126,7 +127,7 @@ def run_throughput(scene_name, solver_names, overrides, out, n_points, log=print
     md += [f"| {r['solver']} | {r['points']} | {r['wall_s']:.3g} | "
            f"{r['points_per_second']:.1f} | {r['points_per_core_second']:.1f} |"
            for r in obj["rows"]]
-    obj["summary_lines"] = lines
+    obj["summary_lines"], obj["result"] = lines, BenchResult.TYPE
     return write_study(out_dir, md, obj, "bench.json", report_in_json=False)
 
 

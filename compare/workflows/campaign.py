@@ -47,11 +47,12 @@ from .. import solvers
 from ..analysis.trajectory import Trajectory
 from ..atomic import publish, write_json
 from ..errors import BadInput
+from ..output import guard
 from ..output.joblog import captured, distinct_lines
 from ..output.progress import PlainProgress
 from ..scenes import get_scene
-from . import guard, runner
 from . import plan as planner
+from . import runner
 from .digest import _scene_module, job_code
 from .executors import (  # noqa: F401  (connect: the API's check)
     Interrupted,
@@ -352,13 +353,13 @@ def run_job(job: Job, store: str):
         if job.solver is None:
             from .modes import run_modes
             d = store / job.key
-            obj, results, _ = run_modes(job.scene, list(job.solvers), job.overrides, None,
-                                        log=lambda m: None, out_dir=d)
-            obj["input_digest"] = job.digest
-            obj["code_digest"] = job_code(get_scene(job.scene),
-                                          [solvers.get_solver(n) for n in job.solvers])
-            write_json(d / "modes.json", obj)          # written last: the job's done-marker
-            bad = [r.status for r in results if r.status != "ok"]
+            res = run_modes(job.scene, list(job.solvers), job.overrides, log=lambda m: None)
+            res.extra["input_digest"] = job.digest
+            res.extra["code_digest"] = job_code(get_scene(job.scene),
+                                                [solvers.get_solver(n) for n in job.solvers])
+            res.save(d)
+            write_json(d / "modes.json", res.to_json())   # written last: the job's done-marker
+            bad = [r.status for r in res.runs.values() if r.status != "ok"]
             status = bad[0] if bad else "ok"
         else:
             sc = get_scene(job.scene)

@@ -31,6 +31,7 @@ import numpy as np
 from .. import solvers
 from ..atomic import write_json
 from ..errors import BadInput
+from ..results import MapResult
 from ..scenes import get_scene
 from . import plan as planner
 from .digest import STORE_VERSION, job_code
@@ -767,7 +768,7 @@ def map_to_folder(plan, out, settings_for=None, executor="local", scheduler=None
             client.close()
     result["files"] = write_map_outputs(out_dir, result, record)
     result["map"] = result["files"]["plot"]
-    result["folder"] = str(out_dir)
+    result["folder"], result["result"] = str(out_dir), MapResult.TYPE
     write_json(out_dir / "map.json", result)
     return result
 

@@ -8,8 +8,6 @@ scene.
 """
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 from scipy.optimize import brentq, linear_sum_assignment
 
@@ -18,11 +16,9 @@ from ..analysis import campbell, metrics
 from ..analysis.campbell import mac
 from ..analysis.trajectory import Modes
 from ..errors import BadInput
-from ..output import campbell_plot, mode_shapes
-from ..output.study import write_study
+from ..results import ModesResult
 from ..scenes import Scene, get_scene
 from .plan import plan
-from .runner import new_run_dir
 
 
 def sweep(scene: Scene, solver: solvers.Solver, params: dict, values: np.ndarray) -> list[Modes]:
@@ -161,12 +157,13 @@ def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: 
     return out
 
 
-def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print):
+def campbell_diagram(sc: Scene, chosen, params, log=print):
     """Critical speeds on the scene's grid (lines by label, refined on each solver's own mode:
     unchanged by the diagram), then the diagram: the grid refined where any solver's lines are
     uncertain, every solver on the same points, lines tracked by MAC with veerings and
     crossings told apart (compare/analysis/campbell.py). Returns the JSON part, the critical
-    speeds and the report's lines."""
+    speeds, the report's lines and what the figure draws (values, lines, critical speeds,
+    events)."""
     cb = sc.campbell
     chosen = [s for s in chosen if not cb.solvers or s.name in cb.solvers]
     values = cb.values(params)
@@ -204,9 +201,6 @@ def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print):
            "min_mac_unmarked": {s: d.min_mac_unmarked() for s, d in diagrams.items()},
            "unconfirmed_critical_speeds": {s: u for s, u in unconfirmed.items() if u},
            "incomplete": missing}
-    if lines:
-        campbell_plot.png(out_dir / "campbell.png", sc, grid, lines, crit, params, events)
-        obj["recording"] = str(campbell_plot.rrd(out_dir / "campbell.rrd", sc, grid, lines))
     md = ["", "## Campbell diagram", "",
           f"{len(grid)} values of {cb.parameter} ({len(values)} on the scene's grid, "
           f"{len(grid) - len(values)} added where lines come close, swap or lose their shape).",
@@ -223,7 +217,7 @@ def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print):
            f"{u['reason']}" for n, us in unconfirmed.items() for u in us]
     md += [f"- {m['solver']}: no critical speeds — {m['reason']}" for m in missing]
     md += ["", "![campbell](campbell.png)"]
-    return obj, crit, md
+    return obj, crit, md, (grid, lines, crit, events)
 
 
 def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float):
@@ -236,32 +230,24 @@ def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float):
     return solvers.simulate(scene, s, params, settings)
 
 
-def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_sweep=True,
-              identify=True, out_dir=None):
-    """`out_dir` given: write there (a campaign case); else a new run folder under `out`."""
+def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=True,
+              identify=True) -> ModesResult:
+    """Every chosen solver's modes, compared; the Campbell diagram, the explanations and the
+    identification where the scene has them. Held in memory: `.save(folder)` writes it."""
     sc = get_scene(scene_name)
     if not sc.is_modes:
         raise BadInput(f"scene {sc.name!r} is a time-domain scene: use `xval run {sc.name}`")
     pl = plan(sc, overrides, solver_names)
     params, chosen = pl.params, list(pl.solvers)
-    out_dir = Path(out_dir or new_run_dir(out, sc.name))
-    out_dir.mkdir(parents=True, exist_ok=True)
     results = []
     for s in chosen:
         log(f"{sc.name}: {s.name} …")
         results.append(solvers.modes(sc, s, params))
     comparisons = sc.verdicts(params, results)
-    obj = {"scene": sc.name, "params": params,
-           "runs": [{"solver": r.solver, "status": r.status, "wall_s": round(r.wall_s, 6),
-                     "frequencies_hz": list(r.frequencies_hz), "labels": r.labels,
-                     "versions": r.versions,
-                     **({"notes": r.notes} if r.notes else {}),
-                     **({k: list(np.ravel(v)) for k, v in r.extra.items()}),
-                     **({"reason": r.reason} if r.reason else {})} for r in results],
-           "comparisons": [c.as_dict() for c in comparisons],
-           "unpaired_modes": metrics.unpaired_modes(results),
-           "incomplete": [{"solver": r.solver, "status": r.status, "reason": r.reason}
-                          for r in results if r.status != "ok"]}
+    unpaired = metrics.unpaired_modes(results)
+    incomplete = [{"solver": r.solver, "status": r.status, "reason": r.reason}
+                  for r in results if r.status != "ok"]
+    extra, report = {}, {"explain": [], "campbell": [], "identify": []}
     md = [f"# {sc.name}: {sc.title}", "", f"Source: {sc.source}", "",
           "| solver | status | frequencies [Hz] | labels | notes |", "|---|---|---|---|---|"]
     md += [f"| {r.solver} | {r.status} | {', '.join(f'{f:.8g}' for f in r.frequencies_hz)} | "
@@ -269,43 +255,36 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
     md += ["", "| a | b | mode | rel. difference | verdict |", "|---|---|---|---|---|"]
     md += [f"| {c.a} | {c.b} | {c.channel} | {c.max_rel:.2e} | {c.verdict} |"
            for c in comparisons]
-    if obj["unpaired_modes"]:
+    if unpaired:
         md += ["", "Modes left unpaired (not compared):", "",
                "| a | b | solver | mode | frequency [Hz] | why |", "|---|---|---|---|---|---|"]
         md += [f"| {u['a']} | {u['b']} | {u['solver']} | {u['mode']} | "
-               f"{u['frequency_hz']:.8g} | {u['reason']} |" for u in obj["unpaired_modes"]]
-    if sc.mode_shape_3d:
-        drawn = mode_shapes.write(out_dir, sc, params, results)
-        if drawn:
-            obj["mode_shapes_recording"] = str(drawn["recording"])
-            obj["mode_shapes_figure"] = str(drawn["figure"])
-            md += ["", "## Mode shapes", "", drawn["text"], "", "![mode shapes](mode_shapes.png)"]
+               f"{u['frequency_hz']:.8g} | {u['reason']} |" for u in unpaired]
+    report["head"] = md
     if sc.explain_frequencies and any(c.verdict == "disagree" for c in comparisons):
         ran = {r.solver: r for r in results}        # the runs above, not run again
         rows, lines_md = sc.explain_frequencies(
             params, comparisons, lambda n, p: ran[n] if p == params and n in ran
             else solvers.modes(sc, solvers.get_solver(n), p), sc.tolerances_for(params))
-        obj["explanations"] = rows
-        md += [""] + lines_md
+        extra["explanations"] = rows
+        report["explain"] = [""] + lines_md
+    crit, obj_cb, drawing = {}, None, None
     if sc.campbell and campbell_sweep and any(
             not sc.campbell.solvers or s.name in sc.campbell.solvers for s in chosen):
-        obj_cb, crit, text = campbell_diagram(sc, chosen, params, out_dir, log)
-        obj["critical_speeds"] = crit
-        obj["campbell"] = obj_cb
-        if "recording" in obj_cb:
-            obj["recording"] = obj_cb.pop("recording")
-        md += text
+        obj_cb, crit, report["campbell"], drawing = campbell_diagram(sc, chosen, params, log)
     if sc.identify and identify:
         rows, lines_md = sc.identify(params, _run_time, solver_names or None)
         if rows:
-            obj["identified_from_free_response"] = rows
-            md += [""] + lines_md
-    failed = {m["solver"] for m in obj["incomplete"]}
-    obj["incomplete"] += [m for m in (obj.get("campbell") or {}).get("incomplete", [])
-                          if m["solver"] not in failed]
-    obj["status"], obj["summary"] = modes_status(comparisons, obj)
-    md[1:1] = ["", f"**{obj['summary']}**"]
-    return write_study(out_dir, md, obj), results, comparisons
+            extra["identified_from_free_response"] = rows
+            report["identify"] = [""] + lines_md
+    failed = {m["solver"] for m in incomplete}
+    incomplete += [m for m in (obj_cb or {}).get("incomplete", []) if m["solver"] not in failed]
+    status, summary = modes_status(comparisons, {"incomplete": incomplete,
+                                                 "unpaired_modes": unpaired,
+                                                 "campbell": obj_cb})
+    return ModesResult(sc, params, results, comparisons, status=status, summary=summary,
+                       critical_speeds=crit, campbell=obj_cb, unpaired_modes=unpaired,
+                       incomplete=incomplete, extra=extra, report=report, drawing=drawing)
 
 
 def modes_status(comparisons, obj) -> tuple[str, str]:

@@ -57,7 +57,7 @@ from exudyn.itemInterface import (
     SensorNode,
 )
 
-from compare.contract import LeafResult, ModesResult, merge_settings
+from compare.contract import LeafModes, LeafResult, merge_settings
 from compare.physics import rotor as physics
 
 _SOLVERS = {
@@ -580,7 +580,7 @@ def modes(params, settings=None):
     model = _modes_model(params)
     M, K, D = _linearised(model, spin)
     w, labels, re = _whirl_pair(M, K, D, spin)
-    return ModesResult(frequencies_hz=np.array(w) / (2 * math.pi), labels=labels,
+    return LeafModes(frequencies_hz=np.array(w) / (2 * math.pi), labels=labels,
                        damping=np.array(re, float),
                        settings={"method": "exudyn ComputeLinearizedSystem + dense quadratic "
                                            "eigenproblem", "drive_torque": 0.0},

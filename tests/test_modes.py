@@ -175,6 +175,7 @@ def test_unpaired_modes_are_listed_with_why(tmp_path):
     from compare.workflows.modes import run_modes
     r = run_modes("helicopter-clamped", ["mstmm", "fem"], {"n_modes": 18},
                   log=lambda m: None, campbell_sweep=False, identify=False)
+    r.save(tmp_path)
     obj, res, comps = r.to_json(), list(r.runs.values()), r.comparisons
     m = {r.solver: r for r in res}
 

@@ -8,9 +8,10 @@ from pathlib import Path
 from ..atomic import write_json
 
 
-def write_trajectory(folder, tr) -> Path:
-    """A solver's trajectory, atomically, as soon as it exists (a later crash loses nothing)."""
-    return tr.save(Path(folder) / f"{tr.solver}.npz")
+def write_trajectory(folder, tr, name: str | None = None) -> Path:
+    """A trajectory as `name`.npz (default: its solver's name), atomically, as soon as it
+    exists (a later crash loses nothing)."""
+    return tr.save(Path(folder) / f"{name or tr.solver}.npz")
 
 
 def write_run_files(result, record: bool = True, report: bool = True) -> dict:

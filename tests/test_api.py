@@ -205,10 +205,12 @@ def test_extremes_and_a_campaign_from_a_dict(tmp_path):
 
 def test_diff_of_two_saved_runs(tmp_path):
     """Identical inputs are bit-identical runs: nothing moved. A torque 0.1 % higher moves
-    |ω| by ΔM t / I_p ≈ 9.6e-3 rad/s at 1 s, far beyond the runs' error bars (~1e-9)."""
-    a = xval.run("rotor-spinup", "euler-vector", t_end=1).save(tmp_path / "a")
-    b = xval.run("rotor-spinup", "euler-vector", t_end=1).save(tmp_path / "b")
-    c = xval.run("rotor-spinup", "euler-vector", t_end=1, torque=1.5015).save(tmp_path / "c")
+    |ω| by ΔM t / I_p ≈ 9.6e-3 rad/s at 1 s, far beyond the runs' error bars (~1e-9). Runs
+    held in memory diff as their saved folders do."""
+    runs = [xval.run("rotor-spinup", "euler-vector", t_end=1, torque=m)
+            for m in (1.5, 1.5, 1.5015)]
+    held = xval.diff(runs[0], runs[2])
+    a, b, c = (r.save(tmp_path / k) for r, k in zip(runs, "abc"))
     same = xval.diff(a, b)
     assert not same["any_change"] and same.report is None
     moved = xval.diff(a, c, out=tmp_path / "d")
@@ -216,6 +218,7 @@ def test_diff_of_two_saved_runs(tmp_path):
     assert moved["summary"]["changed"] == 1 and moved["summary"]["channels_changed"] == 6
     assert moved["lines"][0].startswith("torque 1.5 → 1.5015: rotor-spinup euler-vector")
     assert str(moved).splitlines()[0].startswith("1 changed, 0 unchanged")
+    assert held.data["cases"] == moved.data["cases"] and held.report is None
     with pytest.raises(xval.BadInput):
         xval.diff(a, tmp_path / "nowhere")
 

@@ -100,6 +100,16 @@ def test_torque_moved_by_1e_6_only_that_case_changed(folders, tmp_path):
     assert text.index("| runs (case × solver) | changed | unchanged | new | gone |") \
         < text.index("## spin")
     assert len(list(report.parent.glob("drive__*.png"))) == obj["summary"]["channels_changed"]
+    saved = Result.load(report.parent)                   # the diff folder reads back
+    assert type(saved).__name__ == "DiffResult" and saved.data == obj
+
+
+def test_a_campaign_folder_loads_as_a_campaign_result(folders):
+    """2 cases × 2 solvers: 4 jobs, every case with its two runs."""
+    c = Result.load(folders["A"])
+    assert type(c).__name__ == "CampaignResult" and c["n_jobs"] == 4
+    assert {k: len(v.runs) for k, v in c.side().cases.items()} == {"spin": 2, "drive": 2}
+    assert str(c).splitlines()[-1] == f"report: {folders['A'] / 'report.md'}"
 
 
 def _rewrite(npz, edit):

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..analysis.metrics import Comparison
 from ..errors import BadInput
+from ..scenes import get_scene
 from . import tables
 from .records import Side, is_modes_json, read_json, readable
 
@@ -25,6 +26,8 @@ class Result:
     JSON: ClassVar[str] = "result.json"      # the file `save` writes the JSON to
     TYPES: ClassVar[dict] = {}               # TYPE -> class: what `load` dispatches on
     out_dir: Path | None = None              # the folder of the result's files (None: memory)
+    scene_name: str = ""
+    _scene = None
 
     def __init_subclass__(cls, **kw):
         super().__init_subclass__(**kw)
@@ -85,6 +88,18 @@ class Result:
                 return _typed(read_json(p / name), name, p, p / name)
         raise BadInput(f"{path}: not a campaign folder (summary.json), run folder (result.json) "
                        f"or baseline file")
+
+    def _of(self, scene) -> str:
+        """A run's or modes result's scene, given as the `Scene` or by name: its name."""
+        self._scene = None if isinstance(scene, str) else scene
+        return scene if isinstance(scene, str) else scene.name
+
+    @property
+    def scene(self):
+        """The `Scene` (looked up by name for a result read from files)."""
+        if self._scene is None:
+            self._scene = get_scene(self.scene_name)
+        return self._scene
 
     # --- views -----------------------------------------------------------------------------
 

@@ -8,7 +8,6 @@ import numpy as np
 
 from ..analysis.trajectory import Modes
 from ..errors import BadInput
-from ..scenes import get_scene
 from . import tables
 from .base import Result, comparisons_from_json
 from .records import Side, modes_case
@@ -46,8 +45,7 @@ class ModesResult(Result):
                  unpaired_modes: list | None = None, incomplete: list | None = None,
                  extra: dict | None = None, report: dict | None = None, drawing=None,
                  out_dir=None, files: dict | None = None):
-        self._scene = None if isinstance(scene, str) else scene
-        self.scene_name = scene if isinstance(scene, str) else scene.name
+        self.scene_name = self._of(scene)
         self.params = params
         self.runs = {r.solver: r for r in runs}
         self.comparisons = comparisons
@@ -60,12 +58,6 @@ class ModesResult(Result):
         self.report, self.drawing = report, drawing
         self.out_dir = Path(out_dir) if out_dir else None
         self.files = dict(files or {})
-
-    @property
-    def scene(self):
-        if self._scene is None:
-            self._scene = get_scene(self.scene_name)
-        return self._scene
 
     solvers = property(lambda self: list(self.runs))
     disagreements = property(lambda self: [c for c in self.comparisons

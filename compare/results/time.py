@@ -6,7 +6,7 @@ from pathlib import Path
 from ..analysis import metrics
 from ..analysis.trajectory import Trajectory
 from ..errors import BadInput
-from ..scenes import Finding, get_scene
+from ..scenes import Finding
 from . import tables
 from .base import Result, comparisons_from_json
 from .records import CaseRec, Side, readable, trajectory_run, verdicts
@@ -22,21 +22,13 @@ class TimeResult(Result):
 
     def __init__(self, scene, params: dict, trajectories: list, comparisons: list,
                  findings: list, out_dir=None, files: dict | None = None):
-        self._scene = None if isinstance(scene, str) else scene
-        self.scene_name = scene if isinstance(scene, str) else scene.name
+        self.scene_name = self._of(scene)
         self.params = params
         self.runs = {tr.solver: tr for tr in trajectories}
         self.comparisons = comparisons
         self.findings = findings
         self.out_dir = Path(out_dir) if out_dir else None
         self.files = dict(files or {})
-
-    @property
-    def scene(self):
-        """The `Scene` (looked up by name for a result read from files)."""
-        if self._scene is None:
-            self._scene = get_scene(self.scene_name)
-        return self._scene
 
     trajectories = property(lambda self: list(self.runs.values()))
     solvers = property(lambda self: list(self.runs))

@@ -1,11 +1,13 @@
 """The Python API (`import xval`): the same engine as the `xval` command, which is a thin layer
-over these functions. Results are objects (compare/workflows/results.py); bad arguments raise
+over these functions. Every call returns a `Result` (compare/results/); bad arguments raise
 `BadInput` with the command's one-line message, before anything runs or is written.
 
 Files: with `out=FOLDER` a call writes what the command writes there (a run: the .npz per
 solver, run.rrd, report.md with plots, result.json, in FOLDER/runs/<scene>-<stamp>-<pid>/).
-Without `out` it works in a temporary folder that goes away with the result (a notebook leaves
-nothing under logs/); `result.save(path)` writes the files then.
+Without `out` a run, modes, extremes, power or diff result is held in memory and nothing is
+written; a bench, map or campaign (which store what they compute as they go, to resume from)
+works in a temporary folder that goes away with the result. `result.save(path)` writes the
+files then; `xval.load(path)` reads any of them back.
 """
 from __future__ import annotations
 
@@ -15,17 +17,23 @@ from collections.abc import Callable
 from pathlib import Path
 
 from .errors import BadInput
-from .workflows.inputs import check_out, make_out, positive, positive_int
+from .output.folders import check_out, make_out, temporary_folder
+from .results import (
+    BenchResult,
+    CampaignResult,
+    DiffResult,
+    ExtremesResult,
+    MapResult,
+    ModesResult,
+    PowerResult,
+    Result,
+    SceneInfo,
+    TimeResult,
+)
+from .results.tables import disagreement_message
+from .workflows.inputs import positive, positive_int
 from .workflows.plan import names as _names
 from .workflows.plan import per_solver_settings  # noqa: F401  (the API's documented helper)
-from .workflows.results import (
-    ModesResult,
-    SceneInfo,
-    Summary,
-    TimeResult,
-    disagreement_message,
-    temporary_folder,
-)
 
 
 def _overrides(params: dict | None, kw: dict) -> dict:
@@ -95,26 +103,22 @@ def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol
     pl = plan(sc, _overrides(params, kw), _names(solvers), settings, knobs, limits,
               timeout_s=positive("--timeout", timeout), estimate_errors=estimate_errors)
     log = log or _quiet
-    if out is None:
-        out_dir = temporary = temporary_folder()
-    else:
+    out_dir = None
+    if out is not None:
         make_out(str(out))
-        out_dir, temporary = runner.new_run_dir(out, sc.name), None
+        out_dir = runner.new_run_dir(out, sc.name)
     if knobs.rtol is not None:
         for s in pl.solvers:
             if not s.info(sc).adaptive:
                 log(f"{s.name}: no error-controlled integrator, --rtol ignored (fixed step kept)")
-    kept = out is not None                 # the report whenever files are kept, as `xval run`
-    try:
-        with _removed_on_error(temporary):
-            res = runner.execute(pl, out_dir, record=kept if record is None else record,
-                                 report=kept, log=log)
+    try:                 # with `out` the report is written, as by `xval run`; else nothing
+        return runner.execute(pl, out_dir, record=out is not None if record is None else record,
+                              report=out is not None, log=log)
     except OSError as e:                 # disk full / read-only: one line, folder stays marked
-        from .workflows.guard import write_failure
+        from .output.guard import write_failure
         if write_failure(e) is None:
             raise
         raise BadInput(f"{write_failure(e)}; {out_dir} is left marked incomplete") from None
-    return TimeResult(res, temporary)
 
 
 def modes(scene: str, solvers=None, *, out=None, params: dict | None = None,
@@ -125,18 +129,20 @@ def modes(scene: str, solvers=None, *, out=None, params: dict | None = None,
     figure in `campbell_frame`, "fixed" or "rotating"; default: the solvers' frame), the mode
     shapes where it draws them. Returns a `ModesResult`."""
     from .workflows.modes import run_modes
+    from .workflows.runner import new_run_dir
     overrides = _overrides(params, kw)
     names = _names(solvers)
-    out, temporary = _out(out)
-    with _removed_on_error(temporary):
-        obj, results, comparisons = run_modes(scene, names, overrides, out,
-                                              log=log or _quiet, campbell_frame=campbell_frame)
-    return ModesResult(obj, results, comparisons, Path(obj["report"]).parent, temporary)
+    if out is not None:
+        check_out(str(out))
+    res = run_modes(scene, names, overrides, log=log or _quiet, campbell_frame=campbell_frame)
+    if out is not None:
+        res.save(new_run_dir(out, res.scene_name))
+    return res
 
 
 def bench(scene: str, solvers=None, *, repeats: int = 3, vary=None, out=None,
           max_output_gib=None, max_steps=None, params: dict | None = None,
-          log: Callable | None = None, points: int | None = None, **kw) -> Summary:
+          log: Callable | None = None, points: int | None = None, **kw) -> BenchResult:
     """Work-precision sweep (`xval bench`): each solver along its accuracy knob, error of the
     key channel against a tight reference, median wall time of `repeats` runs. `vary`: trade a
     model parameter instead, as `"stiffness=1e5,1e6"` or `{"stiffness": [1e5, 1e6]}`.
@@ -150,7 +156,7 @@ def bench(scene: str, solvers=None, *, repeats: int = 3, vary=None, out=None,
         with _removed_on_error(temporary):
             obj = run_throughput(scene, _names(solvers), _overrides(params, kw), out, points,
                                  log=log or _quiet, make_out=make_out)
-        return Summary("bench", obj, Path(obj["report"]).parent, temporary)
+        return BenchResult(obj, Path(obj["report"]).parent, temporary)
     max_output_gib, max_steps = (positive("--max-output-gib", max_output_gib),
                                  positive("--max-steps", max_steps))
     if isinstance(vary, dict):
@@ -164,35 +170,36 @@ def bench(scene: str, solvers=None, *, repeats: int = 3, vary=None, out=None,
         obj = run_bench(scene, _names(solvers), overrides, out, repeats=repeats,
                         log=log or _quiet, vary=vary, max_output_gib=max_output_gib,
                         max_steps=max_steps, make_out=make_out)
-    return Summary("bench", obj, Path(obj["report"]).parent, temporary)
+    return BenchResult(obj, Path(obj["report"]).parent, temporary)
 
 
 def extremes(scene: str, solvers=None, *, include_slow: bool = False, timeout=None, out=None,
-             log: Callable | None = None) -> Summary:
+             log: Callable | None = None) -> ExtremesResult:
     """Every extreme case of the scene's spec with every solver (`xval extremes`; the long
     cases with `include_slow=True`, the command's `--all`)."""
-    from .workflows.extremes import run_extremes
+    from .workflows.extremes import extremes_dir, run_extremes
     timeout = positive("--timeout", timeout)
     names = _names(solvers)
-    out, temporary = _out(out)
-    with _removed_on_error(temporary):
-        obj = run_extremes(scene, names, out, include_slow=include_slow, timeout_s=timeout,
-                           log=log or _quiet)
-    return Summary("extremes", obj, Path(obj["report"]).parent, temporary)
+    if out is not None:
+        check_out(str(out))
+    res = run_extremes(scene, names, include_slow=include_slow, timeout_s=timeout,
+                       log=log or _quiet)
+    if out is not None:
+        res.save(extremes_dir(out, scene))
+    return res
 
 
 def power(scene: str, solvers=None, *, parameters=None, timeout=None,
-          params: dict | None = None, log: Callable | None = None, **kw) -> Summary:
+          params: dict | None = None, log: Callable | None = None, **kw) -> PowerResult:
     """Detection power (`xval power`): for each continuous physical parameter and each solver,
     the smallest relative change ε* reaching that solver only that turns an agreeing verdict
-    into disagree. Returns a `Summary` (`s["power"]`, `s["summary"]`)."""
+    into disagree. Returns a `PowerResult` (`s["power"]`, `s["summary"]`)."""
     from .workflows.power import run_power
     overrides = _overrides(params, kw)
     if timeout is not None:
         timeout = positive("timeout", timeout)
-    data = run_power(scene, overrides, _names(solvers), list(parameters or []), timeout,
+    return run_power(scene, overrides, _names(solvers), list(parameters or []), timeout,
                      log=log or _quiet)
-    return Summary("power", data, None)
 
 
 def map(scene: str, x: str, y: str | None = None, solvers=None, *,
@@ -200,7 +207,7 @@ def map(scene: str, x: str, y: str | None = None, solvers=None, *,
         engines: str = "boundary", executor: str = "local", scheduler: str | None = None,
         workers: int | None = None, max_jobs=None, record: bool = True, out=None,
         params: dict | None = None, log: Callable | None = None, y_resolution=None,
-        adaptive: bool = True, **kw) -> Summary:
+        adaptive: bool = True, **kw) -> MapResult:
     """A map (`xval map`): the scene's regimes, or `observable`, over `x` (and `y`), each
     "NAME=LO:HI"; every solver's crossings with brackets ≤ resolution × the x range, their
     error estimates and the pairwise verdicts (`s["boundaries"]`, `s["verdicts"]`); a 2-D
@@ -229,14 +236,14 @@ def map(scene: str, x: str, y: str | None = None, solvers=None, *,
                             workers=workers, record=record, log=log or _quiet,
                             store=Path(out) / "maps" / "points")
     obj["report"] = obj["files"]["report"]
-    return Summary("map", obj, Path(obj["folder"]), temporary)
+    return MapResult(obj, Path(obj["folder"]), temporary)
 
 
 def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | None = None,
              workers: int | None = None, timeout=None, out=None, verbose: bool = False,
              max_output_gib=None, max_steps=None, max_jobs=None,
              progress: Callable | None = None,
-             checking: Callable = contextlib.nullcontext) -> Summary:
+             checking: Callable = contextlib.nullcontext) -> CampaignResult:
     """A campaign (`xval campaign`): a .json/.toml file, a built-in name ("default", "long";
     None is the default campaign) or the campaign as a dict (the file's shape). Stored results
     are reused only in a folder given as `out`. `progress()`: a context giving the progress
@@ -269,24 +276,29 @@ def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | Non
         summary = camp.run_campaign(None, out, executor=executor, scheduler=scheduler,
                                     workers=workers, verbose=verbose, view=view,
                                     prepared=prepared)
-    return Summary("campaign", summary, Path(summary["report"]).parent, temporary)
+    return CampaignResult(summary, Path(summary["report"]).parent, temporary)
 
 
-def diff(old, new, *, out=None) -> Summary:
-    """`xval diff`: which results moved between two campaign folders, run folders or baselines
-    (paths; a result's `.save(path)` gives one), against their own error bars. With `out` the
-    report goes to out/diff/<time>-<pid>/; `s["any_change"]`, `s["lines"]`."""
-    from .workflows.diff import new_diff_dir, pair_cases, run_diff
-    from .workflows.sides import load_side
+def diff(old, new, *, out=None) -> DiffResult:
+    """`xval diff`: which results moved between two results — each a `Result` (a run held in
+    memory too) or a path: a campaign, run or map folder, or a baseline — against their own
+    error bars. With `out` the report goes to out/diff/<time>-<pid>/; `s["any_change"]`,
+    `s["lines"]`."""
+    from .workflows.diff import new_diff_dir, run_diff
     if out is not None:
         check_out(str(out))
-    sides = load_side(old), load_side(new)
-    pair_cases(*sides)                                # bad input before anything is written
-    folder = None
+    res = run_diff(old, new)                          # bad input before anything is written
     if out is not None:
         make_out(str(out))
-        folder = new_diff_dir(out)
-    return Summary("diff", run_diff(*sides, folder), folder)
+        res.save(new_diff_dir(out))
+    return res
+
+
+def load(path) -> Result:
+    """A result saved by `.save(path)` or written by the command (a run, modes, bench,
+    extremes, map, campaign, power or diff folder, its JSON file, or a baseline), read back
+    as the type it was."""
+    return Result.load(path)
 
 
 def scenes() -> dict[str, list[str]]:

@@ -12,7 +12,7 @@ import sys
 
 from .atomic import clean_json
 from .errors import BadInput
-from .workflows.inputs import check_out, make_out  # noqa: F401  (shared with the API)
+from .output.folders import check_out, make_out  # noqa: F401  (shared with the API)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -329,16 +329,11 @@ def build_parser():
 def cmd_diff(args):
     from . import api
     r = api.diff(args.old, args.new, out=args.out)
-    _print_diff(r.data, args.json)
-    return 1 if r["any_change"] else 0
-
-
-def _print_diff(obj, as_json):
-    from .workflows.results import Summary
-    if as_json:
-        emit_json(obj)
+    if args.json:
+        emit_json(r.data)
     else:
-        print(Summary("diff", obj, None))             # the counts, the changes, notes, report
+        print(r)                                      # the counts, the changes, notes, report
+    return 1 if r["any_change"] else 0
 
 
 def cmd_baseline(args):
@@ -401,7 +396,7 @@ def cmd_run(args):
                     integrator=args.integrator, out=args.out, record=not args.no_record,
                     timeout=args.timeout, max_output_gib=args.max_output_gib,
                     max_steps=args.max_steps, params=parse_sets(args.set), log=_log)
-    return _finish(args, r.as_json(), r.result.trajectories, r.comparisons)
+    return _finish(args, r.as_json(), r.trajectories, r.comparisons)
 
 
 def _finish(args, obj, results, comparisons):
@@ -450,9 +445,9 @@ def cmd_campaign(args):
     from .workflows.campaign import Interrupted
     check_out(args.out)
     if args.baseline:                  # bad input before anything is written
+        from .results import Result
         from .workflows.campaign import load_campaign
-        from .workflows.sides import load_side
-        load_side(args.baseline)
+        Result.load(args.baseline)
         own = os.path.join(args.out, "campaign", load_campaign(args.file).get("name", "campaign"))
         if os.path.exists(own) and os.path.samefile(args.baseline, own):
             raise BadInput(f"--baseline {args.baseline}: is the folder this campaign writes (it "
@@ -473,14 +468,12 @@ def cmd_campaign(args):
         return 130
     summary = r.data
     if args.baseline:
-        from pathlib import Path
-
         from .workflows.diff import run_diff
-        folder = Path(summary["report"]).parent
-        obj = run_diff(args.baseline, folder, folder / "diff")
+        d = run_diff(args.baseline, r)
+        d.save(r.out_dir / "diff")
         if not args.json:
-            _print_diff(obj, False)
-        summary["diff"] = {k: obj[k] for k in ("summary", "lines", "report", "any_change")}
+            print(d)
+        summary["diff"] = {k: d[k] for k in ("summary", "lines", "report", "any_change")}
     if args.json:
         emit_json(summary)
     else:

@@ -119,7 +119,7 @@ class LeafResult:
 
 
 @dataclass
-class ModesResult:
+class LeafModes:
     """What `modes(params, settings)` returns: frequencies in Hz (ascending; damped where the
     leaf linearises with damping), one label each ("flap 1", "forward whirl", …), optional
     damping ratios ζ, optional whirl directions ("forward", "backward", "mixed": ROSS's words
@@ -136,11 +136,11 @@ class ModesResult:
     extra: dict = field(default_factory=dict)
 
     @classmethod
-    def coerce(cls, res) -> ModesResult:
+    def coerce(cls, res) -> LeafModes:
         if isinstance(res, cls):
             return res
         if not isinstance(res, dict) or "frequencies_hz" not in res:
-            raise TypeError(f"leaf returned {type(res).__name__}, not a ModesResult")
+            raise TypeError(f"leaf returned {type(res).__name__}, not a LeafModes")
         known = {k: res[k] for k in ("frequencies_hz", "labels", "damping", "shapes", "whirl",
                                      "settings", "notes", "extra") if k in res}
         return cls(**known)
@@ -156,3 +156,8 @@ class ModesResult:
             if given is not None and len(given) != len(f):
                 return f"{len(f)} frequencies but {len(given)} {name} values"
         return None
+
+
+# Deprecated: the name earlier leaves and plug-ins import. It is the same class; the name
+# `ModesResult` now belongs to what `xval.modes` returns (compare/results/modes.py).
+ModesResult = LeafModes

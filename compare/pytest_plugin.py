@@ -26,11 +26,11 @@ _CREATE = {"baselines": False}     # set by --xval-create-baselines
 
 
 def assert_matches_baseline(result, baseline, create: bool = False):
-    """Fails with the diff table when `result` (an `xval.run` result, or a run or campaign
-    folder) moved beyond its own error bars against `baseline` (a file written by `xval
-    baseline save`, or a folder), as `xval diff BASELINE RESULT` would. A missing baseline
-    fails the test — a check with nothing to check against must not pass or skip — unless
-    told to create it (`create=True` or `pytest --xval-create-baselines`): then it is written
+    """Fails with the diff table when `result` (an `xval.run` result, in memory or saved, or a
+    run or campaign folder) moved beyond its own error bars against `baseline` (a file written
+    by `xval baseline save`, or a folder), as `xval diff BASELINE RESULT` would. A missing
+    baseline fails the test — a check with nothing to check against must not pass or skip —
+    unless told to create it (`create=True` or `pytest --xval-create-baselines`): then it is written
     from the result and the test fails once more, asking for it to be reviewed."""
     from pathlib import Path
 
@@ -40,8 +40,7 @@ def assert_matches_baseline(result, baseline, create: bool = False):
         pytest.fail(f"baseline {baseline} is missing: create it with "
                     "assert_matches_baseline(..., create=True) or pytest "
                     "--xval-create-baselines, review it and commit it", pytrace=False)
-    folder = getattr(getattr(result, "result", None), "out_dir", None) or result
-    table, written = check_baseline(folder, baseline)
+    table, written = check_baseline(result, baseline)
     if written:
         pytest.fail(written, pytrace=False)
     if table:

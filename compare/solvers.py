@@ -24,7 +24,7 @@ from types import ModuleType
 import numpy as np
 
 from .analysis.trajectory import Modes, Trajectory
-from .contract import LeafResult, ModesResult
+from .contract import LeafModes, LeafResult
 from .errors import BadInput
 from .leafinfo import LeafInfo, leaf_info
 from .scenes import PLUGIN_SOLVERS, SCENES, Scene, get_scene
@@ -435,7 +435,7 @@ def modes(scene: Scene, solver: Solver, params: dict, settings: dict | None = No
         leaf = solver.leaf(scene)
         s = {**solver.preset, **(settings or {})}
         t0 = time.perf_counter()
-        res = ModesResult.coerce(leaf.modes(params, s))
+        res = LeafModes.coerce(leaf.modes(params, s))
         wall = time.perf_counter() - t0
         broken = res.validate()
     except Exception as e:

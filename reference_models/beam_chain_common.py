@@ -252,7 +252,7 @@ SPREAD_NOTE = 5e-3   # Richardson spread above this: the chain is too coarse at 
 
 def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) -> dict:
     """Modes of the N-segment chain, Richardson-extrapolated with the N/2 chain when asked;
-    returns the ModesResult fields (frequencies ascending) plus notes and extra.
+    returns the LeafModes fields (frequencies ascending) plus notes and extra.
 
     With extrapolation, the N/4 chain gives a second extrapolate; their largest relative
     difference (`richardson_spread_rel`) bounds the error of the first from above where the
@@ -316,9 +316,9 @@ def shaft_result(params: dict, s: dict, linearised, package, method: str):
 
 
 def package(out: dict, settings: dict, note: str, extra: dict):
-    """The chain's solution as the leaf contract's ModesResult."""
-    from compare.contract import ModesResult
-    return ModesResult(frequencies_hz=out["frequencies_hz"], labels=out["labels"],
+    """The chain's solution as the leaf contract's LeafModes."""
+    from compare.contract import LeafModes
+    return LeafModes(frequencies_hz=out["frequencies_hz"], labels=out["labels"],
                        damping=out["damping"], shapes=out["shapes"], settings=settings,
                        notes=[note] + out["notes"], extra={**extra, **out["extra"]})
 

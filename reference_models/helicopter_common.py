@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from compare.contract import ModesResult, merge_settings
+from compare.contract import LeafModes, merge_settings
 from compare.physics.mstmm import helicopter_layout
 from reference_models import beam_chain_common as bc
 
@@ -293,7 +293,7 @@ def _labels(kinds):
 
 
 def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
-                   note: str) -> ModesResult:
+                   note: str) -> LeafModes:
     """The helicopter at params['speed'] as the paper reports it: each mode's frequency on the
     blades (Hz, ascending; fixed-frame cyclic modes shifted by ±Ω), named as mstmm names them
     (numbered by frequency within each family and kind).
@@ -317,7 +317,7 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
     order = np.argsort(blade_f)
     k = params["n_modes"]
     kinds = [kinds[i] for i in order]
-    return ModesResult(frequencies_hz=blade_f[order][:k], labels=_labels(kinds)[:k],
+    return LeafModes(frequencies_hz=blade_f[order][:k], labels=_labels(kinds)[:k],
                        settings=s, notes=notes,
                        extra={"finding": "unstable" if len(grow) else "stable",
                               "unstable": grow.tolist(),

@@ -1,7 +1,6 @@
 """The Python API (`import xval`) against numbers it did not make: the command line's own files,
 closed forms written out here, the paper's passage case; bad arguments give the command's
 one-line messages."""
-import gc
 import json
 import os
 import subprocess
@@ -82,15 +81,19 @@ def test_save_writes_what_the_command_writes(tmp_path, xval_run):
         assert np.array_equal(z["omega_norm"], r["quaternion"].channels["omega_norm"])
 
 
-def test_a_run_without_out_leaves_nothing_behind(tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)
+def test_a_run_or_modes_without_out_writes_nothing(tmp_path, monkeypatch):
+    """Held in memory: no file in the working folder nor in the temporary folder (a run made
+    its .npz in a temporary folder and `.save()` wrote them again)."""
+    import tempfile
+    cwd, tmp = tmp_path / "cwd", tmp_path / "tmp"
+    cwd.mkdir(), tmp.mkdir()
+    monkeypatch.chdir(cwd)
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp))
     r = xval.run("rotor-spinup", "euler-vector", t_end=0.5)
-    assert r.out_dir is None and r.files == {} and list(tmp_path.iterdir()) == []
-    folder = r._folder.temporary
-    assert folder.exists()
-    del r
-    gc.collect()
-    assert not folder.exists()
+    m = xval.modes("rotor-whirl", ["closed-form", "euler-vector"], spin=41.3)
+    assert r.out_dir is None and r.files == {} and m.out_dir is None and m.files == {}
+    assert list(cwd.iterdir()) == [] and list(tmp.iterdir()) == []
+    assert len(r["euler-vector"].t) == 51 and len(m.critical_speeds["euler-vector"]) == 2
 
 
 def test_settings_for_all_solvers_or_per_solver():
@@ -187,9 +190,10 @@ def test_result_views_hold_the_same_numbers(xval_run):
 def test_extremes_and_a_campaign_from_a_dict(tmp_path):
     s = xval.extremes("rotor-spinup", "euler-vector")
     cases = {r["case"] for r in s["results"]}
-    assert len(cases) >= 2 and str(s).endswith(f"report: {s.report}")
+    assert len(cases) >= 2 and s.report is None and s.out_dir is None      # in memory
     saved = s.save(tmp_path / "ext")
     assert (saved / "report.md").exists() and s.report == saved / "report.md"
+    assert str(s).endswith(f"report: {s.report}") and xval.load(saved).data == s.data
     c = xval.campaign({"name": "tiny", "cases": [
         {"scene": "rotor-spinup", "solvers": ["euler-vector", "quaternion"],
          "set": {"t_end": 1}}]}, out=tmp_path / "camp")
@@ -201,10 +205,12 @@ def test_extremes_and_a_campaign_from_a_dict(tmp_path):
 
 def test_diff_of_two_saved_runs(tmp_path):
     """Identical inputs are bit-identical runs: nothing moved. A torque 0.1 % higher moves
-    |ω| by ΔM t / I_p ≈ 9.6e-3 rad/s at 1 s, far beyond the runs' error bars (~1e-9)."""
-    a = xval.run("rotor-spinup", "euler-vector", t_end=1).save(tmp_path / "a")
-    b = xval.run("rotor-spinup", "euler-vector", t_end=1).save(tmp_path / "b")
-    c = xval.run("rotor-spinup", "euler-vector", t_end=1, torque=1.5015).save(tmp_path / "c")
+    |ω| by ΔM t / I_p ≈ 9.6e-3 rad/s at 1 s, far beyond the runs' error bars (~1e-9). Runs
+    held in memory diff as their saved folders do."""
+    runs = [xval.run("rotor-spinup", "euler-vector", t_end=1, torque=m)
+            for m in (1.5, 1.5, 1.5015)]
+    held = xval.diff(runs[0], runs[2])
+    a, b, c = (r.save(tmp_path / k) for r, k in zip(runs, "abc"))
     same = xval.diff(a, b)
     assert not same["any_change"] and same.report is None
     moved = xval.diff(a, c, out=tmp_path / "d")
@@ -212,6 +218,7 @@ def test_diff_of_two_saved_runs(tmp_path):
     assert moved["summary"]["changed"] == 1 and moved["summary"]["channels_changed"] == 6
     assert moved["lines"][0].startswith("torque 1.5 → 1.5015: rotor-spinup euler-vector")
     assert str(moved).splitlines()[0].startswith("1 changed, 0 unchanged")
+    assert held.data["cases"] == moved.data["cases"] and held.report is None
     with pytest.raises(xval.BadInput):
         xval.diff(a, tmp_path / "nowhere")
 
@@ -262,7 +269,7 @@ def test_a_failing_modes_solver_is_incomplete_and_assert_agree_fails(monkeypatch
     obj = r.as_json()
     assert obj["status"] == "incomplete" and obj["incomplete"][0]["solver"] == "mujoco"
     assert obj["summary"] == f"2 of 2 comparisons agree; {why}"
-    assert why in Path(obj["report"]).read_text() and why in str(r)
+    assert why in (r.save(tmp_path / "m") / "report.md").read_text() and why in str(r)
     with pytest.raises(AssertionError, match=why.replace("(", r"\(").replace(")", r"\)")):
         xval.assert_agree(r)
     main(["modes", "rotor-whirl", *[f"--solver={s}" for s in both + ["mujoco"]],

@@ -23,6 +23,9 @@ def test_frequency_bench_small_ladder(tmp_path, monkeypatch):
     out = Path(obj["report"]).parent
     assert {p.name for p in out.iterdir()} >= {"bench.json", "report.md", "work_precision.png"}
     assert json.loads((out / "bench.json").read_text())["scene"] == "rotating-beam"
+    from compare.results import BenchResult, Result
+    loaded = Result.load(out)                        # the bench folder reads back
+    assert isinstance(loaded, BenchResult) and loaded.summary_lines() == obj["summary_lines"]
     # the independent fem confirms the mstmm reference (scene file: ≤ 6e-9 measured)
     assert obj["reference"]["confirmed_by"]["solver"] == "fem"
     assert obj["reference"]["confirmed_by"]["rel"] < 2e-8

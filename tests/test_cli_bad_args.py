@@ -124,7 +124,7 @@ def test_to_pandas_without_pandas_names_the_extra(monkeypatch):
 
     import pyarrow as pa
 
-    from compare.workflows.results import ModesResult, TimeResult
+    from compare.results import ModesResult, TimeResult
     extras = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())[
         "project"]["optional-dependencies"]
     arrow = pa.table({"t": [0.0]})                             # before pandas is hidden

@@ -109,3 +109,14 @@ def test_an_engine_that_swallows_the_wall_clock_alarm_still_ends_timeout(monkeyp
     tr = solvers.simulate(SPINUP, solvers.get_solver("swallow"), SPINUP.resolve({"t_end": 0.1}),
                           {"integrator": "x"}, timeout_s=0.2)
     assert tr.status == "timeout"
+
+
+def test_a_plugin_leaf_returning_the_old_modes_name_still_validates():
+    """`compare.contract.ModesResult` (the name earlier leaves and plug-ins import) is the
+    leaf-level `LeafModes`, not the API's `ModesResult`: such a leaf's return is coerced and
+    validated as before."""
+    from compare.contract import LeafModes, ModesResult
+    res = LeafModes.coerce(ModesResult(frequencies_hz=np.array([1.0, 2.0]), labels=["a", "b"]))
+    assert res.validate() is None and list(res.labels) == ["a", "b"]
+    assert ModesResult(frequencies_hz=np.array([1.0]), labels=[]).validate() == \
+        "1 frequencies but 0 labels"

@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 from conftest import xval
 
+from compare.results import Result
+from compare.results.records import RunRec
 from compare.scenes import get_scene
 from compare.workflows import diff as diff_mod
 from compare.workflows import sides
@@ -98,6 +100,16 @@ def test_torque_moved_by_1e_6_only_that_case_changed(folders, tmp_path):
     assert text.index("| runs (case × solver) | changed | unchanged | new | gone |") \
         < text.index("## spin")
     assert len(list(report.parent.glob("drive__*.png"))) == obj["summary"]["channels_changed"]
+    saved = Result.load(report.parent)                   # the diff folder reads back
+    assert type(saved).__name__ == "DiffResult" and saved.data == obj
+
+
+def test_a_campaign_folder_loads_as_a_campaign_result(folders):
+    """2 cases × 2 solvers: 4 jobs, every case with its two runs."""
+    c = Result.load(folders["A"])
+    assert type(c).__name__ == "CampaignResult" and c["n_jobs"] == 4
+    assert {k: len(v.runs) for k, v in c.side().cases.items()} == {"spin": 2, "drive": 2}
+    assert str(c).splitlines()[-1] == f"report: {folders['A'] / 'report.md'}"
 
 
 def _rewrite(npz, edit):
@@ -163,7 +175,7 @@ def test_baseline_is_compact_and_catches_a_1e_6_change_mid_trajectory(folders, t
 def test_float32_would_not_do_for_a_baseline(folders):
     """The reason baselines keep float64: float32's rounding (6e-8 relative) is larger than
     the solvers' own error bars, so a float32 baseline would flag unchanged runs."""
-    side = sides.load_side(folders["A"])
+    side = Result.load(folders["A"]).side()
     worst = 0.0
     for c in side.cases.values():
         for r in c.runs.values():
@@ -251,13 +263,13 @@ def test_pytest_helper_fails_with_the_diff_table(folders, tmp_path):
 
 def test_frequencies_and_critical_speeds_against_the_relative_floor():
     f = [1.0, 10.0, 100.0]
-    old = sides.RunRec("mstmm", frequencies=f, labels=["a", "b", "c"])
-    new = sides.RunRec("mstmm", frequencies=[1.0, 10.0 * (1 + 2e-8), 100.0 * (1 + 5e-9)],
+    old = RunRec("mstmm", frequencies=f, labels=["a", "b", "c"])
+    new = RunRec("mstmm", frequencies=[1.0, 10.0 * (1 + 2e-8), 100.0 * (1 + 5e-9)],
                        labels=["a", "b", "c"])
     rows = diff_mod.compare_modes(old, new, {"fw": 40.0}, {"fw": 40.0 * (1 + 3e-8)})
     assert [r["state"] for r in rows] == ["unchanged", "changed", "unchanged", "changed"]
     assert rows[1]["max_abs"] == pytest.approx(2e-7, rel=1e-6)
-    fewer = sides.RunRec("mstmm", frequencies=f[:2], labels=["a", "b"])
+    fewer = RunRec("mstmm", frequencies=f[:2], labels=["a", "b"])
     assert diff_mod.compare_modes(old, fewer, {}, {})[0] == \
         {"channel": "number of modes", "state": "changed", "old": 3, "new": 2,
          "ratio": np.inf}

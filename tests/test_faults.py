@@ -16,7 +16,7 @@ import pytest
 from conftest import xval
 
 from compare.cli import main
-from compare.workflows import guard
+from compare.output import guard
 
 # one job of euler-vector at dt 1e-5 over 20 s (RK4, error estimate at half the step) takes
 # ~3 s on this machine: long enough to interrupt or to overlap a second process

@@ -211,8 +211,10 @@ def test_xval_modes_says_why_the_engines_and_mstmm_differ(tmp_path):
     disagrees with mstmm's; the report runs the pair at rest, where they agree within the
     allowance, and calls it the frame assumption."""
     from compare.workflows.modes import run_modes
-    obj, _, _ = run_modes("helicopter-clamped", ["mstmm", "fem", "exudyn"], {}, tmp_path,
-                          log=lambda m: None, campbell_sweep=False)
+    res = run_modes("helicopter-clamped", ["mstmm", "fem", "exudyn"], {},
+                    log=lambda m: None, campbell_sweep=False)
+    res.save(tmp_path)
+    obj = res.to_json()
     rows = {e["mode"]: e for e in obj["explanations"] if {e["a"], e["b"]} == {"mstmm", "exudyn"}}
     lag = rows["lag collective 1"]
     # 1.7e-2 apart; fem reproduces mstmm to 3.5e-7 (bar 1.6e-6); at rest 1.3e-3

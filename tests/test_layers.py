@@ -24,6 +24,7 @@ LAYERS = (("shared", ("compare.contract", "compare.errors", "compare.atomic", "c
           ("values", ("compare.analysis",)),
           ("scenes and registry", ("compare.scenes", "compare.solvers", "compare.leafinfo")),
           ("output", ("compare.output",)),
+          ("results", ("compare.results",)),
           ("orchestration", ("compare.workflows",)),
           ("front door", ("compare.cli", "compare.api", "compare.pytest_plugin",
                           "compare.__main__", "xval")))
@@ -275,10 +276,6 @@ def test_the_cycle_check_finds_one():
 # Trajectory's or result's `.save`, folder copies, os.open for writing
 WRITE_CALLS = {"write_text", "write_bytes", "write_json", "publish", "atomic_path", "savez",
                "savez_compressed", "save", "savefig", "dump", "copytree", "copyfile", "copy"}
-# the rooms of workflows/ that still write, to move into output/ (issue 27 item 5): this list
-# only shrinks — a file that stops writing must leave it, a new writer fails
-STILL_WRITING = {"campaign.py", "guard.py", "inputs.py", "maps.py", "results.py", "runner.py",
-                 "bench.py"}
 
 
 def writes(path):
@@ -303,12 +300,9 @@ def writes(path):
 
 
 def test_workflows_write_no_files():
-    found = {p.name: writes(p) for p in py_files("compare/workflows")}
-    new = [h for name, hits in found.items() if name not in STILL_WRITING for h in hits]
-    assert not new, "workflows/ writes files (move the writer into compare/output/):\n" \
-        + "\n".join(new)
-    moved = sorted(n for n in STILL_WRITING if not found.get(n))
-    assert not moved, f"{moved} write nothing now: take them off STILL_WRITING"
+    found = [h for p in py_files("compare/workflows") for h in writes(p)]
+    assert not found, "workflows/ writes files (move the writer into compare/output/):\n" \
+        + "\n".join(found)
 
 
 @pytest.mark.parametrize("code", [

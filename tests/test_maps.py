@@ -224,7 +224,7 @@ def test_a_crossing_that_vanishes_at_the_tighter_setting_is_unconfirmed_not_wide
 def _quaternion_and_mujoco(monkeypatch, mujoco_points=None):
     """rotor-spinup over torque 2.5–3.5 by quaternion and MuJoCo, run in this process (so a
     test can change what MuJoCo is given): the map's result and its printed summary."""
-    from compare.workflows.results import Summary
+    from compare.results import MapResult
     if mujoco_points:                  # MuJoCo given other parameters, through the scene's own
         orig = maps.evaluate_chunk
 
@@ -235,7 +235,7 @@ def _quaternion_and_mujoco(monkeypatch, mujoco_points=None):
     plan = maps.plan_map("rotor-spinup", "torque=2.5:3.5", overrides=BASE,
                          solver_names=["quaternion", "mujoco"], resolution=0.05, coarse=(3, 1))
     res = maps.run_map(plan)
-    return res, str(Summary("map", res, None))
+    return res, str(MapResult(res))
 
 
 def test_a_crossing_the_other_solver_does_not_find_is_disagree_never_dropped(monkeypatch):

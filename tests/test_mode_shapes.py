@@ -114,8 +114,10 @@ def test_helicopter_rigid_rotation_moves_every_strip_rigidly():
 
 
 def test_run_modes_writes_figure_and_recording(tmp_path):
-    obj, results, _ = run_modes("rotating-beam", ["mstmm", "fem"], {"speed": "40"}, tmp_path,
-                                log=lambda m: None, campbell_sweep=False)
+    res = run_modes("rotating-beam", ["mstmm", "fem"], {"speed": "40"}, log=lambda m: None,
+                    campbell_sweep=False)
+    res.save(tmp_path)
+    obj, results = res.to_json(), list(res.runs.values())
     png, rrd = obj["mode_shapes_figure"], obj["mode_shapes_recording"]
     assert open(png, "rb").read(8) == b"\x89PNG\r\n\x1a\n"
     assert "![mode shapes](mode_shapes.png)" in open(obj["report"]).read()

@@ -177,9 +177,10 @@ def test_unpaired_modes_are_listed_with_why(tmp_path):
     mstmm calls 'torsion differential' and fem 'torsion collective' (at 40 modes: 4 of 40
     per solver, with the pair at 57.27 Hz)."""
     from compare.workflows.modes import run_modes
-    obj, res, comps = run_modes("helicopter-clamped", ["mstmm", "fem"], {"n_modes": 18},
-                                tmp_path, log=lambda m: None, campbell_sweep=False,
-                                identify=False)
+    r = run_modes("helicopter-clamped", ["mstmm", "fem"], {"n_modes": 18},
+                  log=lambda m: None, campbell_sweep=False, identify=False)
+    r.save(tmp_path)
+    obj, res, comps = r.to_json(), list(r.runs.values()), r.comparisons
     m = {r.solver: r for r in res}
 
     def expected(mine, other):

@@ -9,6 +9,7 @@ from compare.api import (
     campaign,
     diff,
     extremes,
+    load,
     map,
     modes,
     power,
@@ -18,10 +19,22 @@ from compare.api import (
 )
 from compare.errors import BadInput
 from compare.pytest_plugin import assert_matches_baseline
-from compare.workflows.results import ModesResult, SceneInfo, Summary, TimeResult
+from compare.results import (
+    BenchResult,
+    CampaignResult,
+    DiffResult,
+    ExtremesResult,
+    MapResult,
+    ModesResult,
+    PowerResult,
+    Result,
+    SceneInfo,
+    TimeResult,
+)
 
 XvalError = BadInput            # one exception type for bad arguments; either name catches it
 
 __all__ = ["run", "modes", "bench", "extremes", "map", "campaign", "diff", "power", "scenes",
-           "show", "assert_agree", "assert_matches_baseline", "BadInput", "XvalError",
-           "TimeResult", "ModesResult", "Summary", "SceneInfo"]
+           "show", "load", "assert_agree", "assert_matches_baseline", "BadInput", "XvalError",
+           "Result", "TimeResult", "ModesResult", "BenchResult", "ExtremesResult", "MapResult",
+           "CampaignResult", "PowerResult", "DiffResult", "SceneInfo"]

@@ -143,7 +143,9 @@ def write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed, 
     name = camp.get("name")
     n_failed = sum(any(r["status"] != "ok" for r in outcome.get(c.name, {}).get("runs", []))
                    or "error" in outcome.get(c.name, {}) for c in cases)
-    summary = {"name": name, "n_jobs": len(jobs), "n_skipped": len(reused),
+    # "result": the type `Result.load` reads it as (compare/results/studies.py)
+    summary = {"result": "campaign", "name": name, "n_jobs": len(jobs),
+               "n_skipped": len(reused),
                "n_reused": len(reused), "n_run": len(jobs) - len(reused),
                "n_failed": n_failed, "n_crashed": len(crashed), "wall_s": round(wall_s, 3),
                "reused": sorted(reused), "crashed": crashed, "cases": []}

@@ -3,7 +3,7 @@ plots' colours, the runs as dots), the Markdown section, and map.rrd (points per
 boundary as line strips)."""
 import numpy as np
 
-from ..atomic import atomic_path, write_text
+from ..atomic import atomic_path, write_json, write_text
 from .recording import APPLICATION_ID, PALETTE
 from .report import plot_style, save_figure
 
@@ -175,12 +175,14 @@ def write_map_recording(path, result):
 
 
 def write_map_outputs(out_dir, result, record=True):
-    """map.png, report.md (the map section) and map.rrd in `out_dir`; map.json is the
-    caller's (the result dict with these paths)."""
+    """map.png, report.md (the map section), map.rrd and, last, map.json (the result dict with
+    these files in "files" and "map") in `out_dir`; returns the result dict."""
     plot_map(out_dir / "map.png", result)
     write_text(out_dir / "report.md", "\n".join([f"# Map: {result['scene']}", ""]
                                                  + markdown(result)[2:]) + "\n")
     files = {"plot": str(out_dir / "map.png"), "report": str(out_dir / "report.md")}
     if record:
         files["recording"] = str(write_map_recording(out_dir / "map.rrd", result))
-    return files
+    result["files"], result["map"] = files, files["plot"]
+    write_json(out_dir / "map.json", result)
+    return result

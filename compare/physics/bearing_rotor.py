@@ -36,7 +36,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from ..contract import ModesResult
+from ..contract import LeafModes
 
 OMEGA_SMOOTH = 0.1     # rad/s, the tanh width of the friction moment's sign (spec)
 
@@ -495,8 +495,8 @@ def linear_modes(A: np.ndarray, params: dict) -> tuple[list[dict], np.ndarray]:
 
 
 def modes_result(A: np.ndarray, A_check: np.ndarray, params: dict, settings: dict,
-                 how: str) -> ModesResult:
-    """A solver's `ModesResult` from its linearisation A and a second one, A_check, at half its
+                 how: str) -> LeafModes:
+    """A solver's `LeafModes` from its linearisation A and a second one, A_check, at half its
     finite-difference step: damped frequencies (Hz), ζ, labels, whirl, and as each mode's error
     estimate |Δ| between the two (extra "frequency_error_hz", "damping_error"); the real roots
     (the spin rate's) in extra "real_roots_per_s". `how` says how A was made."""
@@ -508,7 +508,7 @@ def modes_result(A: np.ndarray, A_check: np.ndarray, params: dict, settings: dic
 
     def error(fn, m):
         return abs(fn(m["lam"]) - fn(other[m["label"]])) if m["label"] in other else np.inf
-    return ModesResult(
+    return LeafModes(
         frequencies_hz=np.array([m["lam"].imag for m in modes]) / (2 * np.pi),
         labels=[m["label"] for m in modes], damping=np.array([zeta(m["lam"]) for m in modes]),
         whirl=[m["whirl"] for m in modes], settings={**settings, "linearisation": how},

@@ -21,7 +21,9 @@ from ..analysis import metrics
 from ..errors import BadInput
 from ..leafinfo import ORDERS, Adaptive, Fixed, snap  # noqa: F401  (ORDERS: the tests' table)
 from ..output.report import fmt_value
+from ..output.run_folder import write_trajectory
 from ..output.study import write_study
+from ..results import BenchResult
 from ..scenes import get_scene
 from . import budget
 from .bench_modes import run_bench_modes
@@ -135,7 +137,7 @@ def run_throughput(scene_name, solver_names, overrides, out, n_points, log=print
            f"{r['points_per_core_second']:.1f} | {r['accurate_points_per_second']:.1f} | "
            + (f"{r['rerun_fraction']:.1%} | {r['labels_differ']} |" if "rerun_fraction" in r
               else "— | — |") for r in obj["rows"]]
-    obj["summary_lines"] = lines
+    obj["summary_lines"], obj["result"] = lines, BenchResult.TYPE
     return write_study(out_dir, md, obj, "bench.json", report_in_json=False)
 
 
@@ -175,7 +177,7 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
     for s in refs:
         st = _tightest(s, s.info(sc), dt_out)
         tr = solvers.simulate(sc, s, params, st)
-        tr.save(out_dir / f"reference-{s.name}.npz")
+        write_trajectory(out_dir, tr, f"reference-{s.name}")
         ref_runs.append(tr)
         done[(s.name, repr(sorted(st.items())))] = tr     # a ladder rung equal to it reuses it
         log(f"reference {s.name}: {key}(end) = {tr.final()[key]:.15g} ({tr.status}, "
@@ -254,7 +256,7 @@ def _run_rung(sc, solver, info, label, st, p, params, done, repeats, ref, key, o
         walls.append(tr.wall_s)
 
     tr = repeat_timed(walls, lambda: solvers.simulate(sc, solver, p, st), repeats) or tr
-    tr.save(out_dir / f"{name}.npz")                          # the trajectories stay
+    write_trajectory(out_dir, tr, name)                       # the trajectories stay
     err = abs(tr.final()[key] - ref) / abs(ref) if tr.status == "ok" else None
     evals, t_int = tr.stats.get("rhs_evals"), tr.stats.get("integrate_s")
     row = {"solver": solver.name, "method": label, "settings": tr.settings,

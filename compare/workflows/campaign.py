@@ -45,13 +45,21 @@ import numpy as np
 
 from .. import solvers
 from ..analysis.trajectory import Trajectory
-from ..atomic import publish, write_json
 from ..errors import BadInput
+from ..output import guard
 from ..output.joblog import captured, distinct_lines
 from ..output.progress import PlainProgress
+from ..output.store import (
+    case_failed,
+    link,
+    mark_case,
+    store_modes,
+    store_sensitivity,
+    store_trajectory,
+)
 from ..scenes import get_scene
-from . import guard, power, runner
 from . import plan as planner
+from . import power, runner
 from .digest import _scene_module, job_code
 from .executors import (  # noqa: F401  (connect: the API's check)
     Interrupted,
@@ -371,19 +379,18 @@ def run_job(job: Job, store: str):
             sc = get_scene(job.scene)
             sens = power.sensitivities(sc, solvers.get_solver(job.solver), job.params,
                                        job.settings, sc.output_grid(job.params), job.timeout_s)
-            write_json(store / f"{job.key}.sensitivity.json",
-                       {"input_digest": job.digest, "solver": job.solver, "sensitivity": sens})
+            store_sensitivity(store, job.key, {"input_digest": job.digest,
+                                               "solver": job.solver, "sensitivity": sens})
             status = "ok" if sens else "error"
         elif job.solver is None:
             from .modes import run_modes
             d = store / job.key
-            obj, results, _ = run_modes(job.scene, list(job.solvers), job.overrides, None,
-                                        log=lambda m: None, out_dir=d)
-            obj["input_digest"] = job.digest
-            obj["code_digest"] = job_code(get_scene(job.scene),
-                                          [solvers.get_solver(n) for n in job.solvers])
-            write_json(d / "modes.json", obj)          # written last: the job's done-marker
-            bad = [r.status for r in results if r.status != "ok"]
+            res = run_modes(job.scene, list(job.solvers), job.overrides, log=lambda m: None)
+            res.extra["input_digest"] = job.digest
+            res.extra["code_digest"] = job_code(get_scene(job.scene),
+                                                [solvers.get_solver(n) for n in job.solvers])
+            store_modes(d, res)
+            bad = [r.status for r in res.runs.values() if r.status != "ok"]
             status = bad[0] if bad else "ok"
         else:
             sc = get_scene(job.scene)
@@ -391,7 +398,7 @@ def run_job(job: Job, store: str):
                                   job.timeout_s, estimate_error=sc.error_estimate)
             tr.stats["input_digest"] = job.digest
             tr.stats["code_digest"] = job_code(sc, [solvers.get_solver(job.solver)])
-            tr.save(store / f"{job.key}.npz")
+            store_trajectory(store, job.key, tr)
             status = tr.status
     return job.label, status, time.perf_counter() - t0, text[0]
 
@@ -593,9 +600,8 @@ def _finish_safely(case, jobs, store, out_dir, crashed, reused, view):
     except Exception as e:
         import traceback
         msg = f"report failed: {type(e).__name__}: {e}".splitlines()[0]
-        (out_dir / case.name).mkdir(parents=True, exist_ok=True)
-        (out_dir / case.name / "report.log").write_text(traceback.format_exc())
-        view.log(f"{case.name}: {msg} (traceback in {out_dir / case.name / 'report.log'})")
+        log = case_failed(out_dir / case.name, traceback.format_exc())
+        view.log(f"{case.name}: {msg} (traceback in {log})")
         for j in jobs:
             if j.case == case.name:
                 crashed.setdefault(j.label, msg)
@@ -622,7 +628,7 @@ def finish_case(case, jobs, store, out_dir, crashed, reused, view):
         f = store / f"{j.key}.npz"
         if f.exists() and j.label not in crashed:
             trs.append(Trajectory.load(f))
-            files[j.solver] = publish(f, case_dir / f"{j.solver}.npz")
+            files[j.solver] = link(f, case_dir / f"{j.solver}.npz")
         else:
             t = case.scene.output_grid(case.params)
             trs.append(Trajectory(case.scene.name, j.solver, t,
@@ -636,7 +642,7 @@ def finish_case(case, jobs, store, out_dir, crashed, reused, view):
     if text[0]:
         view.log(f"{case.name}: report phase said: {distinct_lines(text[0], 3)[0]} "
                  f"(see {case_dir / 'report.log'})")
-    write_json(marker, {"jobs": key, "digests": {j.solver: j.digest for j in mine}})
+    mark_case(case_dir, key, {j.solver: j.digest for j in mine})
     return res.as_json()
 
 
@@ -667,7 +673,7 @@ def _finish_modes(case, job, store, case_dir, crashed):
                 "error": crashed.get(job.label, "no result file")}
     for f in sorted(src.iterdir()):
         if f.is_file() and not f.name.startswith("."):
-            publish(f, case_dir / f.name)
+            link(f, case_dir / f.name)
     obj = json.loads((case_dir / "modes.json").read_text())
     obj["report"] = str(case_dir / "report.md")
     for key in ("recording", "mode_shapes_recording", "mode_shapes_figure"):

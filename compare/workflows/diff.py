@@ -7,8 +7,9 @@ against the error bars at each instant:
     bound(t) = e_old(t) + e_new(t) + recon_old(t) + recon_new(t) + FLOOR_REL × scale
 
 e = the run's own error estimate (a tighter rerun; 0 where the run has none), recon = how far
-a baseline's interpolation may be off (sides.py; 0 for a full trajectory), scale = the
-channel's largest |value| on either side. `changed` when |Δ(t)| > bound(t) anywhere.
+a baseline's interpolation may be off (compare/results/baseline.py; 0 for a full
+trajectory), scale = the channel's largest |value| on either side. `changed` when
+|Δ(t)| > bound(t) anywhere.
 
 Where a run has no error estimate (a scene or solver with error_estimate off, frequencies,
 critical speeds, map boundaries) nothing excuses a change but round-off: FLOOR_REL = 1e-9 of
@@ -32,7 +33,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import BadInput
-from .sides import Series, Side, load_side
+from ..results import DiffResult, Result
+from ..results.records import Series, Side
 
 FLOOR_REL = 1e-9
 FREQ_REL = 1e-8
@@ -352,17 +354,15 @@ def change_lines(obj):
     return lines
 
 
-def run_diff(old_path, new_path, out=None, plots=True):
-    """Load both sides (paths, or Sides loaded already), diff them, write report.md /
-    diff.json / plots under `out` (when given). Returns the JSON document."""
+def run_diff(old, new) -> DiffResult:
+    """Diff two results (each a `Result`, or a path `Result.load` reads: a campaign, run or map
+    folder, or a baseline), in memory; `.save(folder)` writes report.md, diff.json and the
+    plots of the channels that moved."""
     t0 = time.perf_counter()
-    old, new = (x if isinstance(x, Side) else load_side(x) for x in (old_path, new_path))
-    obj, arrays = diff(old, new, keep_plots=plots and out is not None)
+    old, new = (x if isinstance(x, Result) else Result.load(x) for x in (old, new))
+    obj, plots = diff(old.side(), new.side())
     obj["wall_s"] = round(time.perf_counter() - t0, 3)
-    if out is not None:
-        from ..output.diff_report import write_diff_report
-        write_diff_report(Path(out), obj, arrays)
-    return obj
+    return DiffResult(obj, plots=plots)
 
 
 def new_diff_dir(out):
@@ -370,14 +370,15 @@ def new_diff_dir(out):
     return Path(out) / "diff" / f"{stamp}-{os.getpid()}"
 
 
-def check_baseline(folder, baseline):
-    """For tests: None when the run or campaign `folder` matches `baseline` within the error
-    bars; else the diff table (text). A missing baseline file is written from `folder` and
-    reported as such (the caller skips: review and commit it)."""
+def check_baseline(result, baseline):
+    """For tests: None when `result` (a `Result`, or a run or campaign folder) matches
+    `baseline` within the error bars; else the diff table (text). A missing baseline file is
+    written from the result and reported as such (the caller fails once: review and commit
+    it)."""
     from ..output.diff_report import diff_table
     from .sides import save_baseline
     if not Path(baseline).exists():
-        save_baseline(folder, baseline)
+        save_baseline(result, baseline)
         return None, f"baseline written to {baseline}: review and commit it"
-    obj = run_diff(baseline, folder, out=None)
-    return (diff_table(obj) if obj["any_change"] else None), None
+    d = run_diff(baseline, result)
+    return (diff_table(d.data) if d["any_change"] else None), None

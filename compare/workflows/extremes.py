@@ -25,7 +25,7 @@ from ..analysis import metrics
 from ..analysis.metrics import MARGINAL
 from ..analysis.trajectory import Trajectory
 from ..errors import BadInput
-from ..output.study import write_study
+from ..results import ExtremesResult
 from ..scenes import Extreme, Scene, get_scene
 from .plan import Knobs, plan
 
@@ -142,8 +142,13 @@ def _num(v):
     return "" if v is None else f"{v:.3g}"
 
 
-def run_extremes(scene_name: str, solver_names, out, include_slow=False, timeout_s=None,
-                 log=print) -> dict:
+def extremes_dir(out, scene_name) -> Path:
+    stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
+    return Path(out) / "extremes" / f"{scene_name}-{stamp}"
+
+
+def run_extremes(scene_name: str, solver_names, include_slow=False, timeout_s=None,
+                 log=print) -> ExtremesResult:
     sc = get_scene(scene_name)
     if not sc.extremes:
         raise BadInput(f"scene {sc.name!r} lists no extreme cases")
@@ -152,8 +157,6 @@ def run_extremes(scene_name: str, solver_names, out, include_slow=False, timeout
     chosen = solvers.pick(sc, solver_names)
     cases = [c for c in sc.extremes if include_slow or not c.slow]
     rows = [r for c in cases for r in run_case(sc, c, chosen, timeout_s, log)]
-    stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-    out_dir = Path(out) / "extremes" / f"{sc.name}-{stamp}"
     obj = {"scene": sc.name, "cases": [{"name": c.name, "set": c.set, "settings": c.settings,
                                         "check": c.check if isinstance(c.check, str)
                                         else "closed form", "bound": c.bound,
@@ -170,4 +173,4 @@ def run_extremes(scene_name: str, solver_names, out, include_slow=False, timeout
                                  f"{'; ' if c.settings else ''}"
                                  f"{', '.join(f'{k}={v}' for k, v in c.settings.items())}): "
                                  f"{c.why}" for c in cases]
-    return write_study(out_dir, md, obj)
+    return ExtremesResult(obj, report_md=md)

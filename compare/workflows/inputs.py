@@ -1,38 +1,9 @@
 """Checks of what a user asks for before anything runs, shared by the command line and the
-Python API so both doors refuse alike: one BadInput line, nothing written."""
+Python API so both doors refuse alike: one BadInput line, nothing written (the output folder's
+checks: compare/output/folders.py)."""
 import math
-import os
 
 from ..errors import BadInput
-
-
-def check_out(path):
-    """`--out` must name a folder or a place where one can be made; checked before anything
-    runs (BadInput, one line). Nothing is created here."""
-    p = os.path.abspath(path)
-    if os.path.exists(p) and not os.path.isdir(p):
-        raise BadInput(f"--out {path}: exists and is not a folder")
-    parent = p
-    while not os.path.exists(parent):
-        parent = os.path.dirname(parent)
-    if not os.path.isdir(parent):
-        raise BadInput(f"--out {path}: {parent} is not a folder")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise BadInput(f"--out {path}: no permission to write in {parent}")
-
-
-def make_out(path):
-    """Create the output folder after every other check passed; a system that refuses
-    (/proc, a read-only mount) is bad input, one line."""
-    check_out(path)
-    try:
-        os.makedirs(path, exist_ok=True)
-        probe = os.path.join(path, f".xval-write-test-{os.getpid()}")
-        with open(probe, "w"):
-            pass
-        os.unlink(probe)
-    except OSError as e:
-        raise BadInput(f"--out {path}: cannot write there ({e.strerror})") from None
 
 
 def positive(name, value):

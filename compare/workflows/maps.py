@@ -33,8 +33,9 @@ from pathlib import Path
 import numpy as np
 
 from .. import solvers
-from ..atomic import write_json
 from ..errors import BadInput
+from ..output.store import store_point
+from ..results import MapResult
 from ..scenes import get_scene
 from . import plan as planner
 from .digest import STORE_VERSION, job_code
@@ -191,7 +192,7 @@ class Runner:
             for (k, _), row in zip(chunk, rows):
                 self.memo[k] = row
                 if self.store:
-                    write_json(self.store / f"{k}.json", row)
+                    store_point(self.store, k, row)
         return [self.memo[self._key(s, st, pt)] for s, st, pt in tasks]
 
 
@@ -876,11 +877,8 @@ def map_to_folder(plan, out, settings_for=None, executor="local", scheduler=None
             pool.shutdown(wait=True)
         if client is not None:
             client.close()
-    result["files"] = write_map_outputs(out_dir, result, record)
-    result["map"] = result["files"]["plot"]
-    result["folder"] = str(out_dir)
-    write_json(out_dir / "map.json", result)
-    return result
+    result["folder"], result["result"] = str(out_dir), MapResult.TYPE
+    return write_map_outputs(out_dir, result, record)
 
 
 def throughput(scene_name, solver_names, overrides, n_points, workers=2, log=None):

@@ -8,8 +8,6 @@ scene.
 """
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 from scipy.optimize import brentq, linear_sum_assignment
 
@@ -18,11 +16,10 @@ from ..analysis import campbell, metrics
 from ..analysis.campbell import mac
 from ..analysis.trajectory import Modes
 from ..errors import BadInput
-from ..output import campbell_plot, mode_shapes
-from ..output.study import write_study
+from ..results import ModesResult
+from ..results.modes import DAMPED_HEADER, damped_json, damped_rows, markdown_table
 from ..scenes import Scene, get_scene
 from .plan import plan
-from .runner import new_run_dir
 
 SAME_MODE = 0.5     # a mode followed by label must share this much shape with its line (MAC)
 
@@ -212,13 +209,15 @@ def by_name(entries: list[dict]) -> dict[str, float]:
     return {e["name"]: e["value"] for e in entries}
 
 
-def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print, frame=None):
+def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
     """Critical speeds on the scene's grid (lines by label, refined on each solver's own mode:
     unchanged by the diagram), then the diagram: the grid refined where any solver's lines are
     uncertain, every solver on the same points, lines tracked by MAC with veerings and
     crossings told apart (compare/analysis/campbell.py) in the frame the solvers report, and
     read in the other frame too where the modes whirl. The figure is drawn in `frame` (default:
-    the solvers'). Returns the JSON part, the critical speeds and the report's lines."""
+    the solvers'). Returns the JSON part, the critical speeds, the report's lines and what the
+    figure draws (values, the lines in `frame`, critical speeds, events, `frame`, the lines in
+    the solvers' frame)."""
     cb = sc.campbell
     frame = frame or cb.frame
     chosen = [s for s in chosen if not cb.solvers or s.name in cb.solvers]
@@ -268,10 +267,7 @@ def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print, frame=
            "unconfirmed_critical_speeds": {s: u for s, u in unconfirmed.items() if u},
            "incomplete": missing}
     if lines:
-        campbell_plot.png(out_dir / "campbell.png", sc, grid, by_frame[frame], entries, params,
-                          events, frame)
         obj["figure_frame"] = frame
-        obj["recording"] = str(campbell_plot.rrd(out_dir / "campbell.rrd", sc, grid, lines))
     md = ["", "## Campbell diagram", "",
           f"{len(grid)} values of {cb.parameter} ({len(values)} on the scene's grid, "
           f"{len(grid) - len(values)} added where lines come close, swap or lose their shape); "
@@ -288,7 +284,7 @@ def campbell_diagram(sc: Scene, chosen, params, out_dir: Path, log=print, frame=
            f"{u['reason']}" for n, us in unconfirmed.items() for u in us]
     md += [f"- {m['solver']}: no critical speeds — {m['reason']}" for m in missing]
     md += ["", "![campbell](campbell.png)"]
-    return obj, crit, md
+    return obj, crit, md, (grid, by_frame[frame], entries, events, frame, lines)
 
 
 def critical_table(cb, entries: dict) -> list[str]:
@@ -326,10 +322,11 @@ def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float,
     return tr
 
 
-def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_sweep=True,
-              identify=True, out_dir=None, campbell_frame=None):
-    """`out_dir` given: write there (a campaign case); else a new run folder under `out`.
-    `campbell_frame`: the frame the Campbell figure is drawn in (default: the solvers')."""
+def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=True,
+              identify=True, campbell_frame=None) -> ModesResult:
+    """Every chosen solver's modes, compared; the Campbell diagram (its figure in
+    `campbell_frame`, default the solvers' frame), the explanations and the identification
+    where the scene has them. Held in memory: `.save(folder)` writes it."""
     sc = get_scene(scene_name).modal()       # a time scene answers by its linearisation
     if campbell_frame is not None and campbell_frame not in (
             sc.campbell.frames if sc.campbell else ()):
@@ -338,24 +335,15 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
                           if sc.campbell else "diagram nowhere: it sweeps nothing"))
     pl = plan(sc, overrides, solver_names)
     params, chosen = pl.params, list(pl.solvers)
-    out_dir = Path(out_dir or new_run_dir(out, sc.name))
-    out_dir.mkdir(parents=True, exist_ok=True)
     results = []
     for s in chosen:
         log(f"{sc.name}: {s.name} …")
         results.append(solvers.modes(sc, s, params))
     comparisons = sc.verdicts(params, results)
-    obj = {"scene": sc.name, "params": params,
-           "runs": [{"solver": r.solver, "status": r.status, "wall_s": round(r.wall_s, 6),
-                     "frequencies_hz": list(r.frequencies_hz), "labels": r.labels,
-                     "versions": r.versions, **damped_json(r),
-                     **({"notes": r.notes} if r.notes else {}),
-                     **({k: list(np.ravel(v)) for k, v in r.extra.items()}),
-                     **({"reason": r.reason} if r.reason else {})} for r in results],
-           "comparisons": [c.as_dict() for c in comparisons],
-           "unpaired_modes": metrics.unpaired_modes(results),
-           "incomplete": [{"solver": r.solver, "status": r.status, "reason": r.reason}
-                          for r in results if r.status != "ok"]}
+    unpaired = metrics.unpaired_modes(results)
+    incomplete = [{"solver": r.solver, "status": r.status, "reason": r.reason}
+                  for r in results if r.status != "ok"]
+    extra, report = {}, {"explain": [], "campbell": [], "identify": []}
     md = [f"# {sc.name}: {sc.title}", "", f"Source: {sc.source}", "",
           "| solver | status | frequencies [Hz] | labels | notes |", "|---|---|---|---|---|"]
     md += [f"| {r.solver} | {r.status} | {', '.join(f'{f:.8g}' for f in r.frequencies_hz)} | "
@@ -366,97 +354,50 @@ def run_modes(scene_name, solver_names, overrides, out, log=print, campbell_swee
     md += ["", "| a | b | mode | rel. difference | verdict |", "|---|---|---|---|---|"]
     md += [f"| {c.a} | {c.b} | {c.channel} | {c.max_rel:.2e} | {c.verdict} |"
            for c in comparisons]
-    if obj["unpaired_modes"]:
+    if unpaired:
         md += ["", "Modes left unpaired (not compared):", "",
                "| a | b | solver | mode | frequency [Hz] | why |", "|---|---|---|---|---|---|"]
         md += [f"| {u['a']} | {u['b']} | {u['solver']} | {u['mode']} | "
-               f"{u['frequency_hz']:.8g} | {u['reason']} |" for u in obj["unpaired_modes"]]
-    if sc.mode_shape_3d:
-        drawn = mode_shapes.write(out_dir, sc, params, results)
-        if drawn:
-            obj["mode_shapes_recording"] = str(drawn["recording"])
-            obj["mode_shapes_figure"] = str(drawn["figure"])
-            md += ["", "## Mode shapes", "", drawn["text"], "", "![mode shapes](mode_shapes.png)"]
+               f"{u['frequency_hz']:.8g} | {u['reason']} |" for u in unpaired]
+    report["head"] = md
     if sc.explain_frequencies and any(c.verdict == "disagree" for c in comparisons):
         ran = {r.solver: r for r in results}        # the runs above, not run again
         rows, lines_md = sc.explain_frequencies(
             params, comparisons, lambda n, p: ran[n] if p == params and n in ran
             else solvers.modes(sc, solvers.get_solver(n), p), sc.tolerances_for(params))
-        obj["explanations"] = rows
-        md += [""] + lines_md
+        extra["explanations"] = rows
+        report["explain"] = [""] + lines_md
+    crit, obj_cb, drawing = {}, None, None
     if sc.campbell and campbell_sweep and any(
             not sc.campbell.solvers or s.name in sc.campbell.solvers for s in chosen):
-        obj_cb, crit, text = campbell_diagram(sc, chosen, params, out_dir, log, campbell_frame)
-        obj["critical_speeds"] = crit
-        obj["campbell"] = obj_cb
-        if "recording" in obj_cb:
-            obj["recording"] = obj_cb.pop("recording")
-        md += text
+        obj_cb, crit, report["campbell"], drawing = campbell_diagram(sc, chosen, params, log,
+                                                                     campbell_frame)
     if sc.identify and identify:
         rows, lines_md = sc.identify(params, _run_time, solver_names or None)
         if rows:
-            obj["identified_from_free_response"] = rows
-            md += [""] + lines_md
+            extra["identified_from_free_response"] = rows
+            report["identify"] = [""] + lines_md
             more = []
-            for row in rows:
+            for row in rows:             # a ring-down fit against the solver's eigenvalues
                 eig, fit = identified_against_eigenvalues(sc, row, results)
                 if fit is not None:
                     row.update(damped_json(fit))
                     more += sc.verdicts(params, [eig, fit])
             comparisons = comparisons + more
-            obj["comparisons"] += [c.as_dict() for c in more]
-            md += ["", "| a | b | mode | deviation | bound | verdict |",
-                   "|---|---|---|---|---|---|"]
-            md += [f"| {c.a} | {c.b} | {c.channel} | {c.deviation:.2e} | "
-                   f"{c.tolerance * c.scale:.2e} | {c.verdict} |" for c in more]
-    failed = {m["solver"] for m in obj["incomplete"]}
-    obj["incomplete"] += [m for m in (obj.get("campbell") or {}).get("incomplete", [])
-                          if m["solver"] not in failed]
-    obj["status"], obj["summary"] = modes_status(comparisons, obj)
-    md[1:1] = ["", f"**{obj['summary']}**"]
-    return write_study(out_dir, md, obj), results, comparisons
-
-
-DAMPED_HEADER = ["solver", "mode", "whirl", "f_d [Hz]", "ω_d [rad/s]", "ω_d [rpm]", "ζ",
-                 "log dec"]
-
-
-def log_dec(zeta):
-    """The logarithmic decrement δ = 2πζ/√(1 − ζ²) (inf for ζ ≥ 1: no oscillation)."""
-    z = np.asarray(zeta, float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(z < 1, 2 * np.pi * z / np.sqrt(np.maximum(1 - z * z, 0.0)), np.inf)
-
-
-def damped_json(m: Modes | None) -> dict:
-    """A run's damped modes as `xval modes --json` lists them (contract.md, "Rotordynamic
-    results"): ω_d [rad/s] and rpm beside frequencies_hz, ζ, log dec, whirl; {} without ζ."""
-    if m is None or m.damping is None:
-        return {}
-    w = 2 * np.pi * np.asarray(m.frequencies_hz, float)
-    return {"omega_d": list(w), "rpm": list(w * 30 / np.pi), "zeta": list(map(float, m.damping)),
-            "log_dec": list(map(float, log_dec(m.damping))),
-            **({"whirl": list(m.whirl)} if m.whirl is not None else {})}
-
-
-def damped_rows(results: list[Modes]) -> list[list[str]]:
-    """One row per mode of every solver that gives damping ratios (DAMPED_HEADER): Hz, rad/s
-    and rpm side by side, ζ and log dec (ROSS's conventions)."""
-    rows = []
-    for m in results:
-        if m.status != "ok" or m.damping is None:
-            continue
-        whirl = m.whirl or ["—"] * len(m.labels)
-        for f, lb, wh, z, d in zip(m.frequencies_hz, m.labels, whirl, m.damping,
-                                   log_dec(m.damping)):
-            rows.append([m.solver, lb, wh, f"{f:.10g}", f"{2 * np.pi * f:.10g}",
-                         f"{60 * f:.8g}", f"{z + 0.0:.8g}", f"{d + 0.0:.6g}"])   # no −0
-    return rows
-
-
-def markdown_table(header, rows) -> list[str]:
-    return (["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-            + ["| " + " | ".join(r) + " |" for r in rows])
+            if more:
+                report["identify"] += ["", "| a | b | mode | deviation | bound | verdict |",
+                                       "|---|---|---|---|---|---|"]
+                report["identify"] += [f"| {c.a} | {c.b} | {c.channel} | {c.deviation:.2e} | "
+                                       f"{c.tolerance * c.scale:.2e} | {c.verdict} |"
+                                       for c in more]
+    failed = {m["solver"] for m in incomplete}
+    incomplete += [m for m in (obj_cb or {}).get("incomplete", []) if m["solver"] not in failed]
+    status, summary = modes_status(comparisons, {"incomplete": incomplete,
+                                                 "unpaired_modes": unpaired,
+                                                 "campbell": obj_cb})
+    return ModesResult(sc, params, results, comparisons, status=status, summary=summary,
+                       critical_speeds=crit, campbell=obj_cb, unpaired_modes=unpaired,
+                       incomplete=incomplete, extra=extra, report=report, drawing=drawing)
 
 
 def identified_against_eigenvalues(sc: Scene, row: dict, results: list[Modes]):

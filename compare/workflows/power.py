@@ -21,6 +21,7 @@ import numpy as np
 
 from .. import solvers
 from ..errors import BadInput
+from ..results import PowerResult
 from .plan import plan
 
 H = 1e-4            # the finite-difference step, relative
@@ -248,7 +249,7 @@ def summary(rows: list[Power]) -> str:
 
 def run_power(scene_name: str, overrides: dict, names: list[str],
               parameters: list[str] | None = None, timeout_s: float | None = None,
-              log: Callable = print) -> dict:
+              log: Callable = print) -> PowerResult:
     """`xval power`: the table parameter × solver → ε*, with the summary line and the cost."""
     t0 = time.perf_counter()
     pl = plan(scene_name, overrides, names, timeout_s=timeout_s)
@@ -268,9 +269,9 @@ def run_power(scene_name: str, overrides: dict, names: list[str],
             log(f"{sc.name}: {name} in {s.name}: "
                 + (f"ε* = {r.epsilon:.2g} ({' vs '.join(r.pair)}, {r.channel}; {r.how})"
                    if r.epsilon is not None else f"none ({r.how})"))
-    return {"scene": sc.name, "params": {k: overrides[k] for k in overrides},
-            "solvers": [s.name for s in chosen],
-            "nominal": {"agree": sum(c.verdict == "agree" for c in study.base),
-                        "comparisons": len(study.base)},
-            "power": [r.as_dict() for r in rows], "summary": summary(rows),
-            "runs": study.n_runs, "wall_s": round(time.perf_counter() - t0, 3)}
+    return PowerResult({"scene": sc.name, "params": {k: overrides[k] for k in overrides},
+                        "solvers": [s.name for s in chosen],
+                        "nominal": {"agree": sum(c.verdict == "agree" for c in study.base),
+                                    "comparisons": len(study.base)},
+                        "power": [r.as_dict() for r in rows], "summary": summary(rows),
+                        "runs": study.n_runs, "wall_s": round(time.perf_counter() - t0, 3)})

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..output.report import plot_style, save_figure
 from ..output.study import write_study
+from ..results import BenchResult
 
 LEVELS = (1e-3, 1e-6, 1e-9)
 COARSE_ERR = 1e-2          # the coarse end of a ladder: this error reached (or a failed run)
@@ -46,6 +47,7 @@ def walk(rungs, start, run, exhaustive=False, patience=2):
 
 def write_outputs(out_dir, obj, md):
     """report.md (the figure linked at its end) and bench.json; the result with its report."""
+    obj["result"] = BenchResult.TYPE
     md = md + ["", "![work-precision](work_precision.png)"]
     return write_study(out_dir, md, obj, "bench.json", report_in_json=False)
 

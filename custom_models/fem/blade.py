@@ -10,7 +10,7 @@ relative change between the extrapolated and the fine values (the error estimate
 """
 import numpy as np
 
-from compare.contract import ModesResult, merge_settings
+from compare.contract import LeafModes, merge_settings
 from compare.physics.mstmm import blade_section_from, tension_torsion_k2
 
 from .beam import lowest_modes
@@ -85,7 +85,7 @@ def solve(b, spin, r_h, n_modes, n_el, richardson=True, stations=13):
     return rows[:n_modes], err, meshes
 
 
-def modes(params: dict, settings: dict) -> ModesResult:
+def modes(params: dict, settings: dict) -> LeafModes:
     s = merge_settings(settings, MODES_SETTINGS, ())
     b = properties(params)
     n_st = s["stations"]
@@ -103,7 +103,7 @@ def modes(params: dict, settings: dict) -> ModesResult:
         sh[:, col] = y[::step] * (b["chord"] / 2 if fam == "torsion" else 1.0)
         sh = sh.ravel()
         shapes.append(sh / sh[np.argmax(np.abs(sh))])
-    return ModesResult(frequencies_hz=np.array([r[0] for r in rows]) / (2 * np.pi),
+    return LeafModes(frequencies_hz=np.array([r[0] for r in rows]) / (2 * np.pi),
                        labels=[f"{fam} {i}" for _, fam, i, _ in rows], shapes=np.array(shapes),
                        settings=dict(s, elements=meshes),
                        # the mesh change (largest relative over the modes) on every mode

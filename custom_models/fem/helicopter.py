@@ -14,7 +14,7 @@ with n and 2n elements, the frequencies extrapolated (h⁴) and the change repor
 """
 import numpy as np
 
-from compare.contract import ModesResult, merge_settings
+from compare.contract import LeafModes, merge_settings
 from compare.physics.mstmm import helicopter_layout
 
 from .beam import bending
@@ -258,11 +258,11 @@ def modes_for(params, settings, clamped):
     extra["unstable"] = unstable
     from custom_models.mstmm.labels import label_modes
     labels = label_modes(np.array(shapes), w, L, spin)
-    return ModesResult(frequencies_hz=w / (2 * np.pi), labels=labels, shapes=np.array(shapes),
+    return LeafModes(frequencies_hz=w / (2 * np.pi), labels=labels, shapes=np.array(shapes),
                        settings=s, notes=notes, extra=extra)
 
 
-def modes(params: dict, settings: dict) -> ModesResult:
+def modes(params: dict, settings: dict) -> LeafModes:
     """Dispatches on the scene: `helicopter-clamped` has a `clamped` tail (n_modes default
     13), `helicopter-hover` not; the leaf modules below fix it."""
     return modes_for(params, settings, True)

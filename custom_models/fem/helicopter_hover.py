@@ -1,8 +1,8 @@
 """`fem` leaf for `helicopter-hover`: the helicopter with the tail end free (Table 4)."""
-from compare.contract import ModesResult
+from compare.contract import LeafModes
 
 from .helicopter import MODES_SETTINGS, modes_for  # noqa: F401
 
 
-def modes(params: dict, settings: dict) -> ModesResult:
+def modes(params: dict, settings: dict) -> LeafModes:
     return modes_for(params, settings, False)

@@ -9,7 +9,7 @@ Convergence: n and 2n elements, Richardson h⁴ extrapolation of the frequencies
 import numpy as np
 from scipy.linalg import eig
 
-from compare.contract import ModesResult, merge_settings
+from compare.contract import LeafModes, merge_settings
 from compare.physics.mstmm import spinning_shaft_omega0
 from compare.physics.whirl import whirl_labels
 
@@ -53,7 +53,7 @@ def solve(p, n_el, spin, n_modes):
     return np.array([lam[i].imag for i in keep]), V[:, keep], n, unstable
 
 
-def modes(params: dict, settings: dict) -> ModesResult:
+def modes(params: dict, settings: dict) -> LeafModes:
     s = merge_settings(settings, MODES_SETTINGS, ())
     p = params
     w0 = spinning_shaft_omega0(p["EI_xx"], p["m"], p["L"])
@@ -91,7 +91,7 @@ def modes(params: dict, settings: dict) -> ModesResult:
              f"{err:.1e}"]
     if unstable:
         notes.append(f"unstable (divergence) growth rates {np.round(unstable, 6).tolist()} 1/s")
-    return ModesResult(frequencies_hz=w / (2 * np.pi), labels=labels, shapes=np.array(shapes),
+    return LeafModes(frequencies_hz=w / (2 * np.pi), labels=labels, shapes=np.array(shapes),
                        settings=dict(s, elements=n_el), notes=notes,
                        extra={"omega_star": (w / w0).tolist(), "unstable": unstable,
                               "whirl_sense": sense,

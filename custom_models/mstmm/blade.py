@@ -8,7 +8,7 @@ labels every root by construction. Frequencies in Hz, shapes sampled at 13 fixed
 """
 import numpy as np
 
-from compare.contract import ModesResult, merge_settings
+from compare.contract import LeafModes, merge_settings
 from compare.physics.mstmm import blade_section_from, tension_torsion_k2
 
 from . import elements as el
@@ -130,7 +130,7 @@ def blade_modes(b, spin, hub_radius, n_modes, rtol=1e-12):
         omega_max *= 1.6
 
 
-def modes(params: dict, settings: dict) -> ModesResult:
+def modes(params: dict, settings: dict) -> LeafModes:
     s = merge_settings(settings, MODES_SETTINGS, ())
     b = blade_properties(params)
     spin, rh = params["speed"], params["hub_radius"]
@@ -138,7 +138,7 @@ def modes(params: dict, settings: dict) -> ModesResult:
     shapes = np.array([shape(b, root_state(b, w, spin, rh, fam), w, spin, rh, s["stations"])
                        for w, fam, _ in found])
     f_hz = np.array([w for w, _, _ in found]) / (2 * np.pi)
-    return ModesResult(frequencies_hz=f_hz, extra={"frequency_error_hz": root_error_hz(
+    return LeafModes(frequencies_hz=f_hz, extra={"frequency_error_hz": root_error_hz(
                            f_hz, s["rtol"])},
                        labels=[f"{fam} {i}" for _, fam, i in found], shapes=shapes,
                        settings=s, notes=["shapes: [u, v, w, φ·chord/2] at "

@@ -50,7 +50,7 @@ Decisions from the paper's own numbers (measured with this leaf, `fem` agreeing 
 """
 import numpy as np
 
-from compare.contract import ModesResult, merge_settings
+from compare.contract import LeafModes, merge_settings
 from compare.physics.mstmm import helicopter_layout
 
 from . import elements as el
@@ -324,7 +324,7 @@ def mode_shape(L, omega, spin, hub_radius, clamped, stations=7):
 MODES_SETTINGS = {"rtol": 1e-10, "step_hz": 0.1}  # grid step outside the blade clusters
 
 
-def modes_for(params: dict, settings: dict, clamped: bool) -> ModesResult:
+def modes_for(params: dict, settings: dict, clamped: bool) -> LeafModes:
     from .labels import label_modes
     s = merge_settings(settings, MODES_SETTINGS, ())
     L = helicopter_layout(params)
@@ -342,7 +342,7 @@ def modes_for(params: dict, settings: dict, clamped: bool) -> ModesResult:
     # a repeated root gets two orthogonal shapes only from the nullspace; take the same shape
     # twice (labels still count them) — MAC tracking sees a degenerate pair as such
     shapes = np.array([mode_shape(L, w, spin, rh, clamped) for w in roots])
-    return ModesResult(frequencies_hz=np.array(roots) / (2 * np.pi),
+    return LeafModes(frequencies_hz=np.array(roots) / (2 * np.pi),
                        labels=label_modes(shapes, roots, L, spin), shapes=shapes, settings=s,
                        extra={"frequency_error_hz": root_error_hz(np.array(roots) / (2 * np.pi),
                                                                   s["rtol"])},
@@ -350,6 +350,6 @@ def modes_for(params: dict, settings: dict, clamped: bool) -> ModesResult:
                               f"{np.round(np.array(exact) / (2 * np.pi), 4).tolist()} Hz"])
 
 
-def modes(params: dict, settings: dict) -> ModesResult:
+def modes(params: dict, settings: dict) -> LeafModes:
     """helicopter-clamped (tail end clamped, Table 3)."""
     return modes_for(params, settings, True)

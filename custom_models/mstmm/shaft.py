@@ -22,7 +22,7 @@ mode has no real ω: it is missing from the real roots and reported in notes.
 import numpy as np
 from scipy.linalg import expm
 
-from compare.contract import ModesResult, merge_settings
+from compare.contract import LeafModes, merge_settings
 from compare.physics.mstmm import spinning_shaft_omega0
 from compare.physics.whirl import whirl_labels
 
@@ -90,7 +90,7 @@ def shape(p, omega, spin, stations):
     return s / s[np.argmax(np.abs(s))]
 
 
-def modes(params: dict, settings: dict) -> ModesResult:
+def modes(params: dict, settings: dict) -> LeafModes:
     s = merge_settings(settings, MODES_SETTINGS, ())
     p = params
     w0 = spinning_shaft_omega0(p["EI_xx"], p["m"], p["L"])
@@ -116,7 +116,7 @@ def modes(params: dict, settings: dict) -> ModesResult:
     notes = [f"ω₀ = {w0:.6g} rad/s; shapes [U, V] at {s['stations']} stations; rotating frame"]
     if p["EI_xx"] != p["EI_yy"]:
         notes.append("anisotropic: modes inside an instability band have no real frequency")
-    return ModesResult(frequencies_hz=np.array(roots) / (2 * np.pi), labels=labels,
+    return LeafModes(frequencies_hz=np.array(roots) / (2 * np.pi), labels=labels,
                        shapes=np.array(shapes), settings=s, notes=notes,
                        extra={"omega_star": (np.array(roots) / w0).tolist(),
                               "whirl_sense": sense,

@@ -7,7 +7,7 @@ shared with the scene's findings.
 """
 import numpy as np
 
-from compare.contract import ModesResult
+from compare.contract import LeafModes
 from compare.physics.rotor import whirl_closed_form
 
 MODES_SETTINGS: dict = {}
@@ -18,14 +18,14 @@ def whirl_sweep(params: dict, spins) -> tuple[np.ndarray, np.ndarray]:
     return whirl_closed_form(params, spins)
 
 
-def modes(params: dict, settings: dict) -> ModesResult:
+def modes(params: dict, settings: dict) -> LeafModes:
     b, f = whirl_closed_form(params, [params["spin"]])
     notes = []
     if params["eccentricity"] != 0:
         notes.append("approximate: the closed form ignores the eccentricity")
     if np.any(np.asarray(params["gravity"])[:2]):
         notes.append("approximate: the closed form takes only the axial gravity component")
-    return ModesResult(frequencies_hz=np.array([b[0], f[0]]) / (2 * np.pi),
+    return LeafModes(frequencies_hz=np.array([b[0], f[0]]) / (2 * np.pi),
                        labels=["backward whirl", "forward whirl"],
                        settings={"exact": not notes}, notes=notes,
                        # a quadratic's roots: a few roundings (exact only where `exact`)

@@ -8,7 +8,7 @@ are the whirl frequencies; the rotation sense of the tilt in the eigenvector tel
 """
 import numpy as np
 
-from compare.contract import ModesResult, merge_settings
+from compare.contract import LeafModes, merge_settings
 
 from . import model as rotor
 from .euler_vector import rhs
@@ -67,6 +67,6 @@ def modes(params, settings):
         / (2 * np.pi)
     notes = (["approximate: steady spin is no equilibrium of an eccentric rotor"]
              if params["spin"] != 0 and params["eccentricity"] != 0 else [])
-    return ModesResult(frequencies_hz=np.array([b, f]) / (2 * np.pi),
+    return LeafModes(frequencies_hz=np.array([b, f]) / (2 * np.pi),
                        labels=["backward whirl", "forward whirl"], settings=s, notes=notes,
                        extra={"frequency_error_hz": err})

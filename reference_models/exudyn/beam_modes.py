@@ -39,7 +39,7 @@ import exudyn as exu
 import numpy as np
 from exudyn.itemInterface import NodeGenericODE2, ObjectKinematicTree
 
-from compare.contract import ModesResult, merge_settings
+from compare.contract import LeafModes, merge_settings
 from reference_models import beam_chain_common as bc
 
 # Convergence study (max relative error over the first five modes; second order checked in
@@ -98,7 +98,7 @@ def _linearised(chain: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 _package = bc.package
 
 
-def modes(params: dict, settings: dict | None = None) -> ModesResult:
+def modes(params: dict, settings: dict | None = None) -> LeafModes:
     """Rotating blade: flap/lag/torsion frequencies (Hz, rotating frame) at params['speed']."""
     return bc.blade_result(params, merge_settings(settings, MODES_SETTINGS, ()), _linearised,
                            _package, "rigid-segment chain (ObjectKinematicTree), linearised "
@@ -106,7 +106,7 @@ def modes(params: dict, settings: dict | None = None) -> ModesResult:
                            "rotary inertia ρI_lag")
 
 
-def shaft_modes(params: dict, settings: dict | None = None) -> ModesResult:
+def shaft_modes(params: dict, settings: dict | None = None) -> LeafModes:
     """Spinning shaft: whirl frequencies (Hz, co-rotating frame) at Ω = spin_ratio·ω₀;
     extra['omega_star'] = ω/ω₀ (Table 2)."""
     return bc.shaft_result(params, merge_settings(settings, SHAFT_MODES_SETTINGS, ()),

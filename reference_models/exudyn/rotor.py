@@ -57,7 +57,7 @@ from exudyn.itemInterface import (
     SensorNode,
 )
 
-from compare.contract import LeafResult, ModesResult, merge_settings
+from compare.contract import LeafModes, LeafResult, merge_settings
 from compare.physics import rotor as physics
 
 _SOLVERS = {
@@ -581,11 +581,11 @@ def modes(params, settings=None):
     M, K, D = _linearised(model, spin)
     w, labels, re = _whirl_pair(M, K, D, spin)
     re = np.asarray(re, float)
-    return ModesResult(frequencies_hz=np.array(w) / (2 * math.pi), labels=labels,
-                       damping=-re / np.hypot(re, w),           # ζ = −Re λ / |λ|
-                       settings={"method": "exudyn ComputeLinearizedSystem + dense quadratic "
-                                           "eigenproblem", "drive_torque": 0.0},
-                       notes=_approximate_note(params))
+    return LeafModes(frequencies_hz=np.array(w) / (2 * math.pi), labels=labels,
+                     damping=-re / np.hypot(re, w),           # ζ = −Re λ / |λ|
+                     settings={"method": "exudyn ComputeLinearizedSystem + dense quadratic "
+                                         "eigenproblem", "drive_torque": 0.0},
+                     notes=_approximate_note(params))
 
 
 def whirl_sweep(params, spins):

@@ -25,7 +25,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from compare.contract import ModesResult, merge_settings
+from compare.contract import LeafModes, merge_settings
 from reference_models import beam_chain_common as bc
 
 # Same chain and convergence as the Exudyn model (see there: default N = 40 with Richardson
@@ -80,7 +80,7 @@ def _linearised(chain: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.eye(nv - 1), -Aq[1:, 1:], -Av[1:, 1:]
 
 
-def _package(out: dict, settings: dict, note: str, extra: dict) -> ModesResult:
+def _package(out: dict, settings: dict, note: str, extra: dict) -> LeafModes:
     return bc.package(out, {**settings, "fd_eps": _FD_EPS, "hub_armature_factor": HUB_ARMATURE,
                             "linearisation": "mjd_transitionFD (Euler), hub removed"},
                       note, extra)
@@ -98,7 +98,7 @@ def _physical_segments(params, s, section, n):
                          " m (I_x > I_y + I_z); use the Exudyn model or fewer segments")
 
 
-def modes(params: dict, settings: dict | None = None) -> ModesResult:
+def modes(params: dict, settings: dict | None = None) -> LeafModes:
     """Rotating blade: flap/lag/torsion frequencies (Hz, rotating frame) at params['speed']."""
     return bc.blade_result(params, merge_settings(settings, MODES_SETTINGS, ()), _linearised,
                            _package, "rigid-body hinge chain linearised with mjd_transitionFD "
@@ -106,7 +106,7 @@ def modes(params: dict, settings: dict | None = None) -> ModesResult:
                            "rotary inertia ρI_lag", check=_physical_segments)
 
 
-def shaft_modes(params: dict, settings: dict | None = None) -> ModesResult:
+def shaft_modes(params: dict, settings: dict | None = None) -> LeafModes:
     """Spinning shaft: whirl frequencies (Hz, co-rotating frame) at Ω = spin_ratio·ω₀;
     extra['omega_star'] = ω/ω₀ (Table 2)."""
     return bc.shaft_result(params, merge_settings(settings, SHAFT_MODES_SETTINGS, ()),

@@ -43,7 +43,7 @@ import mujoco
 import mujoco.rollout
 import numpy as np
 
-from compare.contract import LeafResult, ModesResult, merge_settings
+from compare.contract import LeafModes, LeafResult, merge_settings
 from compare.physics import rotor as physics
 
 DEFAULT_SETTINGS = {
@@ -607,7 +607,7 @@ def modes(params: dict, settings: dict) -> dict:
             "callback": kind, "linearisation": "mjd_transitionFD, ball joint, inertial frame"}
     notes = (["approximate: steady spin is no equilibrium of an eccentric rotor"]
              if spin != 0 and params["eccentricity"] != 0 else [])
-    return ModesResult(frequencies_hz=np.array([wb, wf]) / (2 * math.pi),
+    return LeafModes(frequencies_hz=np.array([wb, wf]) / (2 * math.pi),
                        labels=["backward whirl", "forward whirl"], damping=np.array([zb, zf]),
                        settings=used, notes=notes)
 

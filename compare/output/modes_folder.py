@@ -1,0 +1,38 @@
+"""The folder of `xval modes` (and of a campaign's frequency case, `ModesResult.save`):
+report.md, result.json, the Campbell diagram (campbell.png, campbell.rrd) where the scene
+sweeps, the mode shapes (mode_shapes.png, mode_shapes.rrd) where it draws them."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from . import campbell_plot, mode_shapes
+from .study import write_study
+
+
+def write_modes_folder(out_dir: Path, result) -> dict:
+    """Every file of a modes result made in memory (`result.report`: its Markdown sections
+    "head", "explain", "campbell", "identify"; `result.drawing`: the Campbell diagram's
+    (values, the lines in the figure's frame, critical speeds, events, that frame, the lines in
+    the solvers' frame)). `result.out_dir` and `result.files` name them;
+    returns the JSON written."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    sc, part, files = result.scene, result.report, {}
+    md = [*part["head"]]
+    if sc.mode_shape_3d:
+        drawn = mode_shapes.write(out_dir, sc, result.params, list(result.runs.values()))
+        if drawn:
+            files["mode_shapes_recording"] = drawn["recording"]
+            files["mode_shapes_figure"] = drawn["figure"]
+            md += ["", "## Mode shapes", "", drawn["text"], "", "![mode shapes](mode_shapes.png)"]
+    md += part["explain"]
+    if result.drawing is not None and result.drawing[5]:
+        values, shown, entries, events, frame, lines = result.drawing
+        campbell_plot.png(out_dir / "campbell.png", sc, values, shown, entries, result.params,
+                          events, frame)
+        files["recording"] = campbell_plot.rrd(out_dir / "campbell.rrd", sc, values, lines)
+    md += part["campbell"] + part["identify"]
+    md[1:1] = ["", f"**{result.summary}**"]
+    files["report"] = out_dir / "report.md"
+    result.out_dir, result.files = out_dir, files
+    return write_study(out_dir, md, result.to_json())

@@ -1,0 +1,28 @@
+"""A run folder (`xval run --out`, a campaign case, `TimeResult.save`): one .npz per solver,
+run.rrd, report.md with its plots, result.json — the last file; until it is written the
+folder is marked incomplete (guard.py)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..atomic import write_json
+
+
+def write_trajectory(folder, tr, name: str | None = None) -> Path:
+    """A trajectory as `name`.npz (default: its solver's name), atomically, as soon as it
+    exists (a later crash loses nothing)."""
+    return tr.save(Path(folder) / f"{name or tr.solver}.npz")
+
+
+def write_run_files(result, record: bool = True, report: bool = True) -> dict:
+    """The recording, the report and result.json into `result.out_dir` (its trajectories are
+    in `result.files` already); returns `result.files`, which names them too."""
+    out_dir, files = result.out_dir, result.files
+    if record:
+        from .recording import write_run_recording
+        files["recording"] = write_run_recording(out_dir / "run.rrd", result)
+    if report:
+        from .report import write_run_report
+        files["report"] = write_run_report(out_dir, result)
+    write_json(out_dir / "result.json", result.to_json())
+    return files

@@ -1,0 +1,230 @@
+"""Natural frequencies: every solver's modes, matched mode by mode; the Campbell diagram and
+critical speeds where the scene sweeps."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..analysis.trajectory import Modes
+from ..errors import BadInput
+from . import tables
+from .base import Result, comparisons_from_json
+from .records import Side, modes_case
+
+# the run fields of the JSON (contract.md); any other key of a run is one of its `extra` arrays
+_RUN_KEYS = ("solver", "status", "wall_s", "frequencies_hz", "labels", "versions", "notes",
+             "reason", "omega_d", "rpm", "zeta", "log_dec", "whirl")
+
+
+def _run_json(r: Modes) -> dict:
+    return {"solver": r.solver, "status": r.status, "wall_s": round(r.wall_s, 6),
+            "frequencies_hz": list(r.frequencies_hz), "labels": r.labels,
+            "versions": r.versions, **damped_json(r),
+            **({"notes": r.notes} if r.notes else {}),
+            **({k: list(np.ravel(v)) for k, v in r.extra.items()}),
+            **({"reason": r.reason} if r.reason else {})}
+
+
+DAMPED_HEADER = ["solver", "mode", "whirl", "f_d [Hz]", "ω_d [rad/s]", "ω_d [rpm]", "ζ",
+                 "log dec"]
+
+
+def log_dec(zeta):
+    """The logarithmic decrement δ = 2πζ/√(1 − ζ²) (inf for ζ ≥ 1: no oscillation)."""
+    z = np.asarray(zeta, float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(z < 1, 2 * np.pi * z / np.sqrt(np.maximum(1 - z * z, 0.0)), np.inf)
+
+
+def damped_json(m: Modes | None) -> dict:
+    """A run's damped modes as `xval modes --json` lists them (contract.md, "Rotordynamic
+    results"): ω_d [rad/s] and rpm beside frequencies_hz, ζ, log dec, whirl; {} without ζ."""
+    if m is None or m.damping is None:
+        return {}
+    w = 2 * np.pi * np.asarray(m.frequencies_hz, float)
+    return {"omega_d": list(w), "rpm": list(w * 30 / np.pi), "zeta": list(map(float, m.damping)),
+            "log_dec": list(map(float, log_dec(m.damping))),
+            **({"whirl": list(m.whirl)} if m.whirl is not None else {})}
+
+
+def damped_rows(results: list[Modes]) -> list[list[str]]:
+    """One row per mode of every solver that gives damping ratios (DAMPED_HEADER): Hz, rad/s
+    and rpm side by side, ζ and log dec (ROSS's conventions)."""
+    rows = []
+    for m in results:
+        if m.status != "ok" or m.damping is None:
+            continue
+        whirl = m.whirl or ["—"] * len(m.labels)
+        for f, lb, wh, z, d in zip(m.frequencies_hz, m.labels, whirl, m.damping,
+                                   log_dec(m.damping)):
+            rows.append([m.solver, lb, wh, f"{f:.10g}", f"{2 * np.pi * f:.10g}",
+                         f"{60 * f:.8g}", f"{z + 0.0:.8g}", f"{d + 0.0:.6g}"])   # no −0
+    return rows
+
+
+def markdown_table(header, rows) -> list[str]:
+    return (["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+            + ["| " + " | ".join(r) + " |" for r in rows])
+
+
+class ModesResult(Result):
+    """`xval.modes(...)`, `xval modes`: per solver the `Modes` (`r["mstmm"].frequencies_hz`,
+    `.labels`, `.status`, `.wall_s`), the mode-by-mode `comparisons`, the `critical_speeds`
+    (solver -> {name: value}) and `campbell` (the diagram's JSON) where the scene sweeps,
+    `status` (agree / disagree / incomplete) and its one line `summary`, `unpaired_modes`,
+    `incomplete`; what else the study found (explanations, identification) in `extra`.
+
+    A result made in memory holds what its report needs (`report`: the Markdown sections,
+    `drawing`: the Campbell lines) and writes it with `save`; one read from files is saved by
+    copying its folder."""
+    TYPE = "modes"
+    FREQ_HEADER = ["solver", "status", "wall [s]", "frequencies [Hz] (labels)"]
+
+    def __init__(self, scene, params: dict, runs: list[Modes], comparisons: list, *,
+                 status: str | None = None, summary: str | None = None,
+                 critical_speeds: dict | None = None, campbell: dict | None = None,
+                 unpaired_modes: list | None = None, incomplete: list | None = None,
+                 extra: dict | None = None, report: dict | None = None, drawing=None,
+                 out_dir=None, files: dict | None = None):
+        self.scene_name = self._of(scene)
+        self.params = params
+        self.runs = {r.solver: r for r in runs}
+        self.comparisons = comparisons
+        self.status, self.summary = status, summary
+        self.critical_speeds = critical_speeds or {}
+        self.campbell = campbell
+        self.unpaired_modes = unpaired_modes or []
+        self.incomplete = incomplete or []
+        self.extra = extra or {}
+        self.report, self.drawing = report, drawing
+        self.out_dir = Path(out_dir) if out_dir else None
+        self.files = dict(files or {})
+
+    solvers = property(lambda self: list(self.runs))
+    disagreements = property(lambda self: [c for c in self.comparisons
+                                           if c.verdict == "disagree"])
+
+    def __getitem__(self, solver):
+        return self.runs[solver]
+
+    # --- JSON and files ----------------------------------------------------------------------
+
+    def to_json(self) -> dict:
+        """What `xval modes --json` prints (contract.md) and result.json holds."""
+        out = {"result": self.TYPE, "scene": self.scene_name, "params": self.params,
+               "runs": [_run_json(r) for r in self.runs.values()],
+               "comparisons": [c.as_dict() for c in self.comparisons],
+               "unpaired_modes": self.unpaired_modes, "incomplete": self.incomplete,
+               **self.extra}
+        if self.campbell is not None:
+            out["critical_speeds"], out["campbell"] = self.critical_speeds, self.campbell
+        out.update({k: str(v) for k, v in self.files.items()})
+        out["status"], out["summary"] = self.status, self.summary
+        return out
+
+    @classmethod
+    def from_json(cls, obj: dict, folder=None) -> ModesResult:
+        runs = [Modes(obj["scene"], r["solver"], np.asarray(r["frequencies_hz"], float),
+                      list(r["labels"]), notes=r.get("notes", []),
+                      damping=np.asarray(r["zeta"], float) if "zeta" in r else None,
+                      whirl=r.get("whirl"),
+                      extra={k: np.asarray(v) for k, v in r.items() if k not in _RUN_KEYS},
+                      status=r["status"], reason=r.get("reason"), wall_s=r.get("wall_s", 0.0),
+                      versions=r.get("versions", {})) for r in obj["runs"]]
+        files = ("report", "recording", "mode_shapes_recording", "mode_shapes_figure")
+        known = {"result", "scene", "params", "runs", "comparisons", "unpaired_modes",
+                 "incomplete", "critical_speeds", "campbell", "status", "summary", *files}
+        return cls(obj["scene"], obj["params"], runs, comparisons_from_json(obj["comparisons"]),
+                   status=obj.get("status"), summary=obj.get("summary"),
+                   critical_speeds=obj.get("critical_speeds"), campbell=obj.get("campbell"),
+                   unpaired_modes=obj.get("unpaired_modes"), incomplete=obj.get("incomplete"),
+                   extra={k: v for k, v in obj.items() if k not in known}, out_dir=folder,
+                   files={k: Path(folder) / Path(obj[k]).name if folder else Path(obj[k])
+                          for k in files if obj.get(k)})
+
+    def save(self, path) -> Path:
+        """Write what `xval modes --out` writes into the folder `path`: report.md,
+        result.json, the Campbell diagram and its recording, the mode shapes."""
+        from ..output.folders import copy_folder, make_out
+        from ..output.modes_folder import write_modes_folder
+        if self.report is None:                 # read from files: its folder holds them
+            if self.out_dir is None:
+                raise BadInput("nothing to save: this modes result holds no report")
+            self.out_dir = copy_folder(self.out_dir, path, {})[0]
+            self.files = {k: self.out_dir / Path(v).name for k, v in self.files.items()}
+            return self.out_dir
+        make_out(str(path))
+        write_modes_folder(Path(path), self)
+        return Path(path)
+
+    # --- views ---------------------------------------------------------------------------
+
+    def title(self):
+        return f"{self.scene_name}: {len(self.runs)} solvers, {self.summary}"
+
+    def tables(self):
+        damped = damped_rows(list(self.runs.values()))   # ζ, log dec, rad/s and rpm beside Hz
+        return [(self.FREQ_HEADER, self._freq_rows()),
+                *([(DAMPED_HEADER, damped)] if damped else []),
+                (tables.VERDICT_HEADER, tables.verdict_rows(self.comparisons))]
+
+    def lines(self):
+        return self._crit()
+
+    def _freq_rows(self):
+        return [[s, m.status, tables.num(m.wall_s),
+                 ", ".join(f"{f:.6g}" + (f" ({lb})" if lb else "")
+                           for f, lb in zip(m.frequencies_hz,
+                                            m.labels or [""] * len(m.frequencies_hz)))
+                 or (m.reason or "")] for s, m in self.runs.items()]
+
+    def _crit(self):
+        return [f"critical {s}: " + ", ".join(f"{k} {v:.6f}" for k, v in c.items())
+                for s, c in self.critical_speeds.items() if c]
+
+    def figure(self):
+        """A matplotlib Figure: the Campbell diagram where the scene sweeps, else each
+        solver's frequencies side by side."""
+        from matplotlib.figure import Figure
+        fig = Figure(figsize=(7.5, 4.8))
+        ax = fig.subplots()
+        if self.campbell and self.campbell["lines_hz"]:
+            x = self.campbell["values"]
+            for k, (s, lines) in enumerate(self.campbell["lines_hz"].items()):
+                for j, (key, f) in enumerate(lines.items()):
+                    ax.plot(x, f, lw=1, ls=["-", "--", ":", "-."][k % 4], color=f"C{j % 10}",
+                            label=f"{s}: {key}")
+            ax.set_xlabel(self.campbell["parameter"])
+            ax.legend(fontsize=6, ncol=2)
+        else:
+            for i, m in enumerate(self.runs.values()):
+                ax.plot([i] * len(m.frequencies_hz), m.frequencies_hz, "_", ms=30, mew=2)
+            ax.set_xticks(range(len(self.runs)), list(self.runs))
+            ax.set_yscale("log")
+        ax.set_ylabel("frequency [Hz]")
+        ax.grid(alpha=0.3)
+        ax.set_title(self.scene_name)
+        fig.tight_layout()
+        return fig
+
+    plot = figure
+
+    def to_arrow(self, what: str = "frequencies"):
+        """"frequencies": one row per solver and mode; "comparisons": one per comparison."""
+        if what == "comparisons":
+            return tables.arrow_rows([c.as_dict() for c in self.comparisons])
+        if what != "frequencies":
+            raise BadInput(f"to_arrow: {what!r} is not 'frequencies' or 'comparisons'")
+        return tables.arrow_rows([{"solver": s, "mode": i + 1,
+                                   "label": (m.labels[i] if i < len(m.labels) else "") or "",
+                                   "frequency_hz": float(f)}
+                                  for s, m in self.runs.items()
+                                  for i, f in enumerate(m.frequencies_hz)])
+
+    def to_pandas(self, what: str = "frequencies"):
+        return tables.pandas(self.to_arrow(what))
+
+    def side(self) -> Side:
+        return Side(self.where(), "run", {self.scene_name: modes_case(self.scene_name,
+                                                                      self.to_json())})

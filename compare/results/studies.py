@@ -1,0 +1,175 @@
+"""The studies' results: bench, extremes, map, campaign, power, diff. Each holds the dict its
+command's `--json` prints (`s["n_failed"]`, `.data`) and prints the lines the command prints
+(`str(s)`, the report's path last).
+
+A study made in memory (extremes, power, diff) writes its files with `save(path)`. The others
+write as they go (a bench's trajectories, a map's and a campaign's stored points, which a
+stopped run resumes from): made without `out` they work in a temporary folder that goes away
+with the result, and `save(path)` copies the folder."""
+from __future__ import annotations
+
+import shutil
+import weakref
+from pathlib import Path
+
+from .base import Result
+from .records import Side, is_modes_json, modes_case, read_maps, readable, time_case
+
+
+class StudyResult(Result):
+    """A study's summary: `data` (the JSON), `lines()` (what the command prints), `report`
+    (the report's path, once written), `out_dir`."""
+
+    def __init__(self, data: dict, out_dir=None, temporary=None, report_md=None):
+        self.data = data
+        data["result"] = self.TYPE
+        self.report_md = report_md            # a report held in memory (Markdown lines)
+        self._dir = Path(out_dir) if out_dir else None
+        self._temporary = temporary           # the temporary folder holding _dir, if any
+        if temporary:
+            weakref.finalize(self, shutil.rmtree, str(temporary), True)
+
+    out_dir = property(lambda self: None if self._temporary else self._dir)
+    report = property(lambda self: Path(self.data["report"]) if self.data.get("report")
+                      else None)
+
+    def __getitem__(self, key):
+        return self.data[key]
+
+    def keys(self):
+        return self.data.keys()
+
+    def to_json(self) -> dict:
+        return self.data
+
+    @classmethod
+    def from_json(cls, obj: dict, folder=None):
+        return cls(obj, folder)
+
+    def summary_lines(self) -> list[str]:
+        return []
+
+    def lines(self):
+        return self.summary_lines() + ([f"report: {self.report}"] if self.report else [])
+
+    def save(self, path) -> Path:
+        """Write the command's files into the folder `path`: the study's folder copied (its
+        paths in `data` follow), or, for a study held in memory, its report and JSON."""
+        from ..output.folders import copy_folder, write_result_json
+        from ..output.study import write_study
+        if self._dir is not None:
+            dest, self.data = copy_folder(self._dir, path, self.data)
+            self._dir, self._temporary = dest, None
+            return dest
+        if self.report_md is not None:
+            from ..output.folders import make_out
+            make_out(str(path))
+            write_study(Path(path), self.report_md, self.data, self.JSON)
+        else:
+            write_result_json(path, self.JSON, self.data)
+        self._dir = Path(path)
+        return self._dir
+
+
+class BenchResult(StudyResult):
+    """`xval.bench(...)`: the work-precision rows, the summary per error level, the observed
+    orders (or the throughput rows)."""
+    TYPE, JSON = "bench", "bench.json"
+
+    def summary_lines(self):
+        return list(self.data["summary_lines"])
+
+
+class ExtremesResult(StudyResult):
+    """`xval.extremes(...)`: per case and solver the outcome, its number and why."""
+    TYPE = "extremes"
+
+    def summary_lines(self):
+        return [f"{r['case']:32s} {r['solver']:26s} {r['outcome']:18s} {r['detail']}"
+                for r in self.data["results"]]
+
+
+class PowerResult(StudyResult):
+    """`xval.power(...)`: per parameter and solver the smallest change a verdict sees."""
+    TYPE = "power"
+
+    def summary_lines(self):
+        d = self.data
+        return [f"{r['parameter']:20s} {r['solver']:26s} "
+                + (f"ε* {r['epsilon']:.2g}  ({' vs '.join(r['pair'])}, {r['channel']}; "
+                   f"{r['how']})"
+                   if r["epsilon"] is not None else f"—  ({r['how']})")
+                for r in d["power"]] + [d["summary"], f"{d['runs']} runs, {d['wall_s']:.1f} s"]
+
+
+class MapResult(StudyResult):
+    """`xval.map(...)`: every solver's crossings (`s["boundaries"]`), the pairwise verdicts
+    (`s["verdicts"]`), the points."""
+    TYPE, JSON = "map", "map.json"
+
+    def summary_lines(self):
+        from ..output.map_plot import status_line
+        d, out = self.data, []
+        for s, cs in d["boundaries"].items():
+            for c in cs:
+                row = "" if c["y"] is None else f" at {d['y']['name']} = {c['y']:.6g}"
+                out.append(f"{s:14s} {c['from']} → {c['to']}{row}: {d['x']['name']} in "
+                           f"[{c['bracket'][0]:.6g}, {c['bracket'][1]:.6g}]")
+        return out + [f"{v['a']} vs {v['b']}: {v['verdict']} — {'; '.join(v['why'])}"
+                      for v in d["verdicts"]] + [status_line(d)]
+
+    def side(self) -> Side:
+        if self._dir is None:
+            return Side(self.where(), "map", {}, {self.data.get("scene", "map"): {
+                "scene": self.data.get("scene"), "boundaries": self.data["boundaries"]}})
+        return Side(self._dir, "map", {}, read_maps(self._dir))
+
+
+class CampaignResult(StudyResult):
+    """`xval.campaign(...)`: the campaign's summary — jobs run and reused, every case's
+    result, the maps."""
+    TYPE, JSON = "campaign", "summary.json"
+
+    def summary_lines(self):
+        d = self.data
+        return [f"campaign {d['name']}: {d['n_jobs']} jobs ({d['n_run']} run, "
+                f"{d['n_reused']} reused), {d['n_failed']} cases with a failed solver, "
+                f"{d['n_crashed']} crashed jobs; {d['wall_s']:.1f} s"]
+
+    def side(self) -> Side:
+        p = self._dir
+        cases = {}
+        with readable(p / "summary.json"):
+            for obj in self.data["cases"]:
+                name = obj["case"]
+                cases[name] = (modes_case(name, obj) if is_modes_json(obj, p / name)
+                               else time_case(name, obj, p / name))
+        return Side(p, "campaign", cases, read_maps(p))
+
+
+class DiffResult(StudyResult):
+    """`xval.diff(old, new)`: which results moved (`s["any_change"]`, `s["lines"]`), per case ×
+    solver × channel against both sides' error bars; `plots`: the data of the changed
+    channels' plots, drawn by `save`."""
+    TYPE, JSON = "diff", "diff.json"
+
+    def __init__(self, data: dict, out_dir=None, plots: dict | None = None):
+        super().__init__(data, out_dir)
+        self.plots = plots or {}
+
+    def summary_lines(self):
+        d, s = self.data, self.data["summary"]
+        return ([f"{s['changed']} changed, {s['unchanged']} unchanged, {s['new']} new, "
+                 f"{s['gone']} gone (runs); {s['channels_changed']} channels changed"]
+                + list(d["lines"]) + [f"note: {n}" for n in d["notes"][:20]])
+
+    def save(self, path) -> Path:
+        """report.md, diff.json and the plots of the channels that moved most."""
+        from ..output.diff_report import write_diff_report
+        from ..output.folders import make_out
+        if self._dir is not None:
+            return super().save(path)
+        make_out(str(path))
+        self._dir = Path(path)
+        self.data = write_diff_report(self._dir, self.data, self.plots)
+        return self._dir

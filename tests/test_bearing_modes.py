@@ -13,8 +13,9 @@ from compare.analysis.identify import pencil_poles
 from compare.analysis.trajectory import Modes
 from compare.cli import main
 from compare.physics import bearing_rotor as phys
+from compare.results.modes import log_dec
 from compare.scenes import bearing, get_scene
-from compare.workflows.modes import _run_time, identified_against_eigenvalues, log_dec
+from compare.workflows.modes import _run_time, identified_against_eigenvalues
 
 TIME = get_scene("bearing-rotor")
 SCENE = TIME.modal()

@@ -167,7 +167,7 @@ def _linacc(ratio):
 # slider 1e9 N/m (press and press-cycle alike): lagrange-partial 4.0e-5 → 4.0e-7 — its drift
 #   stops at 3.0e-6 below dt 1e-6 with the paper's 0.1° virtual step (the O(Δ²) model error of
 #   the partial systems), 0.01° removes it; Exudyn 1.2e-4 → 4.7e-7 at 1.25e-6 s (falls as dt²);
-#   MuJoCo 3.4e-3 / 5.5e-3 (press-cycle) → 2.5e-7 / 3.4e-7 at 2.5e-6 s (as dt^2.6: the soft
+#   MuJoCo 3.4e-3 / 5.5e-3 (press-cycle) → 2.6e-7 / 3.4e-7 at 2.5e-6 s (as dt^2.6: the soft
 #   loop constraint's time constant follows the step; 3.1e-6 s leaves 5.9e-7 in press-cycle).
 _RESOLVE_SLIDER = {"dt": {"lagrange-partial": 1e-6, "exudyn": 1.25e-6, "mujoco": 2.5e-6},
                    "dphi_deg": {"lagrange-partial": 0.01}, "dpsi_deg": {"lagrange-partial": 0.01}}
@@ -190,9 +190,10 @@ _LONG_RUN = {
               "margin needs dt ≈ 1.7e-6 s, 3.5 million steps of a per-step Python callback, "
               "several minutes per run",
     "mujoco": "its energy drift falls as dt^2.9 (2.2e-3 of the energy scale at its default "
-              "1e-4 s, 3.1e-4 at 5e-5 s, 4.1e-5 at 2.5e-5 s — the soft loop constraint's time "
-              "constant follows the step): 1e-6 with margin needs dt ≈ 5e-6 s, 1.2 million "
-              "steps, several minutes per run"}
+              "1e-4 s, 3.1e-4 at 5e-5 s, 4.1e-5 at 2.5e-5 s, 7.9e-7 at 6.25e-6 s in a 6-min run "
+              "on a loaded machine — the soft loop constraint's time constant follows the "
+              "step): 1e-6 with margin needs dt ≈ 5e-6 s, 1.2 million steps, several minutes "
+              "per run"}
 
 PRESS_EXTREMES = (
     Extreme("toggle: rod vertical", {"t_end": 1.0}, _RESOLVE_TOGGLE, slow=("exudyn",),

@@ -115,3 +115,23 @@ def test_a_drift_is_judged_against_the_bound_not_the_bound_plus_its_own_error():
     assert not ok and value == pytest.approx(9.2e-4, rel=1e-3) and "shrinks" in why
     ok, value, why = energy_check(sc, run(6e-7), 1e-6)
     assert ok and "ratio 0.6, marginal" in why
+
+
+def test_a_solvers_long_run_waits_for_all(tmp_path, monkeypatch):
+    """press's toggle: Exudyn at the step that resolves it (160 000 steps) runs only with
+    --all, and the default run says it skipped it; the case's other solvers run either way."""
+    import compare.workflows.extremes as ex
+    ran = {}
+
+    def record(sc, case, chosen, *args):
+        ran[case.name] = [s.name for s in chosen]
+        return []
+    monkeypatch.setattr(ex, "run_case", record)
+    obj = run_extremes("press", None, tmp_path, log=lambda m: None)
+    assert "exudyn" not in ran["toggle: rod vertical"] and "mujoco" in ran["toggle: rod vertical"]
+    assert "exudyn" in ran["slider 1e9 N/m"] and "100 crank revolutions" not in ran
+    assert obj["skipped_slow"] == ["100 crank revolutions", "toggle: rod vertical: exudyn"]
+    ran.clear()
+    obj = run_extremes("press", None, tmp_path, include_slow=True, log=lambda m: None)
+    assert "exudyn" in ran["toggle: rod vertical"] and "100 crank revolutions" in ran
+    assert obj["skipped_slow"] == []

@@ -74,7 +74,9 @@ def test_no_extreme_case_returns_ok_with_a_failing_check(scene, tmp_path):
     """Every run within tolerance or an honest status; a declared known failure still fails
     (a stale declaration — the solver passes after all — is refused as well)."""
     obj = run_extremes(scene, None, tmp_path, include_slow=True, log=lambda m: None)
-    assert not problems(obj["results"]), problems(obj["results"])
+    bad = [f"{r['case']} {r['solver']}: {r['outcome']} — {r['detail']}"
+           for r in problems(obj["results"])]
+    assert not bad, "\n".join(bad)
     declared = {(c.name, s) for c in get_scene(scene).extremes for s in c.known_failures}
     assert {(r["case"], r["solver"]) for r in obj["results"]
             if r["outcome"] == KNOWN} == declared

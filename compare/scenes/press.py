@@ -164,16 +164,17 @@ def _linacc(ratio):
 # step that does, as a user would pick it; the default steps leave a drift that falls with the
 # step (each run's own estimate says so: discretisation error, not a wrong model). Drift of the
 # energy scale measured default → here (dt is snapped to divide the 1.25 ms output step):
-# slider 1e9 N/m (press and press-cycle alike): lagrange-partial 4.0e-5 → 4.0e-7 — its drift
-#   stops at 3.0e-6 below dt 1e-6 with the paper's 0.1° virtual step (the O(Δ²) model error of
-#   the partial systems), 0.01° removes it; Exudyn 1.2e-4 → 4.7e-7 at 1.25e-6 s (falls as dt²);
+# slider 1e9 N/m (press and press-cycle alike): lagrange-partial 4.0e-5 → 4.0e-7 at 1e-6 s and
+#   0.01° (as dt²; with the paper's 0.1° virtual step the drift stops near 3e-6 — 4.4e-6 at
+#   2e-6 s, 3.4e-6 at 1e-6 s — the O(Δ²) model error of the partial systems; 2e-6 s with 0.01°
+#   leaves 1.6e-6); Exudyn 1.2e-4 → 4.7e-7 at 1.25e-6 s (falls as dt²);
 #   MuJoCo 3.4e-3 / 5.5e-3 (press-cycle) → 2.6e-7 / 3.4e-7 at 2.5e-6 s (as dt^2.6: the soft
 #   loop constraint's time constant follows the step; 3.1e-6 s leaves 5.9e-7 in press-cycle).
 _RESOLVE_SLIDER = {"dt": {"lagrange-partial": 1e-6, "exudyn": 1.25e-6, "mujoco": 2.5e-6},
                    "dphi_deg": {"lagrange-partial": 0.01}, "dpsi_deg": {"lagrange-partial": 0.01}}
-# toggle: Exudyn 2.6e-5 → 2.9e-7 at 6.25e-6 s without numerical damping (spectral radius 1:
-# generalized-α's damping at 0.8 bleeds energy steadily, still 4.5e-7 at 2.5e-6 s, a 60-s run);
-# MuJoCo 7.9e-6 → 2.2e-7 at 2.78e-5 s (5.1e-7 at 3.1e-5 s)
+# toggle: Exudyn 2.6e-5 → 2.9e-7 at 6.25e-6 s without numerical damping (spectral radius 1;
+# 5.9e-7 at 1e-5 s; at 0.8 generalized-α bleeds energy steadily, still 4.5e-7 at 2.5e-6 s, a
+# 400 000-step run); MuJoCo 7.9e-6 → 2.2e-7 at 2.78e-5 s (5.1e-7 at 3.1e-5 s)
 _RESOLVE_TOGGLE = {"dt": {"exudyn": 6.25e-6, "mujoco": 2.78e-5}, "spectral_radius": {"exudyn": 1.0}}
 # motor stall: lagrange-partial 2.5e-6 → 4.0e-7 at 4e-6 s and 0.01° (2.5e-6 at any step with
 # 0.1°: the stall's drift is the partial systems' model error, as above); MuJoCo 1.0e-4 → 3.3e-7
@@ -199,8 +200,8 @@ PRESS_EXTREMES = (
     Extreme("toggle: rod vertical", {"t_end": 1.0}, _RESOLVE_TOGGLE, slow=("exudyn",),
             why="left idle the rod reaches the vertical, where the (φ, ψ) chart is singular: "
                 "the minimal-coordinate solvers must stop with that reason; full-coordinate "
-                "engines may pass (at the step that resolves the 1-s run; Exudyn's, 160 000 "
-                "steps, only with --all)"),
+                "engines may pass (at the step that resolves the 1-s run, Exudyn without "
+                "numerical damping; its 160 000 steps only with --all)"),
     Extreme("slider 1e9 N/m", {"slider_stiffness": 1e9}, _RESOLVE_SLIDER, bound=1e-6,
             why="very stiff slider (T_min 3 ms; every solver but lagrange-exact at the step "
                 "that resolves it, lagrange-partial with 0.01° partial systems)"),

@@ -159,12 +159,52 @@ def _linacc(ratio):
     return {**_QUIET, "output_dt": h, "t_end": 300 * h}
 
 
+# The step (and, for lagrange-partial, the finite-difference step of its partial systems) at
+# which each solver's energy balance closes to the 1e-6 bound with ≥ 2× margin — the largest
+# step that does, as a user would pick it; the default steps leave a drift that falls with the
+# step (each run's own estimate says so: discretisation error, not a wrong model). Drift of the
+# energy scale measured default → here (dt is snapped to divide the 1.25 ms output step):
+# slider 1e9 N/m (press and press-cycle alike): lagrange-partial 4.0e-5 → 4.0e-7 at 1e-6 s and
+#   0.01° (as dt²; with the paper's 0.1° virtual step the drift stops near 3e-6 — 4.4e-6 at
+#   2e-6 s, 3.4e-6 at 1e-6 s — the O(Δ²) model error of the partial systems; 2e-6 s with 0.01°
+#   leaves 1.6e-6); Exudyn 1.2e-4 → 4.7e-7 at 1.25e-6 s (falls as dt²);
+#   MuJoCo 3.4e-3 / 5.5e-3 (press-cycle) → 2.6e-7 / 3.4e-7 at 2.5e-6 s (as dt^2.6: the soft
+#   loop constraint's time constant follows the step; 3.1e-6 s leaves 5.9e-7 in press-cycle).
+_RESOLVE_SLIDER = {"dt": {"lagrange-partial": 1e-6, "exudyn": 1.25e-6, "mujoco": 2.5e-6},
+                   "dphi_deg": {"lagrange-partial": 0.01}, "dpsi_deg": {"lagrange-partial": 0.01}}
+# toggle: Exudyn 2.6e-5 → 2.9e-7 at 6.25e-6 s without numerical damping (spectral radius 1;
+# 5.9e-7 at 1e-5 s; at 0.8 generalized-α bleeds energy steadily, still 4.5e-7 at 2.5e-6 s, a
+# 400 000-step run); MuJoCo 7.9e-6 → 2.2e-7 at 2.78e-5 s (5.1e-7 at 3.1e-5 s)
+_RESOLVE_TOGGLE = {"dt": {"exudyn": 6.25e-6, "mujoco": 2.78e-5}, "spectral_radius": {"exudyn": 1.0}}
+# motor stall: lagrange-partial 2.5e-6 → 4.0e-7 at 4e-6 s and 0.01° (2.5e-6 at any step with
+# 0.1°: the stall's drift is the partial systems' model error, as above); MuJoCo 1.0e-4 → 3.3e-7
+# at 2e-5 s (5.1e-7 at 2.5e-5 s)
+_RESOLVE_STALL = {"dt": {"lagrange-partial": 4e-6, "mujoco": 2e-5},
+                  "dphi_deg": {"lagrange-partial": 0.01}, "dpsi_deg": {"lagrange-partial": 0.01}}
+
+# 100 crank revolutions (6 s, 113 revolutions): the engines' drifts fall with the step, but
+# 1e-6 needs runs of minutes (each check is that run plus its estimate's 2·dt and dt/2 runs).
+_LONG_RUN = {
+    "exudyn": "its energy drift falls as dt² (2.7e-4 of the energy scale at its default "
+              "2e-5 s, 6.8e-5 at 1e-5 s; without numerical damping it fails to converge at "
+              "0.9 s, spectral radius 0.95 / 0.98 drift more, 5.1e-4 / 5.2e-4): 1e-6 with "
+              "margin needs dt ≈ 1.7e-6 s, 3.5 million steps of a per-step Python callback, "
+              "several minutes per run",
+    "mujoco": "its energy drift falls as dt^2.9 (2.2e-3 of the energy scale at its default "
+              "1e-4 s, 3.1e-4 at 5e-5 s, 4.1e-5 at 2.5e-5 s, 7.9e-7 at 6.25e-6 s in a 6-min run "
+              "on a loaded machine — the soft loop constraint's time constant follows the "
+              "step): 1e-6 with margin needs dt ≈ 5e-6 s, 1.2 million steps, several minutes "
+              "per run"}
+
 PRESS_EXTREMES = (
-    Extreme("toggle: rod vertical", {"t_end": 1.0}, why="left idle the rod reaches the "
-            "vertical, where the (φ, ψ) chart is singular: the minimal-coordinate solvers must "
-            "stop with that reason; full-coordinate engines may pass"),
-    Extreme("slider 1e9 N/m", {"slider_stiffness": 1e9}, bound=1e-6,
-            why="very stiff slider (T_min 3 ms)"),
+    Extreme("toggle: rod vertical", {"t_end": 1.0}, _RESOLVE_TOGGLE, slow=("exudyn",),
+            why="left idle the rod reaches the vertical, where the (φ, ψ) chart is singular: "
+                "the minimal-coordinate solvers must stop with that reason; full-coordinate "
+                "engines may pass (at the step that resolves the 1-s run, Exudyn without "
+                "numerical damping; its 160 000 steps only with --all)"),
+    Extreme("slider 1e9 N/m", {"slider_stiffness": 1e9}, _RESOLVE_SLIDER, bound=1e-6,
+            why="very stiff slider (T_min 3 ms; every solver but lagrange-exact at the step "
+                "that resolves it, lagrange-partial with 0.01° partial systems)"),
     Extreme("linear acceleration 0.54·T_min", _linacc(0.54),
             {"integrator": "linacc", "dt": 0.54 * _T_MIN}, bound=1e-6, solvers=_CUSTOM,
             why="just below the limit 0.5513·T_min: stable (the leaf's growth check stays "
@@ -177,7 +217,11 @@ PRESS_EXTREMES = (
             why="just above the limit: must end unstable, never ok"),
     Extreme("100 crank revolutions", {"slider_stiffness": 1e8, "slider_damping": 1e5,
                                       "t_end": 6.0, "output_dt": 0.01}, bound=1e-6, slow=True,
-            why="long-run drift (stiff damped slider, 113 revolutions)"),
+            known_failures=_LONG_RUN,
+            why="long-run drift (stiff damped slider, 113 revolutions): lagrange-exact closes "
+                "the balance (2.6e-7); lagrange-partial's linear-acceleration step ends 'too "
+                "coarse'; the engines' drifts fall with the step but the step that meets the "
+                "bound makes each run minutes long (declared known failures)"),
 )
 
 
@@ -212,11 +256,13 @@ PRESS_CYCLE = Scene(
     key_channel="crank_rate", check=_check, findings=lambda p, trs: cycle_findings(p, trs),
     draw_3d=draw_press, view_channels=("crank_rate", "rocker_angle", "slider_x"),
     extremes=(
-        Extreme("motor stall: load 50 kN", {"press_force": 5e4}, bound=1e-6,
+        Extreme("motor stall: load 50 kN", {"press_force": 5e4}, _RESOLVE_STALL, bound=1e-6,
                 why="the working load overpowers the motor (25× the default): the crank "
-                    "stalls and is thrown back"),
-        Extreme("slider 1e9 N/m", {"slider_stiffness": 1e9}, bound=1e-6,
-                why="stiff slider through lock and release"),
+                    "stalls and is thrown back (lagrange-partial and MuJoCo at the step that "
+                    "resolves it, lagrange-partial with 0.01° partial systems)"),
+        Extreme("slider 1e9 N/m", {"slider_stiffness": 1e9}, _RESOLVE_SLIDER, bound=1e-6,
+                why="stiff slider through lock and release (as press's: every solver but "
+                    "lagrange-exact at the step that resolves it)"),
     ),
     campaign_cases=({"name": "press-cycle"},),
     map_observables={"lock_time": (lambda p, tr: lock_time(p, tr), "s",

@@ -24,9 +24,10 @@
 # Your system lives in a package of your own — a *plug-in* — and xval finds it through the
 # entry-point group `xval.scenes`: nothing inside xval is edited. The package has three
 # modules: the scene (parameters, channels, allowances, regimes) and one *leaf* per solver.
-# This page is a notebook kept as text (`docs/tutorials/own_system.py`, jupytext's
-# py:percent format); the tests run it as a script, in an empty folder. Each cell below
-# writes one file of the package.
+# This page is a notebook kept as text ([own_system.py](own_system.py), jupytext's
+# py:percent format: `jupytext --to notebook own_system.py`, or open it in Jupyter with
+# jupytext installed); the tests run it as a script, in an empty folder. The first cells
+# write the package's files.
 
 # %%
 import subprocess

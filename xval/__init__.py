@@ -1,7 +1,7 @@
 """xval from Python: `import xval; r = xval.run("rotor-spinup", torque=3.2, t_end=5)`.
 
 The distribution's name as an import: the same operations as the `xval` command (the command
-is a thin layer over them), implemented in `compare.api`. See the README's "Python API".
+is a thin layer over them), implemented in `compare.api`. See docs/python-api.md.
 """
 from compare.api import (
     assert_agree,

@@ -634,7 +634,7 @@ def modes(params: dict, settings: dict) -> dict:
     return LeafModes(frequencies_hz=np.array([wb, wf]) / (2 * math.pi),
                        labels=["backward whirl", "forward whirl"], whirl=["backward", "forward"],
                        damping=-np.array([sb, sf]) / np.hypot([sb, sf], [wb, wf]),
-                       settings=used, notes=notes, extra={"max_re_per_s": max(sb, sf)})
+                       settings=used, notes=notes, extra={"max_re_per_s": float(max(sb, sf))})
 
 
 def whirl_sweep(params: dict, spins, settings: dict | None = None):

@@ -62,3 +62,22 @@ def test_no_damping_no_growth():
     m = solvers.modes(SCENE, solvers.get_solver("closed-form"), p)
     assert m.extra["max_re_per_s"] == 0 and not np.any(m.damping)
     assert instability_speed(p) == np.inf
+
+
+def test_modes_workflow_reports_unstable_above_the_threshold():
+    """`xval modes rotor-whirl --set c_int=1 --set c_ext=1 --set spin=…`: above Ω_th = 88.206
+    rad/s every solver's forward whirl is listed as growing and the summary says `unstable`;
+    just below, nothing is."""
+    from compare.workflows.modes import run_modes
+    p = SCENE.resolve({"c_int": "1", "c_ext": "1"})
+    w_th = instability_speed(p)
+    names = ["closed-form", "exudyn"]
+
+    def run(spin):
+        return run_modes("rotor-whirl", names, {"c_int": "1", "c_ext": "1", "spin": str(spin)},
+                         log=lambda *a: None, campbell_sweep=False, identify=False)
+    above, below = run(w_th * 1.001), run(w_th * 0.999)
+    assert "unstable" in above.summary and "unstable" not in below.summary
+    assert [(g["solver"], g["mode"]) for g in above.extra["unstable"]] == [
+        (n, "forward whirl") for n in names]
+    assert "unstable" not in below.extra

@@ -14,17 +14,25 @@ from compare.physics.rotor import whirl_closed_form, whirl_damped
 MODES_SETTINGS: dict = {}
 
 
+def _roots(params: dict, spin: float) -> np.ndarray:
+    """The two whirl roots λ = σ + iω, ascending |ω|; undamped, the real formula's ±w."""
+    if params.get("c_ext", 0.0) == 0 and params.get("c_int", 0.0) == 0:
+        b, f = whirl_closed_form(params, [spin])
+        sense = np.sign(spin) or 1.0                    # forward whirls with the spin
+        return 1j * sense * np.array([-b[0], f[0]])
+    lam = whirl_damped(params, spin)
+    return lam[np.argsort(np.abs(lam.imag))]
+
+
 def whirl_sweep(params: dict, spins) -> tuple[np.ndarray, np.ndarray]:
     """(backward, forward) inertial whirl frequencies in rad/s for each spin in `spins`."""
-    return whirl_closed_form(params, spins)
+    w = np.abs([_roots(params, s).imag for s in spins])
+    return w[:, 0], w[:, 1]
 
 
 def modes(params: dict, settings: dict) -> LeafModes:
     spin = params["spin"]
-    lam = whirl_damped(params, spin)
-    lam = lam[np.argsort(np.abs(lam.imag))]                 # ascending damped frequency
-    if params["c_ext"] == 0 and params["c_int"] == 0:       # undamped: the real formula
-        lam = 1j * np.sign(lam.imag) * np.array(whirl_closed_form(params, [spin]))[:, 0]
+    lam = _roots(params, spin)
     w = np.abs(lam.imag)
     whirl = (["backward", "forward"] if spin == 0 else
              ["forward" if np.sign(x) == np.sign(spin) else "backward" for x in lam.imag])

@@ -620,7 +620,9 @@ def modes(params: dict, settings: dict) -> dict:
 
     Linearisation: mjd_transitionFD under Euler (no drive torque), continuous-time blocks
     recovered exactly, ball-joint body-frame tangent frequencies converted to the inertial frame
-    (+Ω), backward/forward labelled from the eigenvector's rotation sense."""
+    (+Ω), backward/forward labelled from the eigenvector's rotation sense. With c_ext = 0 the
+    internal-damping threshold whirl is synchronous (ω = Ω): still in the body-frame
+    coordinates, its root is real there and not found within ~1e-9 of that speed."""
     spin = float(params["spin"])
     s, m, d = _whirl_setup(params, settings)
     with _Callback(s["callback"]) as cbk:

@@ -77,3 +77,37 @@ def whirl_closed_form(p: dict, spins) -> tuple[np.ndarray, np.ndarray]:
     W = np.abs(np.asarray(spins, float))
     root = np.sqrt((c["I_p"] * W) ** 2 + 4 * c["I_t"] * c["k_eff"])
     return (root - c["I_p"] * W) / (2 * c["I_t"]), (root + c["I_p"] * W) / (2 * c["I_t"])
+
+
+def whirl_damped(p: dict, spin: float) -> np.ndarray:
+    """The two whirl roots λ = σ + iω of the damped rotor at spin Ω (θ ∝ e^{λt}; ω > 0 whirls
+    counter-clockwise about +z, forward where it has Ω's sign; σ > 0 grows).
+
+    θ = θx + iθy, the small tilt (transverse Euler vector) in the fixed frame. The transverse
+    angular momentum is I_t θ̇ − i I_p Ω θ (the spin I_p Ω along the tilted axis n, whose
+    transverse part is γ × e_z = −iθ). External damping c_ext opposes the fixed-frame tilt rate
+    θ̇; internal damping c_int opposes the tilt rate seen in the spinning body's frame,
+    e^{iΩt} d/dt(θ e^{−iΩt}) = θ̇ − iΩθ. Euler's law then reads
+        I_t θ̈ + (c_e + c_i − i I_p Ω) θ̇ + (k_eff − i c_i Ω) θ = 0,
+    whose undamped roots are `whirl_closed_form`'s ±w."""
+    c = constants(p)
+    ce, ci = p.get("c_ext", 0.0), p.get("c_int", 0.0)
+    return np.roots([c["I_t"], ce + ci - 1j * c["I_p"] * spin, c["k_eff"] - 1j * ci * spin])
+
+
+def instability_speed(p: dict) -> float:
+    """Spin |Ω_th| above which internal damping makes forward whirl grow (inf: never).
+
+    Neutral root λ = iω in `whirl_damped`'s quadratic: its imaginary part gives ω = rΩ,
+    r = c_i/(c_e + c_i) (where the internal damper's drive c_i(Ω − ω) balances the external
+    drag c_e ω); its real part −I_t r²Ω² + I_p rΩ² + k_eff = 0
+    gives Ω_th = √(k_eff / (r (r I_t − I_p))), real only where r I_t > I_p — otherwise the
+    gyroscopic stiffening keeps the rotor stable at every spin. Jeffcott limit (I_p = 0,
+    I_t = m): Ω_th = ω_n (1 + c_e/c_i)."""
+    c = constants(p)
+    ce, ci = p.get("c_ext", 0.0), p.get("c_int", 0.0)
+    if ci <= 0 or c["k_eff"] <= 0:
+        return np.inf
+    r = ci / (ce + ci)
+    den = r * (r * c["I_t"] - c["I_p"])
+    return float(np.sqrt(c["k_eff"] / den)) if den > 0 else np.inf

@@ -63,6 +63,21 @@ def damped_rows(results: list[Modes]) -> list[list[str]]:
     return rows
 
 
+def growing_modes(results: list[Modes]) -> list[dict]:
+    """Every mode with ζ < 0 (it grows: the linearised system is unstable), per solver, with
+    its growth rate Re λ = −ζ ω_d/√(1 − ζ²) [1/s]."""
+    out = []
+    for m in results:
+        if m.status != "ok" or m.damping is None:
+            continue
+        for f, lb, z in zip(m.frequencies_hz, m.labels, m.damping):
+            if z < 0:
+                out.append({"solver": m.solver, "mode": lb, "frequency_hz": float(f),
+                            "zeta": float(z),
+                            "growth_per_s": float(-z * 2 * np.pi * f / np.sqrt(1 - z * z))})
+    return out
+
+
 def markdown_table(header, rows) -> list[str]:
     return (["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
             + ["| " + " | ".join(r) + " |" for r in rows])

@@ -297,6 +297,12 @@ WHIRL = Scene(
         positive("spin_max", 150.0, "rad/s", "upper end of the Campbell sweep", hi=1e5,
                  physical=False),
         Param("n_spin", 100, "", "points of the Campbell sweep", kind="int", lo=2, hi=10000),
+        # the dampers of compare.physics.rotor.whirl_damped: internal damping destabilises
+        # forward whirl above instability_speed (gyroscopic Jeffcott threshold)
+        Param("c_ext", 0.0, "N·m·s/rad", "external damping on the fixed-frame tilt rate",
+              lo=0.0, hi=1e6),
+        Param("c_int", 0.0, "N·m·s/rad", "internal (rotating) damping on the tilt rate seen "
+              "in the spinning rotor's frame", lo=0.0, hi=1e6),
     ),
     energy_channel=None,
     # Every pair equal to round-off (`python -m tests.allowances rotor-whirl`, spin 0 and 100

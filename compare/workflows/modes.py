@@ -17,7 +17,13 @@ from ..analysis.campbell import mac
 from ..analysis.trajectory import Modes
 from ..errors import BadInput
 from ..results import ModesResult
-from ..results.modes import DAMPED_HEADER, damped_json, damped_rows, markdown_table
+from ..results.modes import (
+    DAMPED_HEADER,
+    damped_json,
+    damped_rows,
+    growing_modes,
+    markdown_table,
+)
 from ..scenes import Scene, get_scene
 from .plan import plan
 
@@ -344,6 +350,9 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
     incomplete = [{"solver": r.solver, "status": r.status, "reason": r.reason}
                   for r in results if r.status != "ok"]
     extra, report = {}, {"explain": [], "campbell": [], "identify": []}
+    growing = growing_modes(results)
+    if growing:                                  # only then: undamped answers stay as they were
+        extra["unstable"] = growing
     md = [f"# {sc.name}: {sc.title}", "", f"Source: {sc.source}", "",
           "| solver | status | frequencies [Hz] | labels | notes |", "|---|---|---|---|---|"]
     md += [f"| {r.solver} | {r.status} | {', '.join(f'{f:.8g}' for f in r.frequencies_hz)} | "
@@ -351,6 +360,10 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
     if any(r.damping is not None for r in results):
         md += ["", "Damped modes (ζ: damping ratio, log dec δ = 2πζ/√(1 − ζ²); whirl about the "
                "spin as ROSS names it):", "", *markdown_table(DAMPED_HEADER, damped_rows(results))]
+    if growing:
+        md += ["", "**unstable**: " + "; ".join(
+            f"{g['solver']} {g['mode']} grows at {g['growth_per_s']:.6g} /s (ζ = {g['zeta']:.3g})"
+            for g in growing)]
     md += ["", "| a | b | mode | rel. difference | verdict |", "|---|---|---|---|---|"]
     md += [f"| {c.a} | {c.b} | {c.channel} | {c.max_rel:.2e} | {c.verdict} |"
            for c in comparisons]
@@ -394,7 +407,8 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
     incomplete += [m for m in (obj_cb or {}).get("incomplete", []) if m["solver"] not in failed]
     status, summary = modes_status(comparisons, {"incomplete": incomplete,
                                                  "unpaired_modes": unpaired,
-                                                 "campbell": obj_cb})
+                                                 "campbell": obj_cb,
+                                                 "unstable": growing})
     return ModesResult(sc, params, results, comparisons, status=status, summary=summary,
                        critical_speeds=crit, campbell=obj_cb, unpaired_modes=unpaired,
                        incomplete=incomplete, extra=extra, report=report, drawing=drawing)
@@ -435,6 +449,9 @@ def modes_status(comparisons, obj) -> tuple[str, str]:
                                   .get("unconfirmed_critical_speeds") or {}).values())
     line += (f"; {unpaired} modes unpaired" if unpaired else "") + (
         f"; {unconf} critical speeds unconfirmed" if unconf else "")
+    unstable = sorted({g["solver"] for g in obj.get("unstable", [])})
+    if unstable:                       # a finding about the system, not a verdict on solvers
+        line += "; unstable (a mode grows) in " + ", ".join(unstable)
     status = ("incomplete" if missing or not comparisons else
               "disagree" if any(c.verdict != "agree" for c in comparisons) else "agree")
     return status, line

@@ -97,7 +97,8 @@ def _physical(params):
     """The model's numbers, from the shared rotor constants (the scene validated them)."""
     c = physics.constants(params)
     return {"m": float(params["m"]), "k": float(params["k"]), "g": c["gravity"],
-            "rc0": c["rc0"], "I_c": c["I_c"]}
+            "rc0": c["rc0"], "I_c": c["I_c"],
+            "c_ext": float(params.get("c_ext", 0.0)), "c_int": float(params.get("c_int", 0.0))}
 
 
 def _rx(a):
@@ -198,7 +199,7 @@ def _build(ph, A0, q0, qd0, w0, torque, with_work=True, stop_checks=True):
                                      initialCoordinates=list(map(float, q0)),
                                      initialCoordinates_t=list(map(float, qd0)),
                                      numberOfODE2Coordinates=3))
-    k = ph["k"]
+    k, c_ext, c_int = ph["k"], ph.get("c_ext", 0.0), ph.get("c_int", 0.0)
     a0 = [float(x) for x in A0[:, 0]]
     A = [[float(x) for x in row] for row in A0]
     flag = {"kind": None, "t": None, "calls": 0}
@@ -232,6 +233,16 @@ def _build(ph, A0, q0, qd0, w0, torque, with_work=True, stop_checks=True):
         tx = k * f * ny
         ty = -k * f * nx
         tz = torque
+        if c_ext or c_int:
+            # ω = J q̇; external damper: −c_ext (ω − (ω·n) n) = −c_ext n × ṅ, against the axis'
+            # motion in the fixed frame; internal: a damper between the rotor and a hub spinning
+            # with it about the fixed z axis, −c_int (ω_x, ω_y, 0) (to first order the tilt
+            # rate seen in the rotor's frame, θ̇ − iΩθ)
+            w = [a0[i] * q_t[0] + j1[i] * q_t[1] + (nx, ny, nz)[i] * q_t[2] for i in range(3)]
+            wn = w[0] * nx + w[1] * ny + w[2] * nz
+            tx -= c_ext * (w[0] - wn * nx) + c_int * w[0]
+            ty -= c_ext * (w[1] - wn * ny) + c_int * w[1]
+            tz -= c_ext * (w[2] - wn * nz)
         return [tx * a0[0] + ty * a0[1] + tz * a0[2],
                 tx * j1[0] + ty * j1[1] + tz * j1[2],
                 tx * nx + ty * ny + tz * nz]
@@ -583,6 +594,8 @@ def modes(params, settings=None):
     re = np.asarray(re, float)
     return LeafModes(frequencies_hz=np.array(w) / (2 * math.pi), labels=labels,
                      damping=-re / np.hypot(re, w),           # ζ = −Re λ / |λ|
+                     whirl=[lb.split()[0] for lb in labels],
+                     extra={"max_re_per_s": float(np.max(re))},
                      settings={"method": "exudyn ComputeLinearizedSystem + dense quadratic "
                                          "eigenproblem", "drive_torque": 0.0},
                      notes=_approximate_note(params))

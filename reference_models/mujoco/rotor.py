@@ -66,8 +66,9 @@ _INTEGRATOR_ENUM = {
 _RHS_PER_STEP = {"rk4": 4, "euler": 1, "implicitfast": 1, "implicit": 1}
 
 # --- userdata layout (doubles in mjData.userdata, read/written by the callback) -------------
-_U_K, _U_TORQUE, _U_COS_PI, _U_OMEGA2, _U_FLAG, _U_TFAIL, _U_VARIANT, _U_COS_CARDAN = range(8)
-_NUSERDATA = 8
+(_U_K, _U_TORQUE, _U_COS_PI, _U_OMEGA2, _U_FLAG, _U_TFAIL, _U_VARIANT, _U_COS_CARDAN, _U_CEXT,
+ _U_CINT) = range(10)
+_NUSERDATA = 10
 _PI_MARGIN = 1e-3            # stop when θ > π − this (the direction of −kγ is undefined at π)
 _CARDAN_MARGIN = 1e-3        # Cardan variant: stop when |cos β| < this (β → ±90°)
 _FLAG_REASONS = {
@@ -81,6 +82,18 @@ _FLAG_REASONS = {
 # ----------------------------------------------------------------------------------------------
 # The spring kernel (plain scalar Python; compiled by numba for the native callback)
 # ----------------------------------------------------------------------------------------------
+def _damper_kernel(w, x, y, z, vx, vy, vz, omz, c_ext, c_int):
+    """Body-frame damper moment. In body axes (ω_body = v, the shaft axis n = e_z, the fixed z
+    axis b = Rᵀe_z): the external damper −c_ext (ω − (ω·n) n) opposes the axis' motion in the
+    fixed frame; the internal one, −c_int (ω − ω_z b), is a damper between the rotor and a hub
+    spinning with it about the fixed z axis (to first order the tilt rate seen in the rotor's
+    frame)."""
+    s2 = 2.0 / (w * w + x * x + y * y + z * z)
+    bx, by, bz = s2 * (x * z - w * y), s2 * (y * z + w * x), 1.0 - s2 * (x * x + y * y)
+    return (-c_ext * vx - c_int * (vx - omz * bx), -c_ext * vy - c_int * (vy - omz * by),
+            -c_int * (vz - omz * bz))
+
+
 def _spring_kernel(w, x, y, z, vx, vy, vz, k, variant, cos_pi, omega2, cos_cardan):
     """Body-frame spring moment (tbx, tby, tbz), spatial ω_z and a status flag (0 = fine)."""
     nq = w * w + x * x + y * y + z * z
@@ -150,6 +163,9 @@ def _python_callback(m, d):
         ud[_U_FLAG] = flag
         ud[_U_TFAIL] = d.time
         return
+    if u[_U_CEXT] != 0.0 or u[_U_CINT] != 0.0:
+        dx, dy, dz = _damper_kernel(w, x, y, z, vx, vy, vz, omz, u[_U_CEXT], u[_U_CINT])
+        tbx, tby, tbz = tbx + dx, tby + dy, tbz + dz
     qf = d.qfrc_passive
     qf[0] += tbx
     qf[1] += tby
@@ -224,6 +240,7 @@ def _native_callback():
                                         context.get_value_type(types.CPointer(types.float64)))
             return sig, codegen
 
+        damper = njit(cache=True)(_damper_kernel)
         kernel = njit(cache=True)(_spring_kernel)   # cached in __pycache__
 
         @cfunc(types.void(types.voidptr, types.voidptr), nopython=True)
@@ -241,6 +258,10 @@ def _native_callback():
                 ud[_U_FLAG] = flag
                 ud[_U_TFAIL] = carray(d, (nwords,), np.float64)[o_time]
                 return
+            if ud[_U_CEXT] != 0.0 or ud[_U_CINT] != 0.0:
+                dx, dy, dz = damper(q[0], q[1], q[2], q[3], v[0], v[1], v[2], omz, ud[_U_CEXT],
+                                    ud[_U_CINT])
+                tbx, tby, tbz = tbx + dx, tby + dy, tbz + dz
             qf = carray(_as_f64ptr(words[o_qfrc]), (3,))
             qf[0] += tbx
             qf[1] += tby
@@ -332,6 +353,8 @@ def _build(params, settings, integrator, torque):
     ud[_U_OMEGA2] = float(settings["omega_max"]) ** 2
     ud[_U_VARIANT] = 0.0 if settings["spring"] == "cone" else 1.0
     ud[_U_COS_CARDAN] = _CARDAN_MARGIN
+    ud[_U_CEXT] = float(params.get("c_ext", 0.0))
+    ud[_U_CINT] = float(params.get("c_int", 0.0))
     return m, d, bid
 
 
@@ -531,7 +554,8 @@ def _whirl_setup(params, settings):
 
 
 def _whirl_at(m, d, spin):
-    """Continuous-time eigen-analysis at steady spin; returns [(signed inertial rad/s, damping)]."""
+    """Continuous-time eigen-analysis at steady spin; returns [(signed inertial rad/s, Re λ)]
+    (the body-frame tangent coordinates shift the frequency by Ω, not the real part)."""
     ud = d.userdata.copy()
     mujoco.mj_resetData(m, d)        # (this also zeroes userdata: restore it)
     d.userdata[:] = ud
@@ -571,12 +595,12 @@ def _whirl_at(m, d, spin):
         signed_body = mu if sense_b > 0 else -mu
         if abs(sense_b) < 1e-9 * (abs(v[0]) ** 2 + abs(v[1]) ** 2):
             signed_body = mu    # linear (non-circular) mode: no sense
-        out.append((signed_body + spin, -lj.real / abs(lj), sense_b))
+        out.append((signed_body + spin, lj.real, sense_b))
     return out
 
 
 def _classify(pairs, spin):
-    """Pick the two whirl modes; return (backward, forward) as (freq_rad_s, damping)."""
+    """Pick the two whirl modes; return (backward, forward) as (freq_rad_s, Re λ)."""
     if len(pairs) < 2:
         raise RuntimeError(f"expected two whirl modes, found {len(pairs)}")
     pairs = pairs[:2]
@@ -596,20 +620,23 @@ def modes(params: dict, settings: dict) -> dict:
 
     Linearisation: mjd_transitionFD under Euler (no drive torque), continuous-time blocks
     recovered exactly, ball-joint body-frame tangent frequencies converted to the inertial frame
-    (+Ω), backward/forward labelled from the eigenvector's rotation sense."""
+    (+Ω), backward/forward labelled from the eigenvector's rotation sense. With c_ext = 0 the
+    internal-damping threshold whirl is synchronous (ω = Ω): still in the body-frame
+    coordinates, its root is real there and not found within ~1e-9 of that speed."""
     spin = float(params["spin"])
     s, m, d = _whirl_setup(params, settings)
     with _Callback(s["callback"]) as cbk:
         pairs = _whirl_at(m, d, spin)
         kind = cbk.kind
-    (wb, zb), (wf, zf) = _classify(pairs, spin)
+    (wb, sb), (wf, sf) = _classify(pairs, spin)
     used = {"integrator": "euler", "dt": _FD_H, "fd_eps": _FD_EPS, "spring": s["spring"],
             "callback": kind, "linearisation": "mjd_transitionFD, ball joint, inertial frame"}
     notes = (["approximate: steady spin is no equilibrium of an eccentric rotor"]
              if spin != 0 and params["eccentricity"] != 0 else [])
     return LeafModes(frequencies_hz=np.array([wb, wf]) / (2 * math.pi),
-                       labels=["backward whirl", "forward whirl"], damping=np.array([zb, zf]),
-                       settings=used, notes=notes)
+                       labels=["backward whirl", "forward whirl"], whirl=["backward", "forward"],
+                       damping=-np.array([sb, sf]) / np.hypot([sb, sf], [wb, wf]),
+                       settings=used, notes=notes, extra={"max_re_per_s": float(max(sb, sf))})
 
 
 def whirl_sweep(params: dict, spins, settings: dict | None = None):

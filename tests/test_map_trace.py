@@ -34,7 +34,7 @@ class Plane:
         return out
 
 
-def _trace(y_res=1 / 64, width=0.02):
+def _trace(y_res=1 / 64, width=0.02, max_rows=257):
     xa = _axis("x", 0.0, 4.0)
     xs = np.linspace(0.0, 4.0, 9)
     runner = Plane()
@@ -42,7 +42,7 @@ def _trace(y_res=1 / 64, width=0.02):
     maps._fill(runner, "s", {}, lines, [(y, float(x)) for y in lines for x in xs], "x", "y",
                "label")
     maps.bisect_lines(runner, "s", {}, lines, xa, width, "y")
-    left = maps.trace_rows(runner, "s", {}, lines, xa, xs, width, "y", y_res * 0.2, 257)
+    left = maps.trace_rows(runner, "s", {}, lines, xa, xs, width, "y", y_res * 0.2, max_rows)
     return lines, left, runner
 
 
@@ -68,14 +68,7 @@ def test_the_traced_boundary_is_the_closed_form_curve_resolved_in_both_axes():
 
 
 def test_a_row_budget_leaves_the_gaps_it_could_not_resolve_listed():
-    xa = _axis("x", 0.0, 4.0)
-    xs = np.linspace(0.0, 4.0, 9)
-    runner = Plane()
-    lines = {float(y): {} for y in np.linspace(0.0, 0.2, 3)}
-    maps._fill(runner, "s", {}, lines, [(y, float(x)) for y in lines for x in xs], "x", "y",
-               "label")
-    maps.bisect_lines(runner, "s", {}, lines, xa, 0.02, "y")
-    left = maps.trace_rows(runner, "s", {}, lines, xa, xs, 0.02, "y", 0.2 / 64, 6)
+    lines, left, _ = _trace(max_rows=6)
     assert left and len(lines) <= 6
 
 

@@ -8,7 +8,8 @@ massless, the disk on the third. With the chart rotation A0 (see below) the body
 
 and the spatial angular velocity is ω = J(q)·q̇ with the columns A0·e_x, A0·Rx·e_y, R·e_z.
 
-Loads (all in the tree's `forceUserFunction`, as generalised forces Jᵀτ of a spatial moment τ):
+Loads (all in the tree's `forceUserFunction`, as generalised forces Jᵀτ of a spatial moment τ;
+the kernel `_loads`):
 - the transverse spring τ_s = −kγ, γ = θ·(e_z × n)/|e_z × n|, n = R·e_z, θ = angle(e_z, n); it
   is −∂/∂q of ½kθ², so exactly conservative, and has no component along n;
 - the drive torque τ_d = torque·e_z, fixed in space. (`linkTorques` is not used: it acts with
@@ -25,17 +26,23 @@ size is unchanged. At tilt π the spring direction itself is undefined; the run 
 status `diverged`. An unstable step shows as a jump of the energy balance, which the compare
 layer's one energy rule (the scene's `energy_bound`) reports as `diverged`.
 
-Speed (the path is the fastest measured for this model; 10 s spin-up, RK67 at dt = 0.01, 1000
-steps, best of 5 on 2 busy cores): the kinematic tree with the Python `forceUserFunction` and the
-Python work rate, 85–96 ms (≈ 13 µs per stage evaluation, the Python calls dominate). Tried and
-not taken: (a) the loads and the work rate as Exudyn symbolic user functions (C++ expression
-trees; the work as the velocity of an extra ODE2 coordinate in an `ObjectGenericODE2` spanning
-the tree's coordinates, the checks moved to a per-step post-step function): same numbers to all
-digits but 85 ms at dt = 0.01 and 478 ms against 392 ms at dt = 0.002 — the expression trees are
-interpreted, and the per-step Python check costs what the stage calls save; (b) the
-`EXUDYN_MODULE=fast` module (no range checks): 171–182 ms against 156–196 ms, no difference in
-the noise; (c) the tree's built-in joint springs (`jointPControlVector`) are C++ but are the
-Cardan spring ½k(α²+β²), a different model (|ω(10 s)| moves by 0.3 rad/s, see the notes).
+Speed. Exudyn calls Python once per stage for the loads and once for the work rate; with
+plain Python bodies those calls were the cost (10 s spin-up, RK67 at 2 ms: 570–620 ms of CPU on
+2 busy cores, of which the tree's own C++ is 61–79 ms, measured without any user function).
+The bodies are compiled kernels (`_loads`, `_work_rates`, numba) that take every rotor of a
+tree at once: alone 277 ms; several rotors as branches of one tree (`regimes`, the map's
+batch path) share each call — 127 ms a rotor at 4 per tree, 114 at 16. Tried and not taken:
+(a) the loads and the work rate as Exudyn symbolic user functions (C++ expression trees; the
+work as the velocity of an extra ODE2 coordinate in an `ObjectGenericODE2` spanning the
+tree's coordinates, the checks moved to a per-step post-step function): same numbers to all
+digits but 478 ms against 392 ms at dt = 0.002 — the expression trees are interpreted;
+(b) the `EXUDYN_MODULE=fast` module (no range checks): no difference in the noise; (c) the
+tree's built-in joint springs (`jointPControlVector`) are C++ but are the Cardan spring
+½k(α²+β²), a different model (|ω(10 s)| moves by 0.3 rad/s, see the notes); (d) one
+`ObjectGenericODE2` carrying the loads of many single-rotor trees: its mass matrix cannot be
+inverted per body, and the sparse solver it then needs costs more than it saves (155 ms a
+rotor at 128); (e) one system reused across points with its parameters updated instead of
+rebuilt: building the tree costs 0.4 ms of a 100–300 ms run.
 A fixed step longer than the output step runs on its own step grid and the channels are
 interpolated linearly onto the output grid (as in the MuJoCo leaf); the final value is a step
 end.
@@ -645,18 +652,20 @@ def _together(params_list, t_out, s):
         ex = _solve(model["mbs"], _sim_settings(0.0, t_out[-1], n_steps, 0.0, s["integrator"],
                                                 s["rtol"], s["spectral_radius"]),
                     _SOLVERS[s["integrator"]])
+        if ex is not None or model["flag"]["kind"] is not None:
+            stopped = model["flag"]["rotor"]          # None: Exudyn's own error, unassigned
+            todo = [i for j, i in enumerate(todo) if stopped is not None and j != stopped]
+            continue
         tt, q, qd, w = _stored(model)
         keep = tt > 0.0
         tt, q, qd, w = tt[keep], q[keep], qd[keep], w[keep]
         idx, on_grid = _on_grid(tt, t_out, 0)
-        full = np.array_equal(idx[on_grid], np.arange(1, n_out))
-        bad = [j for j in range(len(todo)) if not full or not (
-            np.isfinite(q[:, j]).all() and np.isfinite(qd[:, j]).all()
-            and np.isfinite(w[:, j]).all())]
-        if ex is not None or model["flag"]["kind"] is not None or bad:
-            stopped = model["flag"]["rotor"]
-            drop = set(bad) | ({stopped} if stopped is not None else set(range(len(todo))))
-            todo = [i for j, i in enumerate(todo) if j not in drop]
+        if not np.array_equal(idx[on_grid], np.arange(1, n_out)):
+            break                                     # fell short: every rotor runs alone
+        bad = ~(np.isfinite(q).all(axis=(0, 2)) & np.isfinite(qd).all(axis=(0, 2))
+                & np.isfinite(w).all(axis=0))
+        if bad.any():           # a last step gone non-finite (after the checks of its stages)
+            todo = [i for j, i in enumerate(todo) if not bad[j]]
             continue
         for j, i in enumerate(todo):
             R, om = _chart_motion(np.eye(3), q[on_grid, j], qd[on_grid, j])

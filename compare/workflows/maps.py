@@ -93,7 +93,7 @@ def evaluate_chunk(scene_name, solver_name, base, points, settings, what):
     """Runs in a worker: each point's label or value. `points` are {name: value} dicts laid
     over the `base` overrides; `what` is None (the regime) or an observable's name.
 
-    A regime goes through the leaf's compiled batch where it has one (`solvers.regimes`: the
+    A regime goes through the leaf's batch where it has one (`solvers.regimes`: the
     whole chunk in one call, the label decided inside it, no per-point Trajectory or file); a
     point it leaves out (a failed run) and every other solver or observable run one by one
     through `simulate`, models loaded and compiled once per worker, warmed up once per chunk.

@@ -272,14 +272,16 @@ def _work_rates(q, qd, A, torque, out):
         out[i] = torque[i] * (a[2, 0] * qd[j] + j1z * qd[j + 1] + nz * qd[j + 2])
 
 
-def _build(rotors, with_work=True, stop_checks=True):
+def _build(rotors, with_work=True, stop_checks=True, chart_stop=True):
     """One kinematic tree holding every rotor of `rotors` as its own branch (a gimbal X → Y → Z,
     the first two links massless), each a dict with ph (the model's numbers; every rotor of a
     tree has one gravity), A0, q0, qd0, w0, torque. A tree of n rotors is n independent
     systems in one: its mass matrix is block diagonal, and the dense LU of a block-diagonal
     matrix does, block by block, the arithmetic of each block alone (the off-block entries are
     exact zeros), so each rotor's numbers are those of its run alone, bit for bit (tests).
-    Loads and work rates are one compiled call per stage for the whole tree."""
+    Loads and work rates are one compiled call per stage for the whole tree. `chart_stop`: a
+    completed step with |cos q1| < CHART_SWITCH stops the run (a post-step function; off,
+    the caller reads it off the stored steps)."""
     n = len(rotors)
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
@@ -334,7 +336,7 @@ def _build(rotors, with_work=True, stop_checks=True):
 
         mbs.AddObject(ObjectGenericODE1(nodeNumbers=[nw], rhsUserFunction=work_rate))
 
-        if stop_checks:
+        if stop_checks and chart_stop:
             def post_step(mbs_, t):
                 # completed step: leave the chart well before its lock (restart happens outside)
                 c = np.abs(np.cos(sysdata.GetODE2Coordinates(cur)[1::3]))
@@ -638,7 +640,9 @@ def _together(params_list, t_out, s):
     would run alone in `simulate` (same step, same start, same arithmetic per rotor): rows
     (R, ω, work) on t_out per rotor. A rotor whose run would stop (a chart change, tilt π, a
     non-finite state: `simulate` goes on or ends there on its own) stops the whole tree; it
-    is left out (None: `simulate` runs it alone) and the others run again from t = 0."""
+    is left out (None: `simulate` runs it alone) and, where it stopped the tree (any stop
+    but a change of chart, which is read off the stored steps), the others run again from
+    t = 0."""
     n_out = len(t_out)
     dto = float(t_out[1] - t_out[0])
     h = _fixed_step(dto, float(s["dt"]))
@@ -648,7 +652,8 @@ def _together(params_list, t_out, s):
     while todo:
         model = _build([{"ph": _physical(params_list[i]), "A0": np.eye(3),
                          "q0": starts[i][2][0], "qd0": starts[i][2][1], "w0": 0.0,
-                         "torque": float(params_list[i]["torque"])} for i in todo])
+                         "torque": float(params_list[i]["torque"])} for i in todo],
+                       chart_stop=False)
         ex = _solve(model["mbs"], _sim_settings(0.0, t_out[-1], n_steps, 0.0, s["integrator"],
                                                 s["rtol"], s["spectral_radius"]),
                     _SOLVERS[s["integrator"]])
@@ -667,7 +672,12 @@ def _together(params_list, t_out, s):
         if bad.any():           # a last step gone non-finite (after the checks of its stages)
             todo = [i for j, i in enumerate(todo) if not bad[j]]
             continue
+        # a step `simulate` would have ended for a change of chart: that rotor runs alone (the
+        # others' runs stand: they never read it)
+        charted = np.any(np.abs(np.cos(q[:, :, 1])) < CHART_SWITCH, axis=0)
         for j, i in enumerate(todo):
+            if charted[j]:
+                continue
             R, om = _chart_motion(np.eye(3), q[on_grid, j], qd[on_grid, j])
             out[i] = (np.concatenate([starts[i][0][None], R]),
                       np.concatenate([starts[i][1][None], om]),

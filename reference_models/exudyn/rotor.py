@@ -30,13 +30,17 @@ Speed. Exudyn calls Python once per stage for the loads and once for the work ra
 plain Python bodies those calls were the cost (10 s spin-up, RK67 at 2 ms: 570–620 ms of CPU on
 2 busy cores, of which the tree's own C++ is 61–79 ms, measured without any user function).
 The bodies are compiled kernels (`_loads`, `_work_rates`, numba) that take every rotor of a
-tree at once: alone 277 ms; several rotors as branches of one tree (`regimes`, the map's
-batch path) share each call — 127 ms a rotor at 4 per tree, 114 at 16. Tried and not taken:
+tree at once: alone 286 ms; several rotors as branches of one tree (`regimes`, the map's
+batch path) share each call — 111 ms a rotor at 8 per tree. `EXUDYN_MODULE=fast` (Exudyn
+without range checks, chosen at import for the whole process) took 8 per tree from 120 to
+101 ms (its numbers not compared); it is left to the user (an indexing fault would then
+crash instead of raising).
+Tried and not taken:
 (a) the loads and the work rate as Exudyn symbolic user functions (C++ expression trees; the
 work as the velocity of an extra ODE2 coordinate in an `ObjectGenericODE2` spanning the
 tree's coordinates, the checks moved to a per-step post-step function): same numbers to all
 digits but 478 ms against 392 ms at dt = 0.002 — the expression trees are interpreted;
-(b) the `EXUDYN_MODULE=fast` module (no range checks): no difference in the noise; (c) the
+(b) the fast module for one rotor alone: no difference in the noise; (c) the
 tree's built-in joint springs (`jointPControlVector`) are C++ but are the Cardan spring
 ½k(α²+β²), a different model (|ω(10 s)| moves by 0.3 rad/s, see the notes); (d) one
 `ObjectGenericODE2` carrying the loads of many single-rotor trees: its mass matrix cannot be
@@ -631,7 +635,7 @@ def simulate(params, t_out, settings):
 # ----------------------------------------------------------------------------------------------
 # the map's batch path
 
-TREE_SIZE = 8          # rotors per tree in `regimes` (see `_together`)
+TREE_SIZE = 8          # rotors per tree in `regimes` (measured in its note)
 _TOGETHER = ("rk4", "rk67", "explicit_euler")   # fixed-step explicit: no system-wide decision
 
 
@@ -693,8 +697,9 @@ def regimes(params_list, t_out, settings, channel, levels, window):
     it alone). None where runs cannot share a tree: another channel, an error-controlled or
     implicit integrator (their step or Newton decisions are system-wide), a step longer than
     the output step (`_coarse`). Measured (10 s spin-up, RK67 at 2 ms, 2 busy cores, CPU
-    time per point): alone 277 ms, 4 per tree 127 ms, 16 per tree 114 ms — against 61–79 ms
-    for the tree's own C++ without any Python call; the old Python loads 570–620 ms."""
+    time a rotor): 1, 4, 8, 16, 32 per tree 286, 132, 111, 113, 150 ms (the dense LU of the
+    tree's mass matrix grows as n³) — against 61–79 ms for the tree's own C++ without any
+    Python call; the Python loads before 570–620 ms."""
     t_out = np.asarray(t_out, dtype=float)
     s = check_settings(settings, t_out)
     if channel != "omega_norm" or s["integrator"] not in _TOGETHER or len(t_out) < 2 or \

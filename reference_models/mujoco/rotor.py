@@ -26,16 +26,17 @@ and the output rows are picked from them; the torque goes in as the rollout's co
 ``xfrc_applied`` control (rollout does not keep ``xfrc_applied`` of the data it is given).
 Otherwise (Python callback, uneven grid) ``mj_step(m, d, n)`` runs the n steps of each output
 interval in one call. Two switches cut the C step itself without changing a bit of the result
-(tests): the constraint and contact stages are disabled (the model has neither), and a clock
-that returns 0 is installed as ``mjcb_time`` while the model runs — MuJoCo 4.0 otherwise reads
-the system clock around every pipeline stage for ``mjData.timer``, which nothing here reads.
+(tests/test_mujoco_rotor.py): the constraint and contact stages are disabled (the model has
+neither), and a clock that returns 0 is installed as ``mjcb_time`` while the model runs —
+MuJoCo 4.0 otherwise reads the system clock around every pipeline stage for ``mjData.timer``,
+which nothing here reads.
 Measured per RK4 step (the 10 s spin-up, 2 busy cores, CPU time): 7.8 µs → 5.0 (clock) →
 4.2 µs (stages); the 10 s run 125–165 ms through the per-interval loop → 73–77 ms.
 
 `regimes` (the map's batch path) runs many points through the same `_run` as `simulate`, each
 point one rollout, the model compiled once per distinct set of model fields (l, m, R,
 eccentricity, gravity: torque and k are data, not model) and reduced to its regime by
-`physics.regime_summary`, the rule the compiled custom batch applies.
+`physics.regime_summaries`, the rule the compiled custom batch applies.
 
 Optional model variant ``settings["spring"] = "cardan"``: the Cardan spring k/2(α²+β²) of
 R = Rx(α)Ry(β)Rz(φ) (a different spring at large tilt; the compare layer reports the deviation).
@@ -283,7 +284,7 @@ class _Callback:
         mujoco.set_mju_user_warning(self.warnings.append)   # no stdout, no MUJOCO_LOG.TXT
         mujoco.set_mjcb_passive(_NATIVE["cb"].ctypes if self.kind == "native"
                                 else _python_callback)
-        if self.kind == "native":
+        if self.kind == "native" and _NATIVE["clock"] is not None:
             mujoco.set_mjcb_time(_NATIVE["clock"].ctypes)
         return self
 

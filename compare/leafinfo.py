@@ -127,7 +127,7 @@ class LeafInfo:
     integrators: tuple             # Integrator records, in the leaf's order
     auto_dt: dict                  # integrator -> the number behind dt="auto"
     own_check: bool                # the leaf checks settings against the grid itself
-    batch_regimes: bool            # the leaf classifies many runs in one compiled call
+    batch_regimes: bool            # the leaf classifies many runs in one batch call
 
     @property
     def name(self) -> str:

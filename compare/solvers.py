@@ -396,7 +396,7 @@ def _simulate(scene, solver, params, settings, timeout_s, warm_up=True, t_out=No
 
 
 def regimes(scene: Scene, solver: Solver, params_list: list[dict], settings: dict):
-    """The regimes of many runs in one compiled call, where the leaf offers one (`regimes`) for
+    """The regimes of many runs in one batch call, where the leaf offers one (`regimes`) for
     the scene's SpeedRegime on one output grid: (labels, seconds per run), a label None where
     the run did not end ok by `simulate`'s rules (leaf status, finite output, the one energy
     rule: the caller runs that point alone to report why). None where no batch applies or it

@@ -262,13 +262,14 @@ def test_a_crossing_the_other_solver_does_not_find_is_disagree_never_dropped(mon
 
 
 def test_a_solver_that_fails_makes_the_map_incomplete(monkeypatch):
-    """Every MuJoCo run raising: its runs around quaternion's crossing failed, so the pair is
-    `incomplete` (never agree, never left out), with the reason."""
+    """Every MuJoCo run raising (alone and in its batch): its runs around quaternion's crossing
+    failed, so the pair is `incomplete` (never agree, never left out), with the reason."""
     import reference_models.mujoco.rotor as leaf
 
-    def boom(params, t_out, settings):
+    def boom(*args):
         raise RuntimeError("injected")
     monkeypatch.setattr(leaf, "simulate", boom)
+    monkeypatch.setattr(leaf, "regimes", boom)
     res, text = _quaternion_and_mujoco(monkeypatch)
     (v,) = res["verdicts"]
     assert v["verdict"] == "incomplete" and "RuntimeError: injected" in v["why"][0], v

@@ -99,6 +99,20 @@ def test_native_and_python_callbacks_agree():
                                    rtol=1e-10, atol=1e-10)
 
 
+def test_the_speed_switches_change_no_bit(monkeypatch):
+    """The stages switched off (constraint, contact: the model has neither) and the zero clock
+    (`mjcb_time`, read by nothing here) leave every channel bit for bit as MuJoCo's full
+    pipeline with its own clock gives it."""
+    p = params(torque=3.2, tilt0=0.2, spin0=10.0, t_end=1.0)
+    fast = rotor.simulate(p, grid(1.0), {})
+    monkeypatch.setattr(rotor, "_NO_STAGES", int(mujoco.mjtDisableBit.mjDSBL_AUTORESET))
+    monkeypatch.setitem(rotor._NATIVE, "clock", None)
+    full = rotor.simulate(p, grid(1.0), {})
+    assert fast.settings["callback"] == full.settings["callback"] == "native"
+    for name in SPINUP.channels:
+        np.testing.assert_array_equal(fast.channels[name], full.channels[name])
+
+
 def test_rk4_fourth_order():
     p = params(torque=3.2, t_end=2.0)
     t = grid(2.0, 0.02)

@@ -58,6 +58,38 @@ def channels(p: dict, Rs: np.ndarray, omegas: np.ndarray, work: np.ndarray,
                 "potential": potential, "energy_balance": kinetic + potential - work}
 
 
+ENERGY_CHANNELS = ("energy_balance", "kinetic", "potential", "work")
+
+
+def regime_summaries(t: np.ndarray, runs: list, reach, stay, window: float) -> dict:
+    """A leaf's `regimes` answer from full runs (LeafResults on the grid t): per run the
+    integrator's code (0: ok), t_fail, the regime (0: |ω| never reaches `reach` after t = 0,
+    2: it stays above `stay` from `window`·t_end on, else 1 — the rule of the scene's
+    SpeedRegime, which the compiled custom batch applies in `custom_models.rotor.batch`), whether
+    the channels are finite, the largest drift of the energy balance from its first value and
+    the largest |value| of each ENERGY_CHANNELS (the adapter's energy rule applies to those).
+    `reach`, `stay`: one per run."""
+    n = len(runs)
+    out = {"code": np.zeros(n, np.int64), "t_fail": np.full(n, np.nan),
+           "regime": np.zeros(n, np.int64), "finite": np.zeros(n, bool),
+           "drift": np.zeros(n), "max_abs": {c: np.zeros(n) for c in ENERGY_CHANNELS}}
+    late = t >= window * t[-1]
+    for i, r in enumerate(runs):
+        ch = r.channels
+        if r.status != "ok":
+            out["code"][i], out["t_fail"][i] = 1, r.t_fail
+            continue
+        w, e = ch["omega_norm"], ch["energy_balance"]
+        out["finite"][i] = all(np.isfinite(ch[c]).all() for c in ch)
+        out["drift"][i] = np.max(np.abs(e - e[0]))
+        for c in ENERGY_CHANNELS:
+            out["max_abs"][c][i] = np.max(np.abs(ch[c]))
+        above = np.nonzero(w >= reach[i])[0]
+        out["regime"][i] = 0 if not len(above) or above[0] == 0 else \
+            2 if np.min(w[late]) > stay[i] else 1
+    return out
+
+
 def rotations_from_quaternions(q: np.ndarray) -> np.ndarray:
     """(n, 4) unit quaternions w, x, y, z (normalised here) → (n, 3, 3) rotation matrices."""
     q = np.asarray(q, float)

@@ -19,15 +19,24 @@ callback sets to torque·ω_z in every stage, so A is RK4-consistent (act_dot = 
 
 The drive torque is a constant world-frame wrench in ``xfrc_applied``; gravity is MuJoCo's.
 
-Stepping path. With the native callback and a uniform output grid (the normal case), the whole
-run is one ``mujoco.rollout.rollout`` call per block of up to 2^17 steps: the steps run in C,
-the states come back for every step and the output rows are picked from them; the torque goes in
-as the rollout's constant ``xfrc_applied`` control (rollout does not keep ``xfrc_applied`` of the
-data it is given). Otherwise (Python callback, uneven grid) ``mj_step(m, d, n)`` runs the n
-steps of each output interval in one call. Measured on the 10 s spin-up on 2 busy cores: RK4 at
-dt = 0.04 (250 steps) 9 ms per run through the per-interval loop and ≈ 5 ms with rollout, where
-the step itself (≈ 12–25 µs per RK4 step with the callback in its four stages) dominates; at
-dt = 1e-3 both paths cost the 10 000 steps (rollout ≈ 0.27 s, ``mj_step`` loop ≈ 0.37 s busy).
+Stepping path. With the native callback and an output grid uniform to round-off (the normal
+case), the whole run is one ``mujoco.rollout.rollout`` call per block of up to 2^17 steps at
+one step h = span / (intervals · N): the steps run in C, the states come back for every step
+and the output rows are picked from them; the torque goes in as the rollout's constant
+``xfrc_applied`` control (rollout does not keep ``xfrc_applied`` of the data it is given).
+Otherwise (Python callback, uneven grid) ``mj_step(m, d, n)`` runs the n steps of each output
+interval in one call. Two switches cut the C step itself without changing a bit of the result
+(tests/test_mujoco_rotor.py): the constraint and contact stages are disabled (the model has
+neither), and a clock that returns 0 is installed as ``mjcb_time`` while the model runs —
+MuJoCo 4.0 otherwise reads the system clock around every pipeline stage for ``mjData.timer``,
+which nothing here reads.
+Measured per RK4 step (the 10 s spin-up, 2 busy cores, CPU time): 7.8 µs → 5.0 (clock) →
+4.2 µs (stages); the 10 s run 125–165 ms through the per-interval loop → 73–77 ms.
+
+`regimes` (the map's batch path) runs many points through the same `_run` as `simulate`, each
+point one rollout, the model compiled once per distinct set of model fields (l, m, R,
+eccentricity, gravity: torque and k are data, not model) and reduced to its regime by
+`physics.regime_summaries`, the rule the compiled custom batch applies.
 
 Optional model variant ``settings["spring"] = "cardan"``: the Cardan spring k/2(α²+β²) of
 R = Rx(α)Ry(β)Rz(φ) (a different spring at large tilt; the compare layer reports the deviation).
@@ -176,7 +185,7 @@ def _python_callback(m, d):
 # ----------------------------------------------------------------------------------------------
 # Native callback: numba cfunc reading mjData through its pointer
 # ----------------------------------------------------------------------------------------------
-_NATIVE = {"cb": None, "error": None}
+_NATIVE = {"cb": None, "clock": None, "error": None}
 
 
 def _mjdata_offsets():
@@ -268,14 +277,19 @@ def _native_callback():
             qf[2] += tbz
             carray(_as_f64ptr(words[o_ctrl]), (1,))[0] = ud[_U_TORQUE] * omz
 
-        _NATIVE["cb"] = _cb
+        @cfunc(types.float64())
+        def _clock():
+            return 0.0
+
+        _NATIVE["cb"], _NATIVE["clock"] = _cb, _clock
     except Exception as exc:  # numba missing, layout not found, ...: fall back to Python
         _NATIVE["error"] = f"{type(exc).__name__}: {exc}"
     return _NATIVE["cb"]
 
 
 class _Callback:
-    """Context manager: install the passive callback (and a quiet warning handler), restore."""
+    """Context manager: install the passive callback, a quiet warning handler and (native) the
+    zero clock; restore all three."""
 
     def __init__(self, kind):
         self.kind = kind
@@ -287,13 +301,17 @@ class _Callback:
             if cb is None:
                 self.kind = "python"
         self._prev_warning = mujoco.get_mju_user_warning()
+        self._prev_clock = mujoco.get_mjcb_time()
         mujoco.set_mju_user_warning(self.warnings.append)   # no stdout, no MUJOCO_LOG.TXT
         mujoco.set_mjcb_passive(_NATIVE["cb"].ctypes if self.kind == "native"
                                 else _python_callback)
+        if self.kind == "native" and _NATIVE["clock"] is not None:
+            mujoco.set_mjcb_time(_NATIVE["clock"].ctypes)
         return self
 
     def __exit__(self, *exc):
         mujoco.set_mjcb_passive(None)
+        mujoco.set_mjcb_time(self._prev_clock)
         mujoco.set_mju_user_warning(self._prev_warning)
         return False
 
@@ -316,9 +334,14 @@ def check_settings(settings, t_out=None):
     return s
 
 
-def _build(params, settings, integrator, torque):
-    """Compile the ball-joint rotor; return (model, data, body id)."""
-    l, k, mass, rad = (float(params[n]) for n in ("l", "k", "m", "R"))
+MODEL_FIELDS = ("l", "m", "R", "eccentricity", "gravity")   # compiled into the model
+_NO_STAGES = int(mujoco.mjtDisableBit.mjDSBL_AUTORESET) | \
+    int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT) | int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+
+
+def _compile(params, settings, integrator):
+    """The ball-joint rotor as an MjModel: everything but torque and k (set in the data)."""
+    l, mass, rad = (float(params[n]) for n in ("l", "m", "R"))
     ecc = float(params["eccentricity"])
     g = np.asarray(params["gravity"], dtype=float).reshape(3)
     spec = mujoco.MjSpec()
@@ -342,12 +365,19 @@ def _build(params, settings, integrator, torque):
     act.ctrllimited = mujoco.mjtLimited.mjLIMITED_FALSE
     act.actlimited = mujoco.mjtLimited.mjLIMITED_FALSE
     m = spec.compile()
-    m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
+    m.opt.disableflags |= _NO_STAGES      # no contacts, no constraints: stages that do nothing
+    return m
+
+
+def _build(params, settings, integrator, torque, model=None):
+    """(model, data, body id) with the point's torque and k in the data; `model`: one compiled
+    from the same MODEL_FIELDS, settings and integrator (else compiled here)."""
+    m = _compile(params, settings, integrator) if model is None else model
     d = mujoco.MjData(m)
     bid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "rotor")
     d.xfrc_applied[bid, 3:6] = (0.0, 0.0, float(torque))
     ud = d.userdata
-    ud[_U_K] = k
+    ud[_U_K] = float(params["k"])
     ud[_U_TORQUE] = float(torque)
     ud[_U_COS_PI] = math.cos(math.pi - _PI_MARGIN)
     ud[_U_OMEGA2] = float(settings["omega_max"]) ** 2
@@ -451,15 +481,21 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> dict:
     """Integrate the rotor; channels on t_out (see module doc and the leaf-model contract).
 
     Steps: each output interval Δ is split into N = ceil(Δ/dt) equal steps (h = Δ/N ≤ dt; h = dt
-    when dt divides Δ, reported as ``settings['dt_effective']``). If dt > Δ the integrator steps
-    at exactly dt and the channels are interpolated linearly onto t_out."""
+    when dt divides Δ, reported as ``settings['dt_effective']``); on a grid uniform to
+    round-off every interval takes the mean step. If dt > Δ the integrator steps at exactly dt
+    and the channels are interpolated linearly onto t_out."""
     s = check_settings(settings)
     t_out = np.asarray(t_out, dtype=float)
     if t_out.ndim != 1 or t_out.size < 1 or t_out[0] != 0.0 or np.any(np.diff(t_out) <= 0):
         raise ValueError("t_out must be increasing and start at 0")
+    return _run(params, t_out, s)
+
+
+def _run(params, t_out, s, model=None):
+    """`simulate` on checked settings and grid; `model`: a compiled one to reuse (`_build`)."""
     torque = float(params["torque"])
     tilt0, spin0 = float(params["tilt0"]), float(params["spin0"])
-    m, d, bid = _build(params, s, s["integrator"], torque)
+    m, d, bid = _build(params, s, s["integrator"], torque, model)
     d.qpos[:] = (math.cos(tilt0 / 2), math.sin(tilt0 / 2), 0.0, 0.0)    # R0 = Rx(tilt0)
     d.qvel[:] = (0.0, 0.0, spin0)                                       # spin0·n0, body frame
     d.act[0] = 0.0
@@ -474,6 +510,10 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> dict:
     else:
         ns = np.maximum(1, np.ceil(intervals / dt - 1e-9).astype(int))
         chunks = list(zip(ns.tolist(), (intervals / ns).tolist()))
+        # uniform but for round-off (np.diff of a linspace): one step, so one rollout
+        if intervals.size and np.ptp(intervals) <= 1e-9 * intervals.mean():
+            h = (t_out[-1] - t_out[0]) / (ns[0] * intervals.size)
+            chunks = [(int(ns[0]), float(h))] * intervals.size
         step_t = t_out
     nrec = len(chunks) + 1
     quat = np.full((nrec, 4), np.nan)
@@ -538,6 +578,24 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> dict:
         stats={"steps": int(steps), "rhs_evals": int(steps * _RHS_PER_STEP[s["integrator"]]),
                "integrate_s": wall},
         settings=used, extra={"orientation": orient})
+
+
+def regimes(params_list, t_out, settings, channel, levels, window):
+    """The map's batch path: every point of `params_list` run by `_run` on the grid `t_out`,
+    one compiled model per distinct MODEL_FIELDS, and reduced to its regime on |ω|
+    (`physics.regime_summaries`; None for another channel). `levels`: (n, 2) per point."""
+    if channel != "omega_norm":
+        return None
+    s = check_settings(settings)
+    t_out = np.asarray(t_out, dtype=float)
+    models, runs = {}, []
+    for p in params_list:
+        key = repr([np.asarray(p[f], float).tolist() for f in MODEL_FIELDS])
+        if key not in models:
+            models[key] = _compile(p, s, s["integrator"])
+        runs.append(_run(p, t_out, s, models[key]))
+    levels = np.asarray(levels, float)
+    return physics.regime_summaries(t_out, runs, levels[:, 0], levels[:, 1], window)
 
 
 # ----------------------------------------------------------------------------------------------

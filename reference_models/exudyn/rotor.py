@@ -228,9 +228,10 @@ _STOP_KINDS = {_NONFINITE: "nonfinite", _TILT: "tilt", _LOCK: "chart"}
 @nb.njit(cache=True)
 def _loads(q, qd, A, k, c_ext, c_int, torque, checks, out):
     """Generalised forces Jᵀτ, τ = −kγ + torque·e_z and the dampers c_ext, c_int, of every
-    rotor i of a tree (coordinates
-    3i…3i+2, chart A[i]) into `out`; with `checks`, the first rotor whose stage state is
-    non-finite, at tilt π or near its chart's lock stops it: returns (kind, i), else (0, -1)."""
+    rotor i of a tree (coordinates 3i…3i+2, chart A[i]) into `out`; with `checks`, the first
+    rotor whose stage state is non-finite, at tilt π or near its chart's lock stops it:
+    returns (kind, i), else (0, -1). `_work_rates` repeats the axes' z row on purpose: a work
+    rate needs that row alone, once per stage."""
     for i in range(k.shape[0]):
         j = 3 * i
         a = A[i]

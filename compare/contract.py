@@ -66,6 +66,20 @@ def require_positive(settings: dict, keys: tuple, auto_ok: bool = False) -> None
                              f"got {v!r}")
 
 
+class Channel(str):
+    """A scene's output channel: it is its name (dict keys, JSON, `==` and the leaves see a plain
+    string) and carries its SI unit — the unit's one home, read by every plot and table. A
+    plug-in may name its channels with plain strings; they are drawn unitless ([–])."""
+
+    def __new__(cls, name: str, unit: str = ""):
+        self = super().__new__(cls, name)
+        self.unit = unit
+        return self
+
+    def __getnewargs__(self):          # pickled with its unit (pool workers, Dask)
+        return (str(self), self.unit)
+
+
 @dataclass
 class LeafResult:
     """What `simulate(params, t_out, settings)` returns.

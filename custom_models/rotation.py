@@ -168,6 +168,17 @@ def quat_matrix_t(w, x, y, z):
 
 
 @nb.njit(cache=True)
+def quat_matrix(q):
+    """`quat_matrix_t` as a (3, 3) array, filled in place (a nested np.array literal costs
+    ~1 µs inside numba kernels)."""
+    t = quat_matrix_t(q[0], q[1], q[2], q[3])
+    R = np.empty((3, 3))
+    for k in range(9):
+        R[k // 3, k % 3] = t[k]
+    return R
+
+
+@nb.njit(cache=True)
 def mat_vec_t(M, a, b, c):
     return (M[0] * a + M[1] * b + M[2] * c, M[3] * a + M[4] * b + M[5] * c,
             M[6] * a + M[7] * b + M[8] * c)

@@ -41,3 +41,20 @@ def test_show_cites_the_papers():
     assert "Kiryukhin" in so and "2024" in so and "Chuveyko" in so
     rc, so, _ = xval("show", "sail-deploy", "--json")
     assert any("Tenenbaum" in s and "2014" in s for s in json.loads(so)["sources"])
+
+
+def test_every_time_channel_carries_its_unit_from_the_scene():
+    """Units have one home, the scene's Channels: every built-in time scene names the SI unit
+    of each channel, and the plots read it there (a plain-string channel is drawn [–])."""
+    from compare.output.report import channel_label
+    from compare.scenes import SCENES
+    for sc in SCENES.values():
+        if sc.is_time:
+            assert all(c.unit for c in sc.channels), (sc.name, [c for c in sc.channels
+                                                                 if not c.unit])
+    rotor = SCENES["rotor-spinup"]
+    assert channel_label(rotor, "tilt") == "tilt [rad]"
+    assert channel_label(rotor, "work") == "work [J]"
+    from dataclasses import replace
+    plain = replace(rotor, channels=("tilt", "work"))
+    assert channel_label(plain, "tilt") == "tilt [–]"

@@ -10,6 +10,7 @@ from .citations import papers_in
 from .joblog import distinct_lines
 from .map_plot import markdown as map_markdown
 from .report import fmt_value, plot_style
+from .tables import VERDICT_HEADER, markdown, verdict_rows
 
 
 def _num(x, spec=".3g"):
@@ -60,20 +61,14 @@ def _comparison_rows(obj, full_up_to=12):
     every pair)."""
     cs = obj.get("comparisons", [])
     if len(cs) <= full_up_to:
-        rows = ["| a | b | channel | max abs Δ | max rel Δ | tolerance (rel) | verdict |",
-                "|---|---|---|---|---|---|---|"]
-        return rows + [f"| {c['a']} | {c['b']} | {c['channel']} | {_num(c.get('max_abs'))} | "
-                       f"{_num(c.get('max_rel'), '.2e')} | {_num(c.get('tolerance'), '.1e')} | "
-                       f"**{c['verdict']}** |" for c in cs]
-    rows = ["| channel | worst pair | max abs Δ | max rel Δ | tolerance (rel) | verdicts of "
-            "all pairs |", "|---|---|---|---|---|---|"]
+        return markdown(VERDICT_HEADER, verdict_rows(cs)).splitlines()
+    rows = []
     for ch in dict.fromkeys(c["channel"] for c in cs):
         mine = [c for c in cs if c["channel"] == ch]
         w = _worst({"comparisons": mine}) or mine[0]
-        rows.append(f"| {ch} | {w['a']} – {w['b']} | {_num(w.get('max_abs'))} | "
-                    f"{_num(w.get('max_rel'), '.2e')} | {_num(w.get('tolerance'), '.1e')} | "
-                    f"{_verdicts({'comparisons': mine})} |")
-    return rows
+        rows.append(verdict_rows([w])[0][:-2] + [_verdicts({"comparisons": mine})])
+    # the verdict table's columns for each channel's worst pair, and the verdicts of all pairs
+    return markdown(VERDICT_HEADER[:-2] + ["verdicts of all pairs"], rows).splitlines()
 
 
 def _run_rows(case, obj):

@@ -20,6 +20,7 @@ import rerun.blueprint as rrb
 
 from ..atomic import atomic_path
 from .report import analytic_curve
+from .tables import VERDICT_HEADER, markdown, verdict_rows
 
 PALETTE = [(31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189),
            (140, 86, 75), (227, 119, 194), (127, 127, 127)]
@@ -133,11 +134,7 @@ def write_run_recording(path, result):
 def summary_markdown(result):
     lines = [f"# {result.scene.name}", "", "| solver | status | wall s |", "|---|---|---|"]
     lines += [f"| {t.solver} | {t.status} | {t.wall_s:.3g} |" for t in result.trajectories]
-    lines += ["", "| a | b | channel | max abs Δ | error estimates | allowance | verdict |",
-              "|---|---|---|---|---|---|---|"]
-    lines += [f"| {c.a} | {c.b} | {c.channel} | {c.max_abs:.2e} | "
-              f"{'—' if c.error_estimate is None else f'{c.error_estimate:.1e}'} | "
-              f"{c.allowance:.1e} | **{c.verdict}** |" for c in result.comparisons]
+    lines += ["", markdown(VERDICT_HEADER, verdict_rows(result.comparisons))]
     lines += ["", "## Findings", ""] + [f"- {f.text}" for f in result.findings]
     return "\n".join(lines)
 

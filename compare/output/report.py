@@ -1,8 +1,8 @@
 """Markdown reports with PNG plots (matplotlib, Agg backend).
 
-Plots carry a unit on every axis (the scene's `channel_units` where it has them, else the
-table below), never offset notation (a flat channel such as a conserved energy is drawn as its
-deviation from the initial value, which the label states), and numbers in the text are printed
+Plots carry a unit on every axis (the scene's `Channel`s carry them), never offset notation
+(a flat channel such as a conserved energy is drawn as its deviation from the initial value,
+which the label states), and numbers in the text are printed
 to their meaningful digits (`fmt_value`: 1e-13, not 9.999999999999999e-14).
 """
 from pathlib import Path
@@ -12,21 +12,11 @@ import numpy as np
 from ..analysis import metrics
 from ..atomic import atomic_path, write_text
 from .citations import cite_short, papers_in
-
-# SI unit of each channel name the scenes use (a Scene hook `channel_units` would own this)
-CHANNEL_UNITS = {
-    "omega_norm": "rad/s", "spin_rate": "rad/s", "tilt": "rad", "work": "J", "kinetic": "J",
-    "potential": "J", "energy_balance": "J", "crank_angle": "rad", "crank_rate": "rad/s",
-    "rocker_angle": "rad", "rocker_rate": "rad/s", "slider_position": "m",
-    "slider_velocity": "m/s", "motor_work": "J", "hub_rate": "rad/s", "deployed_length": "m",
-    "tip_angle": "rad", "angular_momentum": "kg·m²/s", "spin_angle": "rad",
-    "journal_a_x": "m", "journal_a_y": "m", "journal_b_x": "m", "journal_b_y": "m",
-    "dissipated": "J", "crank_accel": "rad/s²", "slider_x": "m", "loop_violation": "m",
-}
+from .tables import VERDICT_HEADER, markdown, verdict_rows
 
 
 def channel_unit(scene, ch):
-    return getattr(scene, "channel_units", {}).get(ch) or CHANNEL_UNITS.get(ch, "")
+    return scene.unit(ch)
 
 
 def channel_label(scene, ch):
@@ -196,14 +186,10 @@ def run_markdown(result, figures):
     if result.findings:
         out += ["", "## Findings", ""] + [f"- {f.text}" for f in result.findings]
     out += ["", "## Agreement", "",
-            "Verdict per pair and channel: max |Δ| relative to the channel's scale (max |value| "
-            "of the pair) against the scene's tolerance.", "",
-            "| a | b | channel | max abs | rms | max rel | tolerance | Δ/bound | verdict |",
-            "|---|---|---|---|---|---|---|---|---|"]
-    out += [f"| {c.a} | {c.b} | {c.channel} | {_fmt(c.max_abs, '.3e')} | {_fmt(c.rms, '.3e')} | "
-            f"{_fmt(c.max_rel, '.2e')} | {c.tolerance:.2g} | {metrics.ratio_text(c.ratio)} | "
-            f"**{c.shown}** |"
-            for c in result.comparisons]
+            "Verdict per pair and channel: the deviation max|Δ| against its bound — both "
+            "solvers' error estimates (their tighter reruns) plus the scene's modelling "
+            f"allowance; Δ/bound ≤ 1 agrees, above {metrics.MARGINAL:g} it is marginal.", "",
+            markdown(VERDICT_HEADER, verdict_rows(result.comparisons))]
     out += power_markdown(getattr(result, "power", None))
     out += [""] + [f"![{f}]({f})" for f in figures]
     return "\n".join(out) + "\n"

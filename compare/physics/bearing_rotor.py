@@ -36,6 +36,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from custom_models.rotation import quat_matrix  # noqa: F401  (the leaves' too)
+
 from ..contract import LeafModes
 
 OMEGA_SMOOTH = 0.1     # rad/s, the tanh width of the friction moment's sign (spec)
@@ -69,25 +71,6 @@ def pack(params: dict) -> np.ndarray:
 
 
 # ---------------------------------------------------------------- rotation and spin angle
-@nb.njit(cache=True)
-def quat_matrix(q):
-    """Rotation matrix of a quaternion (w, x, y, z), normalised on the fly (filled in place: a
-    nested np.array literal costs ~1 µs inside numba kernels)."""
-    s = 1.0 / (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
-    w, x, y, z = q[0], q[1], q[2], q[3]
-    R = np.empty((3, 3))
-    R[0, 0] = 1 - 2 * s * (y * y + z * z)
-    R[0, 1] = 2 * s * (x * y - w * z)
-    R[0, 2] = 2 * s * (x * z + w * y)
-    R[1, 0] = 2 * s * (x * y + w * z)
-    R[1, 1] = 1 - 2 * s * (x * x + z * z)
-    R[1, 2] = 2 * s * (y * z - w * x)
-    R[2, 0] = 2 * s * (x * z - w * y)
-    R[2, 1] = 2 * s * (y * z + w * x)
-    R[2, 2] = 1 - 2 * s * (x * x + y * y)
-    return R
-
-
 @nb.njit(cache=True)
 def cross(a, b):
     """a × b for 3-vectors (np.cross is several times slower inside numba kernels)."""

@@ -13,6 +13,8 @@ import math
 import numba as nb
 import numpy as np
 
+from ..contract import Channel
+
 # ---- motor 4A80B4U3, Kloss characteristic (scene-press.md) -----------------------------------
 P_N, N_SYNC_RPM, S_N, LAMBDA_K = 1500.0, 1500.0, 0.058, 2.2
 OMEGA_SYNC = 2.0 * math.pi * N_SYNC_RPM / 60.0
@@ -134,8 +136,10 @@ def breakpoints(params: dict, t_out: np.ndarray):
 
 
 # ---- observables from a solver's kinematic output --------------------------------------------
-CHANNELS = ("crank_angle", "crank_rate", "crank_accel", "rocker_angle", "slider_x",
-            "loop_violation", "energy_balance")
+CHANNELS = (Channel("crank_angle", "rad"), Channel("crank_rate", "rad/s"),
+            Channel("crank_accel", "rad/s²"), Channel("rocker_angle", "rad"),
+            Channel("slider_x", "m"), Channel("loop_violation", "m"),
+            Channel("energy_balance", "J"))
 
 
 def loop_violation(params: dict, phi, psi, slider_x):

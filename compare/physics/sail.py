@@ -19,7 +19,11 @@ import math
 import numba as nb
 import numpy as np
 
-CHANNELS = ("hub_rate", "deployed_length", "tip_angle", "angular_momentum", "energy_balance")
+from ..contract import Channel
+
+CHANNELS = (Channel("hub_rate", "rad/s"), Channel("deployed_length", "m"),
+            Channel("tip_angle", "rad"), Channel("angular_momentum", "kg·m²/s"),
+            Channel("energy_balance", "J"))
 
 
 def thread(params: dict) -> tuple:

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..analysis.metrics import damping_comparisons, first_crossing, frequency_comparisons, pairwise
+from ..contract import Channel
 from ..errors import BadInput
 from ..physics.whirl import FRAMES
 from .params import Param
@@ -196,7 +197,8 @@ class Scene:
     params: tuple[Param, ...]
     # solver name -> leaf module serving this scene (the registry line of each solver)
     leaves: dict = field(default_factory=dict)
-    channels: tuple[str, ...] = ()
+    # the output channels, each a `Channel` carrying its unit (plain names: unitless)
+    channels: tuple[Channel, ...] = ()
     # per-channel modelling allowance, relative to the channel's scale (max |value| of the
     # pair) or ("abs", SI): what the models may differ by beyond the solvers' own errors —
     # each set from a measured deviation, with the reason, in the scene file, ≤ 10 × it
@@ -265,6 +267,14 @@ class Scene:
     # parameters held at fixed values (name -> value: its leaves get them, `--set` refuses them)
     linearisation: "Linearisation | None" = None
     held: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        object.__setattr__(self, "channels", tuple(
+            c if isinstance(c, Channel) else Channel(c) for c in self.channels))
+
+    def unit(self, channel: str) -> str:
+        """The SI unit of `channel` ("" where the scene names none)."""
+        return next((c.unit for c in self.channels if c == channel), "")
 
     @property
     def is_time(self) -> bool:

@@ -4,6 +4,7 @@ compare/physics/bearing_rotor.py."""
 import numpy as np
 
 from ..analysis.identify import pencil_poles
+from ..contract import Channel
 from ..errors import BadInput
 from ..physics import bearing_rotor as physics
 from .base import Extreme, Finding, Linearisation, MapSpec, Scene
@@ -278,9 +279,12 @@ BEARING_ROTOR = Scene(
     ),
     # `kinetic`, `potential` (gravity + bearing springs), `motor_work`, `dissipated` (dampers,
     # friction and the work of the prescribed defect lift) make up the energy balance
-    channels=("spin_rate", "spin_angle", "journal_a_x", "journal_a_y", "journal_b_x",
-              "journal_b_y", "energy_balance", "kinetic", "potential", "motor_work",
-              "dissipated"),
+    channels=(Channel("spin_rate", "rad/s"), Channel("spin_angle", "rad"),
+              Channel("journal_a_x", "m"), Channel("journal_a_y", "m"),
+              Channel("journal_b_x", "m"), Channel("journal_b_y", "m"),
+              Channel("energy_balance", "J"), Channel("kinetic", "J"),
+              Channel("potential", "J"), Channel("motor_work", "J"),
+              Channel("dissipated", "J")),
     # Modelling allowances: one model in three solvers, so only the error estimates' own
     # inaccuracy; each ≤ 10 × the deviation left beyond both estimates (`python -m
     # tests.allowances bearing-rotor`: defaults and t_end 0.5 s; tests/allowances.json). Left,

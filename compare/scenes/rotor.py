@@ -3,6 +3,7 @@ import numpy as np
 
 from ..analysis.identify import fft_peak, matrix_pencil, transverse_components
 from ..analysis.metrics import first_crossing
+from ..contract import Channel
 from ..physics.rotor import constants
 from .base import Campbell, Extreme, Finding, MapSpec, Scene, SpeedRegime
 from .params import Param, positive
@@ -196,8 +197,9 @@ SPINUP = Scene(
         positive("t_end", 10.0, "s", "horizon", hi=1e5),
         positive("output_dt", 0.01, "s", "common output grid step"),
     ),
-    channels=("omega_norm", "spin_rate", "tilt", "work", "kinetic", "potential",
-              "energy_balance"),
+    channels=(Channel("omega_norm", "rad/s"), Channel("spin_rate", "rad/s"),
+              Channel("tilt", "rad"), Channel("work", "J"), Channel("kinetic", "J"),
+              Channel("potential", "J"), Channel("energy_balance", "J")),
     # Modelling allowances: the four solvers model one system with one spring law, so only the
     # error estimates' own inaccuracy is allowed for: a relative part plus a floor of 1e-11
     # (SI) for channels that stay near zero (tilt before resonance). Measured (`python -m

@@ -32,12 +32,8 @@ stored result and raises `Interrupted` (the CLI prints one line and exits 130).
 import hashlib
 import itertools
 import json
-import signal
-import threading
 import time
 import tomllib
-from concurrent.futures import FIRST_COMPLETED, wait
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -64,9 +60,10 @@ from .digest import _scene_module, job_code
 from .executors import (  # noqa: F401  (connect: the API's check)
     Interrupted,
     connect,
-    make_executor,
+    execute_many,
     stop,
     terminated_as_interrupt,
+    worker_pool,
 )
 
 TOP_KEYS = ("name", "cases", "maps", "max_output_gib", "max_steps", "max_jobs")
@@ -423,18 +420,6 @@ def is_done(job, store):
     return meta["stats"].get("input_digest") == job.digest and meta["status"] != "timeout"
 
 
-@contextmanager
-def _sigint_ignored():
-    if threading.current_thread() is not threading.main_thread():
-        yield                              # only the main thread may set handlers
-        return
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
-
-
 def _stop_workers(ex, store):
     """Cancel what is queued and end the running jobs now. Their results are written under a
     temporary name and renamed when complete, so a stopped job leaves no result file; its
@@ -504,42 +489,29 @@ def _run_locked(camp, cases, jobs, out_dir, view, executor, scheduler, workers, 
         if not pending[c.name]:
             outcome[c.name] = _finish_safely(c, jobs, store, out_dir, crashed, reused, view)
     if todo:
-        ex, client = make_executor(executor, scheduler, workers, ignore_sigint=True)
         t_start = time.time()
-        stopped = False
-        try:
-            with _sigint_ignored():            # children spawn ignoring it
-                futures = {ex.submit(run_job, j, str(store)): j for j in todo}
-            left = set(futures)
-            while left:
-                done, left = wait(left, timeout=0.5, return_when=FIRST_COMPLETED)
-                view.running(_started([futures[f] for f in left], store, t_start))
-                for f in done:
-                    j = futures[f]
-                    try:
-                        _, status, wall, text = f.result()
-                    except Exception as e:           # a worker died: record it, keep the rest
-                        crashed[j.label] = f"{type(e).__name__}: {e}".splitlines()[0]
-                        status, wall, text = "crashed", None, crashed[j.label]
-                    view.finished(j.label, status, wall)
-                    if verbose and text:
-                        for line in distinct_lines(text):
-                            view.log(f"    {line}")
-                    pending[j.case].discard(j.label)
-                    if not pending[j.case]:
-                        case = next(c for c in cases if c.name == j.case)
-                        view.note(f"writing the report of {case.name}")
-                        outcome[case.name] = _finish_safely(case, jobs, store, out_dir,
-                                                            crashed, reused, view)
-        except KeyboardInterrupt:
-            stopped = True
-            _stop_workers(ex, store)
-            raise
-        finally:
-            if not stopped:
-                ex.shutdown(wait=True)
-            if client is not None:
-                client.close()
+        by_key = {j.key: j for j in todo}
+        with worker_pool(executor, scheduler, workers,
+                         on_stop=lambda ex: _stop_workers(ex, store)) as ex:
+            for o in execute_many({j.key: (run_job, (j, str(store))) for j in todo}, ex,
+                                  waiting=lambda keys: view.running(
+                                      _started([by_key[k] for k in keys], store, t_start))):
+                j = by_key[o.key]
+                if o.error is None:
+                    _, status, wall, text = o.value
+                else:                            # a worker died: record it, keep the rest
+                    crashed[j.label] = f"{type(o.error).__name__}: {o.error}".splitlines()[0]
+                    status, wall, text = "crashed", None, crashed[j.label]
+                view.finished(j.label, status, wall)
+                if verbose and text:
+                    for line in distinct_lines(text):
+                        view.log(f"    {line}")
+                pending[j.case].discard(j.label)
+                if not pending[j.case]:
+                    case = next(c for c in cases if c.name == j.case)
+                    view.note(f"writing the report of {case.name}")
+                    outcome[case.name] = _finish_safely(case, jobs, store, out_dir,
+                                                        crashed, reused, view)
     map_results = [_run_map(name, pl, out_dir, executor, scheduler, workers, view)
                    for name, pl in maps]
     from ..output.campaign_report import write_campaign_report

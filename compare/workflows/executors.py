@@ -1,5 +1,9 @@
-"""Where jobs run: a local process pool (embedded, nothing to start) or Dask distributed (a
-LocalCluster, or a running scheduler's address); campaigns and maps use the same two.
+"""Where jobs run, and the one executor under every study that runs many: `worker_pool` (a
+local process pool — embedded, nothing to start — or Dask distributed: a LocalCluster or a
+running scheduler's address) owns the workers' lives, and `execute_many` runs calls on it and
+hands each outcome back as it finishes (what a store already holds under a call's digest is
+the caller's to skip: a campaign's jobs, a map's points). Campaigns,
+maps and `bench --points` all go through these two.
 
 The pool's workers die with the process that started them: each sets the kernel's parent-death
 signal (Linux `prctl(PR_SET_PDEATHSIG, SIGKILL)`) and watches its parent from a thread (any
@@ -16,8 +20,10 @@ import signal
 import sys
 import threading
 import time
-from concurrent.futures import ProcessPoolExecutor
+from collections.abc import Callable, Iterator
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from contextlib import contextmanager
+from dataclasses import dataclass
 
 from ..errors import BadInput
 
@@ -40,11 +46,11 @@ def connect(scheduler, timeout_s=10):
                        ) from None
 
 
-def _worker_init(parent, ignore_sigint):
-    """In each pool worker: die with `parent` (the kernel's signal where there is one, and a
-    thread that polls `getppid`); a campaign's workers also ignore SIGINT."""
-    if ignore_sigint:
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
+def _worker_init(parent):
+    """In each pool worker: ignore SIGINT (Ctrl-C reaches the whole process group; the main
+    process stops the workers and keeps what is stored) and die with `parent` (the kernel's
+    signal where there is one, and a thread that polls `getppid`)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     if sys.platform.startswith("linux"):
         try:
             ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
@@ -60,7 +66,7 @@ def _worker_init(parent, ignore_sigint):
     threading.Thread(target=watch, daemon=True, name="xval-parent-watch").start()
 
 
-def make_executor(kind, scheduler, workers, ignore_sigint=False):
+def make_executor(kind, scheduler, workers):
     if kind == "dask":
         try:
             from distributed import Client, LocalCluster
@@ -75,13 +81,10 @@ def make_executor(kind, scheduler, workers, ignore_sigint=False):
         return client.get_executor(), client
     # spawn: engines start threads; a forked child would inherit a half-initialised state.
     # The children inherit one BLAS thread each (compare/__init__.py)
-    # a campaign's workers ignore SIGINT: Ctrl-C reaches the whole process group, and only the
-    # main process decides what happens (stop the workers, keep what is stored, say how to
-    # resume); other callers keep the default (a worker's KeyboardInterrupt ends its job)
     return ProcessPoolExecutor(max_workers=workers or 2,
                                mp_context=multiprocessing.get_context("spawn"),
                                initializer=_worker_init,
-                               initargs=(os.getpid(), ignore_sigint)), None
+                               initargs=(os.getpid(),)), None
 
 
 def _is_main_test(node):
@@ -148,3 +151,85 @@ def terminated_as_interrupt():
         yield
     finally:
         signal.signal(signal.SIGTERM, old)
+
+
+@contextmanager
+def _sigint_ignored():
+    """Workers spawned in this block start with SIGINT ignored (a Python started so keeps it):
+    Ctrl-C reaches the whole process group, and only the main process decides what happens."""
+    if threading.current_thread() is not threading.main_thread():
+        yield                              # only the main thread may set handlers
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+@contextmanager
+def worker_pool(kind="local", scheduler=None, workers=None, on_stop: Callable = stop,
+                in_process_if_unguarded=False):
+    """The workers of one study, and everything about their lives: they die with this process
+    (see `_worker_init`), SIGTERM is handled as Ctrl-C, and on either `on_stop(executor)` ends
+    them (default `stop`; a campaign also removes its half-written files) before the
+    KeyboardInterrupt goes on to the caller; on a normal exit they finish and are shut down.
+    `in_process_if_unguarded`: a script that called us outside its `__main__` guard gets None
+    (run here, one call at a time) and one line saying what to add — its spawned workers would
+    import it again and die."""
+    script = kind == "local" and in_process_if_unguarded and unguarded_script()
+    if script:
+        print(f"xval: {script}: running in this process, one point at a time; put the call "
+              f'under `if __name__ == "__main__":` for {workers or 2} workers', file=sys.stderr)
+        yield None
+        return
+    ex, client = make_executor(kind, scheduler, workers)
+    stopped = False
+    try:
+        with terminated_as_interrupt():
+            yield ex
+    except KeyboardInterrupt:
+        stopped = True
+        on_stop(ex)
+        raise
+    finally:
+        if not stopped:
+            ex.shutdown(wait=True)
+        if client is not None:
+            client.close()
+
+
+@dataclass
+class Outcome:
+    """One call's end: its key, and its value or the exception it raised."""
+    key: object
+    value: object = None
+    error: BaseException | None = None
+
+
+def execute_many(calls: dict, executor=None, waiting: Callable | None = None,
+                 poll_s: float = 0.5) -> Iterator[Outcome]:
+    """Run `calls` ({key: (fn, args)}, fn importable by the workers) and yield an `Outcome` as
+    each finishes (`executor` None: here, one after another). A call that raises is an outcome
+    like any other: a dead worker never hides the other calls. `waiting(keys)`: told every
+    `poll_s` which keys are still out (a progress view)."""
+    todo = calls
+    if executor is None:
+        for key, (fn, args) in todo.items():
+            try:
+                yield Outcome(key, fn(*args))
+            except Exception as e:
+                yield Outcome(key, error=e)
+        return
+    with _sigint_ignored():                # a worker spawns at its first submit
+        futures = {executor.submit(fn, *args): key for key, (fn, args) in todo.items()}
+    left = set(futures)
+    while left:
+        done, left = wait(left, timeout=poll_s, return_when=FIRST_COMPLETED)
+        if waiting:
+            waiting([futures[f] for f in left])
+        for f in done:
+            try:
+                yield Outcome(futures[f], f.result())
+            except Exception as e:
+                yield Outcome(futures[f], error=e)

@@ -25,7 +25,6 @@ import hashlib
 import json
 import math
 import os
-import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,13 +38,7 @@ from ..results import MapResult
 from ..scenes import get_scene
 from . import plan as planner
 from .digest import STORE_VERSION, job_code
-from .executors import (
-    Interrupted,
-    make_executor,
-    stop,
-    terminated_as_interrupt,
-    unguarded_script,
-)
+from .executors import Interrupted, execute_many, worker_pool
 
 NONE = "none"                     # an observable's label where its event did not happen
 MAX_JOBS = 100_000                # runs a map may plan before it is refused (--max-jobs)
@@ -173,7 +166,7 @@ class Runner:
         groups = {}
         for k, (solver, settings, pt) in todo.items():
             groups.setdefault((solver, json.dumps(settings, sort_keys=True)), []).append((k, pt))
-        jobs = []
+        calls, chunks = {}, {}
         for (solver, settings_text), items in groups.items():
             settings = json.loads(settings_text)
             # every chunk strided over the batch: a point's cost follows its place on the grid
@@ -182,16 +175,18 @@ class Runner:
             n = min(len(items), 2 * self.workers)
             for i in range(n):
                 chunk = items[i::n]
-                args = (self.sc.name, solver, self.base, [p for _, p in chunk], settings,
-                        self.what)
-                jobs.append((solver, chunk, self.executor.submit(evaluate_chunk, *args)
-                             if self.executor else None, args))
-        for solver, chunk, fut, args in jobs:
-            rows = fut.result() if fut is not None else evaluate_chunk(*args)
+                key = (solver, settings_text, i)
+                chunks[key] = (solver, chunk)
+                calls[key] = (evaluate_chunk, (self.sc.name, solver, self.base,
+                                               [p for _, p in chunk], settings, self.what))
+        for o in execute_many(calls, self.executor):
+            if o.error is not None:
+                raise o.error
+            solver, chunk = chunks[o.key]
             # one core's time in the solver per point (compile time apart, as `simulate` has it)
-            self.wall[solver] = self.wall.get(solver, 0.0) + sum(r["wall_s"] for r in rows)
-            self.runs[solver] = self.runs.get(solver, 0) + len(rows)
-            for (k, _), row in zip(chunk, rows):
+            self.wall[solver] = self.wall.get(solver, 0.0) + sum(r["wall_s"] for r in o.value)
+            self.runs[solver] = self.runs.get(solver, 0) + len(o.value)
+            for (k, _), row in zip(chunk, o.value):
                 self.memo[k] = row
                 if self.store:
                     store_point(self.store, k, row)
@@ -856,29 +851,13 @@ def map_to_folder(plan, out, settings_for=None, executor="local", scheduler=None
         sc = plan["scene"]
         salt = {"store": STORE_VERSION, "code": job_code(sc, plan["chosen"]),
                 "versions": {s.name: solvers.versions(s) for s in plan["chosen"]}}
-    script = executor == "local" and unguarded_script()
-    if script:                     # its spawned workers would run the script again and die
-        print(f"xval: {script}: the map runs in this process, one point at a time; put the "
-              f'call under `if __name__ == "__main__":` for {workers} workers', file=sys.stderr)
-        pool, client = None, None
-    else:
-        pool, client = make_executor(executor, scheduler, workers)
-    stopped = False
     try:
-        with terminated_as_interrupt():
+        with worker_pool(executor, scheduler, workers, in_process_if_unguarded=True) as pool:
             result = run_map(plan, settings_for, pool, workers, store, log, salt)
     except KeyboardInterrupt:
-        stopped = True
-        if pool is not None:
-            stop(pool)
         n = len(list(Path(store).glob("*.json"))) if store else 0
         raise Interrupted(f"{n} map points are stored in {store} and will be reused"
                           if store else "map stopped") from None
-    finally:
-        if not stopped and pool is not None:
-            pool.shutdown(wait=True)
-        if client is not None:
-            client.close()
     result["folder"], result["result"] = str(out_dir), MapResult.TYPE
     return write_map_outputs(out_dir, result, record)
 
@@ -910,7 +889,6 @@ def throughput(scene_name, solver_names, overrides, n_points, workers=2, log=Non
         left -= len(row)
     grid = [row for row in grid if row]
     pts = [p for row in grid for p in row]
-    pool, client = make_executor("local", None, workers)
     rows, say = [], log or (lambda m: None)
 
     def timed(st, adaptive=None):
@@ -925,7 +903,7 @@ def throughput(scene_name, solver_names, overrides, n_points, workers=2, log=Non
             got = ([r["label"] for r in runner.run([(s.name, st, p) for p in pts])], len(pts))
         return got, time.perf_counter() - t0, sum(runner.wall.values())
 
-    try:
+    with worker_pool("local", None, workers) as pool:
         for s in plan["chosen"]:
             st = plan["settings"][s.name]
             (labels, _), wall, core = timed(st)
@@ -946,9 +924,5 @@ def throughput(scene_name, solver_names, overrides, n_points, workers=2, log=Non
                 + (f" (accurate everywhere {row['accurate_points_per_second']:.0f}; "
                    f"{row['rerun_fraction']:.1%} rerun accurate, "
                    f"{row['labels_differ']} labels differ)" if cheap else ""))
-    finally:
-        pool.shutdown(wait=True)
-        if client is not None:
-            client.close()
     return {"scene": sc.name, "map": spec.name, "x": xa.as_dict(),
             "y": ya.as_dict() if ya else None, "set": base, "workers": workers, "rows": rows}

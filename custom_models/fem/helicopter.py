@@ -17,16 +17,13 @@ import numpy as np
 from compare.contract import LeafModes, merge_settings
 from compare.physics.mstmm import helicopter_layout
 
+from ..rotation import skew
 from .beam import bending
 
 MODES_SETTINGS = {"blade_elements": 12, "shaft_elements": 2, "tail_elements": 6,
                   "richardson": True}
 BLADE_STATIONS = 7
 RIGID_BODY_HZ = 0.01
-
-
-def skew(r):
-    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
 
 def blade_frame(k):

@@ -53,12 +53,9 @@ import numpy as np
 from compare.contract import LeafModes, merge_settings
 from compare.physics.mstmm import helicopter_layout
 
+from ..rotation import skew
 from . import elements as el
 from .roots import SEARCH_RTOL, find_roots, root_error_hz
-
-
-def skew(r):
-    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
 
 def frame_blocks(R):

@@ -62,10 +62,13 @@ write("my_pendulum/my_pendulum/scene.py", '''
 damping, so E = ½ m l² ω² − m g l cos θ is conserved."""
 import numpy as np
 
+from compare.contract import Channel
 from compare.scenes.base import Scene
 from compare.scenes.params import Param, positive
 
-CHANNELS = ("theta", "omega", "energy", "energy_balance")
+# each channel carries its unit: every plot and table reads it from here
+CHANNELS = (Channel("theta", "rad"), Channel("omega", "rad/s"), Channel("energy", "J"),
+            Channel("energy_balance", "J"))
 
 
 def channels(params, theta, omega):

@@ -33,7 +33,9 @@ CASES = {
     "press-cycle": [("default", {}, None)],
     "sail-deploy": [("full", {}, ["thread-spool", "thread-spool-conservative"]),
                     ("2s", {"t_end": 2}, None), ("0.2s", {"t_end": 0.2}, None)],
-    "rotor-whirl": [("spin0", {}, None), ("spin100", {"spin": 100.0}, None)],
+    "rotor-whirl": [("spin0", {}, None), ("spin100", {"spin": 100.0}, None),
+                    ("damped40", {"spin": 40.0, "c_ext": 0.5, "c_int": 2.0}, None),
+                    ("damped120", {"spin": 120.0, "c_ext": 0.5, "c_int": 2.0}, None)],
     "rotating-beam": [(f"speed{s:g}", {"speed": s}, None) for s in (0.0, 20.0, 40.0)],
     "spinning-shaft": [(f"spin{s:g}", {"spin_ratio": s}, None) for s in (0.0, 6.0)],
     # like for like at speed, as the campaign runs them (the engines' fixed-frame aircraft and
@@ -76,15 +78,21 @@ def measure_time(scene, params, trajectories):
     return rows, {tr.solver: tr.status for tr in trajectories}
 
 
-def measure_modes(results):
-    from compare.analysis.metrics import frequency_comparisons
+def measure_modes(results, scene):
+    """Per pair: the largest relative frequency difference ("frequency") and, where the scene
+    has a ζ allowance and both give damping ratios, the largest |Δζ| ("damping"), over the
+    paired modes."""
+    from compare.analysis.metrics import damping_comparisons, frequency_comparisons
     rows = {}
-    for c in frequency_comparisons(results, {"frequency": 0.0}):
-        r = rows.setdefault((c.a, c.b), {"a": c.a, "b": c.b, "channel": "frequency",
-                                         "max_abs": 0.0, "scale": 1.0, "error_estimate": None,
-                                         "left": 0.0, "worst_mode": None})
-        if c.max_rel >= r["max_abs"]:
-            r.update(max_abs=c.max_rel, left=c.max_rel, worst_mode=c.channel)
+    for channel, cs in (("frequency", frequency_comparisons(results, {"frequency": 0.0})),
+                        ("damping", damping_comparisons(results, {"damping": 0.0})
+                         if "damping" in channels(scene) else [])):
+        for c in cs:
+            r = rows.setdefault((c.a, c.b, channel), {
+                "a": c.a, "b": c.b, "channel": channel, "max_abs": 0.0, "scale": 1.0,
+                "error_estimate": None, "left": 0.0, "worst_mode": None})
+            if c.max_rel >= r["max_abs"]:
+                r.update(max_abs=c.max_rel, left=c.max_rel, worst_mode=c.channel)
     return list(rows.values()), {r.solver: r.status for r in results}
 
 
@@ -97,7 +105,7 @@ def run_case(scene_name, overrides, names):
     params = sc.resolve({k: str(v) for k, v in overrides.items()})
     chosen = reg.pick(sc, names)
     if sc.kind == "modes":
-        return measure_modes([reg.modes(sc, s, params) for s in chosen])
+        return measure_modes([reg.modes(sc, s, params) for s in chosen], sc)
     t_out = sc.output_grid(params)
     trs = [reg.simulate(sc, s, params, reg.settings_for(s, sc.name, t_out=t_out), None,
                         sc.error_estimate) for s in chosen]
@@ -123,7 +131,12 @@ def allowance_table(table=None):
     `covers`: the allowance (+ estimates) covers every measured case (the verdict agrees);
     `wider`: the scene file's documented reason for a wider one ({pair: reason} or
     {pair: {channel: reason}})."""
-    from compare.analysis.metrics import allowance, allowance_si, frequency_allowance
+    from compare.analysis.metrics import (
+        allowance,
+        allowance_si,
+        damping_allowance,
+        frequency_allowance,
+    )
     from compare.scenes import ORIGIN, SCENES
     table = table if table is not None else json.loads(TABLE.read_text())
     out = []
@@ -142,7 +155,8 @@ def allowance_table(table=None):
                     # a reason for the whole pair, or {channel: reason}
                     reason = (pair_reason.get(ch) if isinstance(pair_reason, dict)
                               else pair_reason)
-                    allow = (frequency_allowance(tol, a, b) if sc.kind == "modes"
+                    allow = (frequency_allowance(tol, a, b) if ch == "frequency"
+                             else damping_allowance(tol, a, b) if ch == "damping"
                              else allowance(tol, a, b, ch))
                     ratio, measured, covers, where = None, None, True, []
                     for n in mine:

@@ -81,3 +81,27 @@ def test_modes_workflow_reports_unstable_above_the_threshold():
     assert [(g["solver"], g["mode"]) for g in above.extra["unstable"]] == [
         (n, "forward whirl") for n in names]
     assert "unstable" not in below.extra
+
+
+def test_round_off_is_not_a_growing_root():
+    """Undamped, every root lies on the imaginary axis (closed form); the finite-difference
+    linearisations put some at ζ ≈ −1e-16 (euler-vector −1.2e-16, MuJoCo −8.5e-20 at 40 rad/s).
+    Those are round-off, inside the scene's damping allowance: no solver is `unstable`."""
+    from compare.workflows.modes import run_modes
+    res = run_modes("rotor-whirl", list(SCENE.leaves), {"spin": "40"}, log=lambda *a: None,
+                    campbell_sweep=False, identify=False)
+    assert "unstable" not in res.summary and "unstable" not in res.extra
+    assert all(c.verdict == "agree" for c in res.comparisons)
+
+
+def test_damping_verdicts_see_a_one_percent_damper_error():
+    """ζ is judged like the frequencies (allowance 5e-13, set from |Δζ| ≤ 6.2e-14 measured):
+    MuJoCo with c_ext 1 % off (ζ moves by ~4e-4) disagrees with the closed form on ζ, while
+    its frequencies barely move."""
+    p = SCENE.resolve({"spin": "60", "c_ext": "0.5", "c_int": "2"})
+    exact = solvers.modes(SCENE, solvers.get_solver("closed-form"), p)
+    right = solvers.modes(SCENE, solvers.get_solver("mujoco"), p)
+    wrong = solvers.modes(SCENE, solvers.get_solver("mujoco"), {**p, "c_ext": 0.505})
+    zeta = lambda cs: [c.verdict for c in cs if c.channel.endswith("ζ")]
+    assert zeta(SCENE.verdicts(p, [exact, right])) == ["agree", "agree"]
+    assert zeta(SCENE.verdicts(p, [exact, wrong])) == ["disagree", "disagree"]

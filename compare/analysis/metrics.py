@@ -110,7 +110,8 @@ def allowance_channels(tolerances: dict) -> list[str]:
     "frequency_by_…" tables, "frequency_one_model" pairs, nor "wider": pair -> the scene's
     reason for a wider one)."""
     return [c for c in tolerances
-            if not c.startswith(("by_", "frequency_by_", "frequency_one_model", "wider"))]
+            if not c.startswith(("by_", "frequency_by_", "damping_by_", "frequency_one_model",
+                                 "wider"))]
 
 
 def pairwise(trajectories: list[Trajectory], tolerances: dict) -> list[Comparison]:
@@ -251,6 +252,13 @@ def frequency_errors(m: Modes) -> np.ndarray | None:
     return e if e.shape == np.shape(m.frequencies_hz) else None
 
 
+def damping_allowance(tolerances: dict, a: str, b: str) -> float:
+    """The pair's allowance on ζ (absolute): "damping", raised by a "damping_by_solver" entry
+    of either solver."""
+    by = tolerances.get("damping_by_solver", {})
+    return max([tolerances["damping"]] + [by.get(s, 0.0) for s in (a, b)])
+
+
 def frequency_allowance(tolerances: dict, a: str, b: str) -> float:
     """The relative allowance of the pair (a, b) on frequencies: the pair's own
     ("frequency_by_pair", "a|b" in either order), else the larger of "frequency" and a
@@ -311,8 +319,7 @@ def damping_comparisons(results: list[Modes], tolerances: dict) -> list[Comparis
     ok = [r for r in results if r.status == "ok" and r.damping is not None]
     for i, a in enumerate(ok):
         for b in ok[i + 1:]:
-            by = tolerances.get("damping_by_solver", {})
-            tol = max([tolerances["damping"]] + [by.get(s, 0.0) for s in (a.solver, b.solver)])
+            tol = damping_allowance(tolerances, a.solver, b.solver)
             ea, eb = (m.extra.get("damping_error") for m in (a, b))
             for ia, ib in match_modes(list(a.frequencies_hz), a.labels,
                                       list(b.frequencies_hz), b.labels):

@@ -63,24 +63,24 @@ def damped_rows(results: list[Modes]) -> list[list[str]]:
     return rows
 
 
-def growing_modes(results: list[Modes]) -> list[dict]:
-    """Every mode with ζ < 0 (it grows: the linearised system is unstable), per solver, with
-    its growth rate Re λ = −ζ ω_d/√(1 − ζ²) [1/s]."""
+def growing_modes(results: list[Modes], floor: float = 0.0) -> list[dict]:
+    """Every mode that grows (the linearised system is unstable), per solver, with its growth
+    rate Re λ = −ζ ω_d/√(1 − ζ²) [1/s]: ζ below zero by more than its error — the solver's
+    own estimate (extra "damping_error") plus `floor`, the scene's damping allowance (what
+    its solvers cannot tell from zero: an undamped rotor-whirl gives ζ = −1.2e-16 in one
+    solver's eigenvalues, round-off, not a growing root)."""
     out = []
     for m in results:
         if m.status != "ok" or m.damping is None:
             continue
-        for f, lb, z in zip(m.frequencies_hz, m.labels, m.damping):
-            if z < 0:
+        errors = m.extra.get("damping_error")
+        errors = np.zeros(len(m.damping)) if errors is None else np.asarray(errors, float)
+        for f, lb, z, e in zip(m.frequencies_hz, m.labels, m.damping, errors):
+            if z < -(floor + e):
                 out.append({"solver": m.solver, "mode": lb, "frequency_hz": float(f),
                             "zeta": float(z),
                             "growth_per_s": float(-z * 2 * np.pi * f / np.sqrt(1 - z * z))})
     return out
-
-
-def markdown_table(header, rows) -> list[str]:
-    return (["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-            + ["| " + " | ".join(r) + " |" for r in rows])
 
 
 class ModesResult(Result):

@@ -22,8 +22,8 @@ from ..results.modes import (
     damped_json,
     damped_rows,
     growing_modes,
-    markdown_table,
 )
+from ..results.tables import VERDICT_HEADER, markdown, verdict_rows
 from ..scenes import Scene, get_scene
 from .plan import plan
 
@@ -350,7 +350,7 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
     incomplete = [{"solver": r.solver, "status": r.status, "reason": r.reason}
                   for r in results if r.status != "ok"]
     extra, report = {}, {"explain": [], "campbell": [], "identify": []}
-    growing = growing_modes(results)
+    growing = growing_modes(results, sc.tolerances_for(params).get("damping", 0.0))
     if growing:                                  # only then: undamped answers stay as they were
         extra["unstable"] = growing
     md = [f"# {sc.name}: {sc.title}", "", f"Source: {sc.source}", "",
@@ -359,14 +359,13 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
            f"{', '.join(r.labels)} | {'; '.join(r.notes) or r.reason or ''} |" for r in results]
     if any(r.damping is not None for r in results):
         md += ["", "Damped modes (ζ: damping ratio, log dec δ = 2πζ/√(1 − ζ²); whirl about the "
-               "spin as ROSS names it):", "", *markdown_table(DAMPED_HEADER, damped_rows(results))]
+               "spin as ROSS names it):", "",
+               *markdown(DAMPED_HEADER, damped_rows(results)).splitlines()]
     if growing:
         md += ["", "**unstable**: " + "; ".join(
             f"{g['solver']} {g['mode']} grows at {g['growth_per_s']:.6g} /s (ζ = {g['zeta']:.3g})"
             for g in growing)]
-    md += ["", "| a | b | mode | rel. difference | verdict |", "|---|---|---|---|---|"]
-    md += [f"| {c.a} | {c.b} | {c.channel} | {c.max_rel:.2e} | {c.verdict} |"
-           for c in comparisons]
+    md += ["", *markdown(VERDICT_HEADER, verdict_rows(comparisons)).splitlines()]
     if unpaired:
         md += ["", "Modes left unpaired (not compared):", "",
                "| a | b | solver | mode | frequency [Hz] | why |", "|---|---|---|---|---|---|"]
@@ -398,11 +397,8 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
                     more += sc.verdicts(params, [eig, fit])
             comparisons = comparisons + more
             if more:
-                report["identify"] += ["", "| a | b | mode | deviation | bound | verdict |",
-                                       "|---|---|---|---|---|---|"]
-                report["identify"] += [f"| {c.a} | {c.b} | {c.channel} | {c.deviation:.2e} | "
-                                       f"{c.tolerance * c.scale:.2e} | {c.verdict} |"
-                                       for c in more]
+                report["identify"] += ["", *markdown(VERDICT_HEADER,
+                                                     verdict_rows(more)).splitlines()]
     failed = {m["solver"] for m in incomplete}
     incomplete += [m for m in (obj_cb or {}).get("incomplete", []) if m["solver"] not in failed]
     status, summary = modes_status(comparisons, {"incomplete": incomplete,

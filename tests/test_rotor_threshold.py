@@ -105,3 +105,20 @@ def test_damping_verdicts_see_a_one_percent_damper_error():
     zeta = lambda cs: [c.verdict for c in cs if c.channel.endswith("ζ")]
     assert zeta(SCENE.verdicts(p, [exact, right])) == ["agree", "agree"]
     assert zeta(SCENE.verdicts(p, [exact, wrong])) == ["disagree", "disagree"]
+
+
+def test_campbell_marks_where_the_forward_whirl_starts_to_grow():
+    """On the Campbell sweep every solver's forward-whirl line turns growing between the two
+    samples that bracket the closed-form threshold Ω_th (88.206 rad/s at c_int = c_ext = 1),
+    its onset interpolated within the bracket; the backward whirl never grows."""
+    from compare.workflows.modes import run_modes
+    over = {"c_int": "1", "c_ext": "1", "spin": "100", "n_spin": "34"}
+    w_th = instability_speed(SCENE.resolve(over))
+    res = run_modes("rotor-whirl", list(SCENE.leaves), over, log=lambda *a: None,
+                    identify=False)
+    onsets = res.campbell["growing_from"]
+    assert sorted(onsets) == sorted(SCENE.leaves)
+    for name, rows in onsets.items():
+        assert [r["line"] for r in rows] == ["forward whirl"], name
+        r = rows[0]
+        assert r["lo"] < w_th < r["hi"] and abs(r["from"] - w_th) < 0.05 * (r["hi"] - r["lo"])

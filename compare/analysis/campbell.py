@@ -388,3 +388,26 @@ def _veerings(d: Diagram, results: list[Modes]) -> list[Event]:
                     out.append(Event("veering", (low, up), float(v[lo]), float(v[hi]),
                                      float(v[k]), float(g[k])))
     return out
+
+
+def growing_onsets(values, zeta_lines: dict, floor: float = 0.0) -> list[dict]:
+    """Where each line's root starts to grow: its ζ (tracked like the frequencies) goes below
+    −`floor` (the scene's ζ allowance: round-off is not growth). Per line whose root grows
+    somewhere: the speed where ζ crosses zero (linear between the samples that bracket it;
+    the sweep's start where it grows from there), the bracket, and the least ζ on the sweep."""
+    v = np.asarray(values, float)
+    out = []
+    for key, z in zeta_lines.items():
+        z = np.asarray(z, float)
+        grows = np.isfinite(z) & (z < -floor)
+        if not grows.any():
+            continue
+        i = int(np.argmax(grows))
+        if i == 0 or not np.isfinite(z[i - 1]):
+            at, lo = float(v[i]), float(v[i])
+        else:
+            lo = float(v[i - 1])
+            at = lo + (v[i] - lo) * z[i - 1] / (z[i - 1] - z[i]) if z[i - 1] > 0 else lo
+        out.append({"line": key, "from": float(at), "lo": lo, "hi": float(v[i]),
+                    "least_zeta": float(np.nanmin(z))})
+    return out

@@ -9,11 +9,13 @@ from ..atomic import atomic_path
 from ..physics.whirl import order_seen
 
 
-def png(path, scene, values, lines_by_solver, entries, params, events=None, frame=None):
+def png(path, scene, values, lines_by_solver, entries, params, events=None, frame=None,
+        growing=None):
     """The lines of every solver as seen in `frame` (default: the solvers' own), each
     excitation line labelled with its order, name and frame — an excitation of the other frame
-    drawn where it meets forward and backward whirl in this one (compare.physics.whirl) — and
-    the critical speeds (`entries`: solver → the crossings of compare.workflows.modes)."""
+    drawn where it meets forward and backward whirl in this one (compare.physics.whirl) — the
+    critical speeds (`entries`: solver → the crossings of compare.workflows.modes), and the
+    samples where a line's root grows (`growing`: solver → line → bool per sample) in red."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -28,6 +30,14 @@ def png(path, scene, values, lines_by_solver, entries, params, events=None, fram
             colour = f"C{j % 10}" if len(keys) <= 10 else plt.cm.tab20(j % 20)
             ax.plot(values, f, lw=1, ls=styles[k % len(styles)], color=colour,
                     marker=".", ms=2, label=key if k == 0 else None)   # dots: the samples
+    marked = False
+    for s, by_line in (growing or {}).items():
+        for key, g in by_line.items():
+            f = np.asarray(lines_by_solver.get(s, {}).get(key, []), float)
+            if len(f) == len(g) and g.any():
+                ax.plot(np.asarray(values)[g], f[g], "o", color="red", ms=3,
+                        label=None if marked else "growing root (ζ < 0)")
+                marked = True
     speed = np.array([cb.excitation_hz(params, v) for v in values])
     grey = iter(np.linspace(0.0, 0.6, 2 * len(cb.excitations)))
     for e in cb.excitations:

@@ -13,8 +13,8 @@ def write_modes_folder(out_dir: Path, result) -> dict:
     """Every file of a modes result made in memory (`result.report`: its Markdown sections
     "head", "explain", "campbell", "identify"; `result.drawing`: the Campbell diagram's
     (values, the lines in the figure's frame, critical speeds, events, that frame, the lines in
-    the solvers' frame)). `result.out_dir` and `result.files` name them;
-    returns the JSON written."""
+    the solvers' frame, where each line's root grows)). `result.out_dir` and `result.files`
+    name them; returns the JSON written."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     sc, part, files = result.scene, result.report, {}
@@ -27,9 +27,9 @@ def write_modes_folder(out_dir: Path, result) -> dict:
             md += ["", "## Mode shapes", "", drawn["text"], "", "![mode shapes](mode_shapes.png)"]
     md += part["explain"]
     if result.drawing is not None and result.drawing[5]:
-        values, shown, entries, events, frame, lines = result.drawing
+        values, shown, entries, events, frame, lines, growing = result.drawing
         campbell_plot.png(out_dir / "campbell.png", sc, values, shown, entries, result.params,
-                          events, frame)
+                          events, frame, growing)
         files["recording"] = campbell_plot.rrd(out_dir / "campbell.rrd", sc, values, lines)
     md += part["campbell"] + part["identify"]
     md[1:1] = ["", f"**{result.summary}**"]

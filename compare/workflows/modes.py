@@ -8,6 +8,8 @@ scene.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from scipy.optimize import brentq, linear_sum_assignment
 
@@ -258,6 +260,13 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
          for p, v in zip(per_point, grid)]) for k, s in enumerate(usable)} for f in cb.frames}
     lines = by_frame[cb.frame]
     events = {s: d.events for s, d in diagrams.items()}
+    # ζ along each line (tracked as the frequencies are), where a solver gives damping
+    zeta = {s.name: diagrams[s.name].lines_of([replace(p[k], frequencies_hz=p[k].damping)
+                                               for p in per_point])
+            for k, s in enumerate(usable)
+            if all(p[k].damping is not None for p in per_point)}
+    floor = sc.tolerances_for(params).get("damping", 0.0)
+    onsets = {s: campbell.growing_onsets(grid, z, floor) for s, z in zeta.items()}
     none = lambda f: [None if not np.isfinite(x) else float(x) for x in f]   # noqa: E731
     obj = {"parameter": cb.parameter, "values": list(grid), "grid_points": len(values),
            "frame": cb.frame, "lines_hz": {s: {k: none(v) for k, v in ln.items()}
@@ -270,6 +279,8 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
            "excitations": [{"order": e.order, "frame": e.frame, "name": e.name}
                            for e in cb.excitations],
            "critical_speeds": entries,
+           "zeta_lines": {s: {k: none(v) for k, v in z.items()} for s, z in zeta.items()},
+           "growing_from": {s: o for s, o in onsets.items() if o},
            "unconfirmed_critical_speeds": {s: u for s, u in unconfirmed.items() if u},
            "incomplete": missing}
     if lines:
@@ -286,11 +297,18 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
            f"({e.lo:.4g}–{e.hi:.4g}; least gap {e.gap_hz:.3g} Hz)"
            for s, ev in events.items() for e in ev]
     md += [""] + critical_table(cb, entries)
+    md += ["", f"Growing roots on the sweep (ζ below −{floor:.1e}, the scene's ζ allowance; "
+           "onset where ζ crosses zero):", ""] + [
+        f"- {s}: {o['line']} grows from {cb.parameter} ≈ {o['from']:.6g} "
+        f"({o['lo']:.6g}–{o['hi']:.6g}; least ζ {o['least_zeta']:.3g})"
+        for s, os_ in onsets.items() for o in os_] if any(onsets.values()) else []
     md += [f"- {n}: {u['name']} unconfirmed (the lines cross near {u['lines_estimate']:.6g}): "
            f"{u['reason']}" for n, us in unconfirmed.items() for u in us]
     md += [f"- {m['solver']}: no critical speeds — {m['reason']}" for m in missing]
     md += ["", "![campbell](campbell.png)"]
-    return obj, crit, md, (grid, by_frame[frame], entries, events, frame, lines)
+    growing = {s: {k: np.asarray(z, float) < -floor for k, z in zeta[s].items()}
+               for s, o in onsets.items() if o}
+    return obj, crit, md, (grid, by_frame[frame], entries, events, frame, lines, growing)
 
 
 def critical_table(cb, entries: dict) -> list[str]:

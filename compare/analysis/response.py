@@ -33,6 +33,7 @@ def judge(a, ea, b, eb) -> dict:
     ok = d_amp <= bar_amp and d_phase <= bar_phase
     return {"amplitude_diff": d_amp, "amplitude_bar": bar_amp,
             "amplitude_rel": d_amp / max(abs(a), abs(b)),
+            "amplitude_bar_rel": bar_amp / max(abs(a), abs(b)),
             "phase_diff_deg": float(np.degrees(d_phase)),
             "phase_bar_deg": float(np.degrees(bar_phase)),
             "verdict": "agree" if ok else "disagree"}

@@ -14,12 +14,18 @@ from .studies import StudyResult
 RPM = 60 / (2 * math.pi)
 
 
+def time_label(name: str) -> str:
+    """A time solver's curve, told from the same solver's frequency-domain one."""
+    return f"{name} (time)"
+
+
 class ResponseResult(StudyResult):
     TYPE, JSON = "response", "response.json"
 
     @property
     def solvers(self) -> list[str]:
-        return list(self.data["frequency"]) + list(self.data["time"])
+        """The curves' labels: frequency-domain solvers, then time-domain ones."""
+        return list(self.data["frequency"]) + [time_label(n) for n in self.data["time"]]
 
     def curve(self, name) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(speeds [rad/s], complex amplitudes, error bars) of one solver (NaN where a time
@@ -29,7 +35,7 @@ class ResponseResult(StudyResult):
             f = d["frequency"][name]
             return (np.array(d["speeds_rad_s"]), np.array(f["re"]) + 1j * np.array(f["im"]),
                     np.array(f["error"]))
-        rows = d["time"][name]
+        rows = d["time"][name.removesuffix(time_label(""))]
         ok = [r["status"] == "ok" for r in rows]
         a = np.array([complex(r["re"], r["im"]) if k else np.nan for r, k in zip(rows, ok)])
         return (np.array([r["speed_rad_s"] for r in rows]), a,

@@ -184,8 +184,8 @@ class Response:
     `decay(params, spin)`: the slowest free decay rate [1/s] (the settling time);
     `time_params(params, spin, t_end, output_dt, a)`: the time scene's parameters holding
     that spin (`a`: the closed form's amplitude, for a drive that balances the damping);
-    `observe(params, trajectory) -> (a(t) samples, φ(t))`: the observable and the rotor's
-    angle from a run; `high_spot`: the factor turning a into the high spot's phasor relative
+    `observe(params, trajectory) -> (z(t), e^{iφ(t)})`: the observable's samples and the
+    rotor's angle from a run; `high_spot`: the factor turning a into the high spot's phasor relative
     to the heavy spot (the phase lag is −arg(high_spot·a))."""
     time_scene: str
     time_solvers: tuple

@@ -15,11 +15,11 @@ import numpy as np
 from .. import solvers
 from ..analysis import response as resp
 from ..errors import BadInput
-from ..results.response import ResponseResult
-from ..scenes import get_scene
+from ..results.response import ResponseResult, time_label
+from ..scenes import SCENES, get_scene
 from .plan import plan
 
-SETTLE = 1e-9        # the transient left when the fit windows start (of its initial size)
+SETTLE = 1e-12       # the transient left when the fit windows start (of its initial size)
 WINDOW_S = 1.0       # each fit window: the fewest whole revolutions lasting this long
 SAMPLES = 40         # output samples per revolution at least
 MIN_SPEEDS = 5
@@ -29,7 +29,7 @@ def _split(scene, names):
     """(frequency-domain solver names, time-domain ones) among `names` (default: all)."""
     spec = scene.response
     freq = [s for s in scene.leaves if solvers.get_solver(s).info(scene).unbalance_response]
-    known = freq + list(spec.time_solvers)
+    known = list(dict.fromkeys(freq + list(spec.time_solvers)))
     for n in names:
         if n not in known:
             raise BadInput(f"--solver {n}: no unbalance response in scene {scene.name} "
@@ -109,7 +109,7 @@ def run_response(scene_name: str, solver_names=None, overrides: dict | None = No
     spec = scene.response
     if spec is None:
         raise BadInput(f"scene {scene_name!r} has no unbalance response (scenes with one: "
-                       "rotor-whirl)")
+                       f"{', '.join(n for n, s in SCENES.items() if s.response)})")
     if n_speeds < MIN_SPEEDS:
         raise BadInput(f"--speeds: at least {MIN_SPEEDS} speeds, got {n_speeds}")
     freq, timed = _split(scene, list(solver_names or []))
@@ -163,14 +163,16 @@ def _judge(scene, data, params, freq, timed):
                 break
             fa = _frequency(scene, f, params, at)
             for k, r in enumerate(ok):
-                data["verdicts"].append({"speed_rad_s": r["speed_rad_s"], "a": f, "b": name,
-                                         "kind": "frequency-time", "spin_rad_s": r["spin_rad_s"],
+                data["verdicts"].append({"speed_rad_s": r["speed_rad_s"], "a": f,
+                                         "b": time_label(name), "kind": "frequency-time",
+                                         "spin_rad_s": r["spin_rad_s"],
                                          **resp.judge(_complex(fa, k), fa["error"][k],
                                                       _complex(r), r["error"])})
         for r in data["time"][name]:
             if r["status"] != "ok":
-                data["verdicts"].append({"speed_rad_s": r["speed_rad_s"], "a": name, "b": None,
-                                         "kind": "time", "verdict": "incomplete",
+                data["verdicts"].append({"speed_rad_s": r["speed_rad_s"],
+                                         "a": time_label(name), "b": None, "kind": "time",
+                                         "verdict": "incomplete",
                                          "why": f"{r['status']}: {r.get('reason')}"})
 
 
@@ -182,7 +184,7 @@ def _peaks(scene, data, params, freq, timed):
     for n in timed:
         ok = [r for r in data["time"][n] if r["status"] == "ok"]
         if len(ok) == len(spins):
-            curves[n] = np.array([abs(_complex(r)) for r in ok])
+            curves[time_label(n)] = np.array([abs(_complex(r)) for r in ok])
     for n, amp in curves.items():
         pk = resp.peak(spins, amp)
         if pk is not None and n in freq:

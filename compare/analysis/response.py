@@ -41,16 +41,23 @@ def judge(a, ea, b, eb) -> dict:
             "verdict": "agree" if ok else "disagree"}
 
 
-def peak(speeds, amplitude) -> dict | None:
-    """The peak of |a| over speed (a cubic spline through the samples), its half-power speeds
-    (|a| = peak/√2 on either side), the amplification factor Q = Ω_peak/(Ω₂ − Ω₁) and the
-    half-power damping estimate ζ ≈ (Ω₂ − Ω₁)/(2 Ω_peak) = 1/(2Q); None where the curve has
-    no interior peak with both half-power points among the samples."""
-    w, amp = np.asarray(speeds, float), np.asarray(amplitude, float)
+def peak(speeds, a) -> dict | None:
+    """The peak of |a| over speed, its half-power speeds (|a| = peak/√2 on either side), the
+    amplification factor Q = Ω_peak/(Ω₂ − Ω₁) and the half-power damping estimate
+    ζ ≈ (Ω₂ − Ω₁)/(2 Ω_peak) = 1/(2Q); None where the curve has no interior peak with both
+    half-power points among the samples. Between samples |a| = 1/|s(Ω)|, s the cubic spline
+    of the complex 1/a: near a resonance 1/a is a low polynomial in Ω (an oscillator's
+    dynamic stiffness over its forcing), which a spline follows where |a| itself, sharp at
+    the peak, is not (24 speeds: peak speed 5.9e-4 and ζ 1.9 % off through |a|)."""
+    w, a = np.asarray(speeds, float), np.asarray(a, complex)
+    amp = np.abs(a)
     i = int(np.argmax(amp))
     if i in (0, len(w) - 1):
         return None
-    f = CubicSpline(w, amp)
+    s = CubicSpline(w, 1 / a)
+
+    def f(x):
+        return 1 / np.abs(s(x))
     top = minimize_scalar(lambda x: -f(x), bounds=(w[i - 1], w[i + 1]), method="bounded",
                           options={"xatol": 1e-12 * w[i]})
     wp, ap = float(top.x), float(f(top.x))

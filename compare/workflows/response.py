@@ -180,13 +180,14 @@ def _peaks(scene, data, params, freq, timed):
     """Per curve: peak speed and amplitude, half-power band, Q, ζ ≈ Δω/(2ω_c) — and the
     modal ζ of the forward whirl at the peak speed from each frequency solver's own modes."""
     spins = np.array(data["speeds_rad_s"])
-    curves = {n: np.hypot(data["frequency"][n]["re"], data["frequency"][n]["im"]) for n in freq}
+    curves = {n: np.array(data["frequency"][n]["re"]) + 1j * np.array(data["frequency"][n]["im"])
+              for n in freq}
     for n in timed:
         ok = [r for r in data["time"][n] if r["status"] == "ok"]
         if len(ok) == len(spins):
-            curves[time_label(n)] = np.array([abs(_complex(r)) for r in ok])
-    for n, amp in curves.items():
-        pk = resp.peak(spins, amp)
+            curves[time_label(n)] = np.array([_complex(r) for r in ok])
+    for n, a in curves.items():
+        pk = resp.peak(spins, a)
         if pk is not None and n in freq:
             pk["zeta_modal_forward"] = _modal_zeta(scene, n, params, pk["peak_rad_s"])
         data["peaks"][n] = pk

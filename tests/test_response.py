@@ -12,7 +12,7 @@ from compare import solvers
 from compare.analysis import response as resp
 from compare.cli import main
 from compare.physics.rotor import unbalance_response
-from compare.results import Result, ResponseResult
+from compare.results import ResponseResult, Result
 from compare.scenes import get_scene
 from compare.workflows import response as workflow
 

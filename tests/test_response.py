@@ -10,6 +10,7 @@ import pytest
 
 from compare import solvers
 from compare.analysis import response as resp
+from compare.atomic import clean_json
 from compare.cli import main
 from compare.physics.rotor import unbalance_response
 from compare.results import ResponseResult, Result
@@ -81,7 +82,7 @@ def test_json_shape_and_load(tmp_path):
     per solver the complex amplitudes with error bars, verdicts per speed, peaks; saved and
     loaded back as a ResponseResult."""
     r = workflow.run_response("rotor-whirl", ["closed-form", "mujoco"], {}, 6)
-    d = json.loads(json.dumps(r.as_json(), default=float))
+    d = json.loads(json.dumps(clean_json(r.as_json())))
     assert d["result"] == "response" and len(d["speeds_rad_s"]) == 6
     assert set(d["frequency"]) == {"closed-form", "mujoco"} and set(d["time"]) == {"mujoco"}
     assert all(len(d["frequency"]["mujoco"][k]) == 6 for k in ("re", "im", "error"))

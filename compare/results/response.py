@@ -46,7 +46,7 @@ class ResponseResult(StudyResult):
         return lag_deg(a, self.data["high_spot"])
 
     def worst(self, kind="frequency-time") -> dict | None:
-        """The verdict of `kind` with the largest amplitude difference relative to its bar."""
+        """The verdict of `kind` whose amplitude difference comes closest to its bar."""
         vs = [v for v in self.data["verdicts"] if v["kind"] == kind and "amplitude_diff" in v]
         return max(vs, key=lambda v: v["amplitude_diff"] / max(v["amplitude_bar"], 1e-300),
                    default=None)
@@ -91,12 +91,16 @@ class ResponseResult(StudyResult):
             if not vs:
                 continue
             n_ok = sum(v["verdict"] == "agree" for v in vs)
+            amp = max(vs, key=lambda v: v.get("amplitude_rel", -1))
+            ph = max(vs, key=lambda v: v.get("phase_diff_deg", -1))
             w = self.worst(kind)
-            out.append(f"{kind}: {n_ok}/{len(vs)} agree; largest difference {w['a']} vs "
-                       f"{w['b']} at {w['speed_rad_s']:.6g} rad/s: |Δ|a|| "
-                       f"{w['amplitude_diff']:.3g} (bar {w['amplitude_bar']:.3g}, relative "
-                       f"{w['amplitude_rel']:.3g}), Δphase {w['phase_diff_deg']:.3g}° (bar "
-                       f"{w['phase_bar_deg']:.3g}°)")
+            out.append(f"{kind}: {n_ok}/{len(vs)} agree; largest Δ|a|/|a| "
+                       f"{amp['amplitude_rel']:.3g} (bar {amp['amplitude_bar_rel']:.3g}; "
+                       f"{amp['a']} vs {amp['b']} at {amp['speed_rad_s']:.6g} rad/s), largest "
+                       f"Δphase {ph['phase_diff_deg']:.3g}° (bar {ph['phase_bar_deg']:.3g}°; "
+                       f"{ph['a']} vs {ph['b']} at {ph['speed_rad_s']:.6g} rad/s); closest to "
+                       f"its bar: {w['a']} vs {w['b']} at {w['speed_rad_s']:.6g} rad/s, "
+                       f"{w['amplitude_diff'] / max(w['amplitude_bar'], 1e-300):.2f} of it")
         for v in d["verdicts"]:
             if v["verdict"] == "incomplete":
                 out.append(f"{v['a']} at {v['speed_rad_s']:.6g} rad/s: {v['why']}")

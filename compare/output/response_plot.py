@@ -14,12 +14,12 @@ MARKERS = {"frequency": ("-", "."), "time": ("none", "o")}
 
 
 def _draw(result, bode: Path, polar: Path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    # bare Figures: no pyplot state, the caller's backend and rcParams stay as they were
+    from matplotlib.figure import Figure
     d = result.data
-    fig, (ax_a, ax_p) = plt.subplots(2, 1, sharex=True, figsize=(7.5, 6))
-    figp = plt.figure(figsize=(5.5, 5.5))
+    fig = Figure(figsize=(7.5, 6))
+    ax_a, ax_p = fig.subplots(2, 1, sharex=True)
+    figp = Figure(figsize=(5.5, 5.5))
     ax_r = figp.add_subplot(projection="polar")
     for k, name in enumerate(result.solvers):
         w, a, err = result.curve(name)
@@ -45,7 +45,6 @@ def _draw(result, bode: Path, polar: Path):
         f.tight_layout()
         with atomic_path(path) as tmp:
             f.savefig(tmp, dpi=110, format="png")
-        plt.close(f)
 
 
 def write_response(out_dir: Path, result) -> Path:

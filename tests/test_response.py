@@ -116,3 +116,18 @@ def test_bad_input_is_one_line(argv, says, capsys):
 def test_scene_without_response(capsys):
     assert main(["response", "rotor-spinup"]) == 2
     assert "no unbalance response" in capsys.readouterr().err
+
+
+def test_strict_exits_1_where_the_response_stops_being_linear(tmp_path, capsys):
+    """e = 1e-4 m: the nonlinear rotor leaves the linear answer by O(θ²) (measured on these 5
+    speeds: 5.3e-9 … 9.7e-7 relative in amplitude, 1e-14 … 8e-9 bars), so `--strict` exits 1
+    and names the speeds; the --json line is the ResponseResult's JSON."""
+    argv = ["response", "rotor-whirl", "--solver", "closed-form", "--solver", "mujoco",
+            "--speeds", "5", "--set", "eccentricity=1e-4", "--json", "--out", str(tmp_path),
+            "--strict"]
+    assert main(argv) == 1
+    cap = capsys.readouterr()
+    out = json.loads(cap.out)
+    assert out["result"] == "response"
+    assert any(v["verdict"] == "disagree" for v in out["verdicts"])
+    assert "--strict" in cap.err and "disagree" in cap.err

@@ -101,6 +101,11 @@ class ResponseResult(StudyResult):
                        f"{ph['a']} vs {ph['b']} at {ph['speed_rad_s']:.6g} rad/s); closest to "
                        f"its bar: {w['a']} vs {w['b']} at {w['speed_rad_s']:.6g} rad/s, "
                        f"{w['amplitude_diff'] / max(w['amplitude_bar'], 1e-300):.2f} of it")
+        n = len(d["speeds_rad_s"])
+        cost = [f"{k} {f['wall_s'] / n * 1e3:.3g} ms" for k, f in d["frequency"].items()]
+        cost += [f"{time_label(k)} {np.mean([r.get('wall_s', np.nan) for r in rows]):.3g} s"
+                 for k, rows in d["time"].items()]
+        out.append("cost per speed (with each error estimate): " + ", ".join(cost))
         for v in d["verdicts"]:
             if v["verdict"] == "incomplete":
                 out.append(f"{v['a']} at {v['speed_rad_s']:.6g} rad/s: {v['why']}")

@@ -144,9 +144,11 @@ def run_response(scene_name: str, solver_names=None, overrides: dict | None = No
 
 def _judge(scene, data, params, freq, timed):
     """Frequency vs frequency at the planned speeds; every frequency solver against every
-    time run at the spin that run measured (its steady spin differs from the start by the
-    angular momentum the whirl takes: ~1e-8 relative, which near the critical moves the
-    phase by ~1e-7 — more than the solvers' errors)."""
+    time run at the spin that run measured. A run's steady spin is not quite the one it
+    started at: the whirl takes angular momentum (∝ e²: 2.9e-7 rad/s at e = 1e-6 m near the
+    critical, which moved |a| by 1.3e-7 relative, 100× the solvers' errors) and a fixed step
+    drifts (Exudyn RK67 at 82 rad/s: 2.7e-7 rad/s). Time runs are not judged against each
+    other: their spins differ."""
     spins = data["speeds_rad_s"]
     for i, w in enumerate(spins):
         for j, a in enumerate(freq):

@@ -26,6 +26,7 @@ from .results import (
     MapResult,
     ModesResult,
     PowerResult,
+    ResponseResult,
     Result,
     SceneInfo,
     TimeResult,
@@ -137,6 +138,25 @@ def modes(scene: str, solvers=None, *, out=None, params: dict | None = None,
     res = run_modes(scene, names, overrides, log=log or _quiet, campbell_frame=campbell_frame)
     if out is not None:
         res.save(new_run_dir(out, res.scene_name))
+    return res
+
+
+def response(scene: str, solvers=None, *, speeds: int = 24, out=None,
+             params: dict | None = None, log: Callable | None = None,
+             **kw) -> ResponseResult:
+    """The steady unbalance response vs spin through the first critical speed (`xval
+    response`): every solver that takes the unbalance into its linear model (frequency
+    domain) and the scene's time solvers at constant spin (time domain), judged speed by speed
+    on amplitude and phase; peaks, Q, half-power ζ. Returns a `ResponseResult`."""
+    from .workflows.response import run_response
+    from .workflows.runner import new_run_dir
+    overrides = _overrides(params, kw)
+    n = positive_int("--speeds", speeds)
+    if out is not None:
+        check_out(str(out))
+    res = run_response(scene, _names(solvers), overrides, n, log=log or _quiet)
+    if out is not None:
+        res.save(new_run_dir(out, scene))
     return res
 
 

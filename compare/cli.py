@@ -181,6 +181,22 @@ def build_parser():
                     help="draw the Campbell figure in this frame (default: the frame the "
                          "scene's solvers report; the other where the modes whirl)")
 
+    sp = sub.add_parser("response", help="unbalance response vs speed: frequency domain vs "
+                        "time domain",
+                        description="Steady unbalance response (amplitude and phase lag vs "
+                                    "spin, through the first critical speed) from every solver "
+                                    "that takes the unbalance into its linear model and from "
+                                    "the time-domain solvers run at constant spin to steady "
+                                    "state (1× fit), judged speed by speed against the error "
+                                    "bars; peak, amplification factor Q, half-power ζ against "
+                                    "the modal ζ; Bode and polar plots.")
+    common(sp)
+    sp.add_argument("--speeds", type=_positive_int("--speeds"), default=24, metavar="N",
+                    help="number of speeds, half of them within ±3ζ of the critical "
+                         "(default 24)")
+    sp.add_argument("--out", default="logs", metavar="DIR", help=out_help)
+    sp.add_argument("--strict", action="store_true", help=STRICT)
+
     sp = sub.add_parser("campaign", help="run a campaign file (default: built-in) into a report",
                         description="Run every case of a campaign file (JSON or TOML; "
                                     "default: the built-in campaign) as parallel jobs, reuse "
@@ -443,6 +459,19 @@ def cmd_modes(args):
     return _finish(args, r.as_json(), list(r.runs.values()), r.comparisons)
 
 
+def cmd_response(args):
+    from . import api
+    check_out(args.out)
+    with stdout_to_stderr():
+        r = api.response(args.scene, args.solver, speeds=args.speeds, out=args.out,
+                         params=parse_sets(args.set), log=_log)
+    if args.json:
+        emit_json(r.as_json())
+    else:
+        print(r)
+    return strict_exit(args, r.problems())
+
+
 def cmd_campaign(args):
     from . import api
     from .output.progress import busy, progress_view
@@ -591,7 +620,7 @@ def cmd_power(args):
 COMMANDS = {"list": cmd_list, "show": cmd_show, "run": cmd_run, "modes": cmd_modes,
             "campaign": cmd_campaign, "map": cmd_map, "bench": cmd_bench,
             "extremes": cmd_extremes, "diff": cmd_diff, "baseline": cmd_baseline,
-            "power": cmd_power}
+            "power": cmd_power, "response": cmd_response}
 
 
 def main(argv=None):

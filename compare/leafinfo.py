@@ -1,8 +1,9 @@
 """A leaf as the rest of xval sees it — read once per leaf module, the only place that reads a
 leaf's attributes (`DEFAULT_SETTINGS`, `INTEGRATORS`, `ADAPTIVE`, `AUTO_DT`, `MODES_SETTINGS`,
-`ORDERS`, `check_settings`, `regimes`) — and the accuracy knobs as types: `Fixed(dt)` or
-`Adaptive(rtol, atol)`, each with its tighter setting, its step count and its ladder (the
-shape of scipy's `OdeSolver`, which carries its own order, and diffrax's step-size controllers).
+`ORDERS`, `check_settings`, `regimes`, `unbalance_response`) — and the accuracy knobs as
+types: `Fixed(dt)` or `Adaptive(rtol, atol)`, each with its tighter setting, its step count and
+its ladder (the shape of scipy's `OdeSolver`, which carries its own order, and diffrax's
+step-size controllers).
 """
 from __future__ import annotations
 
@@ -128,6 +129,9 @@ class LeafInfo:
     auto_dt: dict                  # integrator -> the number behind dt="auto"
     own_check: bool                # the leaf checks settings against the grid itself
     batch_regimes: bool            # the leaf classifies many runs in one batch call
+    # unbalance_response(params, spins) -> (complex amplitudes, their errors): a frequency
+    # leaf's steady response to a rotating unbalance (`xval response`); None where it has none
+    unbalance_response: object = None
 
     @property
     def name(self) -> str:
@@ -245,4 +249,5 @@ def _build(leaf: ModuleType) -> LeafInfo:
                     modes_defaults=dict(getattr(leaf, "MODES_SETTINGS", {})),
                     integrators=integrators, auto_dt=dict(getattr(leaf, "AUTO_DT", {})),
                     own_check=hasattr(leaf, "check_settings"),
-                    batch_regimes=hasattr(leaf, "regimes"))
+                    batch_regimes=hasattr(leaf, "regimes"),
+                    unbalance_response=getattr(leaf, "unbalance_response", None))

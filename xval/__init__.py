@@ -13,6 +13,7 @@ from compare.api import (
     map,
     modes,
     power,
+    response,
     run,
     scenes,
     show,
@@ -27,6 +28,7 @@ from compare.results import (
     MapResult,
     ModesResult,
     PowerResult,
+    ResponseResult,
     Result,
     SceneInfo,
     TimeResult,
@@ -34,7 +36,8 @@ from compare.results import (
 
 XvalError = BadInput            # one exception type for bad arguments; either name catches it
 
-__all__ = ["run", "modes", "bench", "extremes", "map", "campaign", "diff", "power", "scenes",
+__all__ = ["run", "modes", "response", "bench", "extremes", "map", "campaign", "diff", "power",
+           "scenes",
            "show", "load", "assert_agree", "assert_matches_baseline", "BadInput", "XvalError",
            "Result", "TimeResult", "ModesResult", "BenchResult", "ExtremesResult", "MapResult",
-           "CampaignResult", "PowerResult", "DiffResult", "SceneInfo"]
+           "CampaignResult", "PowerResult", "DiffResult", "ResponseResult", "SceneInfo"]

@@ -143,3 +143,22 @@ def instability_speed(p: dict) -> float:
     r = ci / (ce + ci)
     den = r * (r * c["I_t"] - c["I_p"])
     return float(np.sqrt(c["k_eff"] / den)) if den > 0 else np.inf
+
+
+def unbalance_response(p: dict, spins) -> np.ndarray:
+    """Steady synchronous tilt θ = a e^{iΩt} (θ = θx + iθy as in `whirl_damped`, heavy spot at
+    e^{i(Ωt + π/2)}: the centre of mass starts on body y) of the unbalanced rotor at constant
+    spin Ω: the complex amplitudes a, one per spin.
+
+    The eccentricity e puts the centre of mass at R(0, e, l); to first order in e it adds the
+    rotating moment −m e (l Ω² − g_z) e^{iΩt} to `whirl_damped`'s equation: the centrifugal
+    force m e Ω² at height l (equivalently the product of inertia I_yz = −m e l spun at Ω)
+    and gravity on the offset centre of mass (m e g_z). With θ = a e^{iΩt} the internal damper
+    sees no motion (θ̇ − iΩθ = 0: synchronous whirl is rigid rotation) and
+        a = −m e (l Ω² − g_z) / (k_eff − (I_t − I_p) Ω² + i c_e Ω),
+    whose undamped peak is the forward critical speed √(k_eff/(I_t − I_p))."""
+    c = constants(p)
+    W = np.asarray(spins, float)
+    force = -p["m"] * p["eccentricity"] * (p["l"] * W**2 - c["gravity"][2])
+    return force / (c["k_eff"] - (c["I_t"] - c["I_p"]) * W**2
+                    + 1j * p.get("c_ext", 0.0) * W)

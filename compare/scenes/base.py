@@ -174,6 +174,33 @@ class AllowanceCase:
 
 
 @dataclass(frozen=True)
+class Response:
+    """An unbalance response (`xval response`): steady amplitude and phase of a complex
+    observable a (its motion a·e^{iφ(t)}, φ the rotor's angle) vs constant spin, from the
+    leaves' `unbalance_response(params, spins) -> (a, error)` (frequency domain) and from the
+    `time_solvers` of `time_scene` run to steady state (time domain).
+    `set`: the parameters the response runs at unless told (an unbalance small enough to stay
+    linear, damping that makes a steady state); `critical(params) -> (Ω_c, ζ)`: the first
+    critical speed and its damping ratio, which place the speeds (denser within ±3ζ of Ω_c);
+    `decay(params, spin)`: the slowest free decay rate [1/s] (the settling time);
+    `time_params(params, spin, t_end, output_dt, a)`: the time scene's parameters holding
+    that spin (`a`: the closed form's amplitude, for a drive that balances the damping);
+    `observe(params, trajectory) -> (z(t), e^{iφ(t)})`: the observable's samples and the
+    rotor's angle from a run; `high_spot`: the factor turning a into the high spot's phasor relative
+    to the heavy spot (the phase lag is −arg(high_spot·a))."""
+    time_scene: str
+    time_solvers: tuple
+    critical: Callable
+    decay: Callable
+    time_params: Callable
+    observe: Callable
+    set: dict = field(default_factory=dict)
+    high_spot: complex = 1.0
+    amplitude: str = ""            # what |a| is, with its unit
+    drive: str = ""                # how the time solvers hold the spin, in words
+
+
+@dataclass(frozen=True)
 class Linearisation:
     """A time scene's modal answer (`xval modes` on it, `Scene.modal()`): its leaves'
     `modes(params, settings)` linearise the system about `operating_point` (a steady state of
@@ -235,6 +262,7 @@ class Scene:
     # (json rows, markdown lines) of frequencies identified from time-domain free responses
     campbell: Campbell | None = None
     identify: Callable | None = None
+    response: Response | None = None        # the unbalance response (`xval response`)
     # explain_frequencies(params, comparisons, modes_at(solver, params), tolerances) -> (json
     # rows, markdown lines): why the pairs that disagree do (measured), for the report
     explain_frequencies: Callable | None = None

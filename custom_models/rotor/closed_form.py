@@ -9,6 +9,7 @@ growth rate. The formulas live in compare.physics.rotor, shared with the scene's
 import numpy as np
 
 from compare.contract import LeafModes
+from compare.physics import rotor as physics
 from compare.physics.rotor import whirl_closed_form, whirl_damped
 
 MODES_SETTINGS: dict = {}
@@ -47,3 +48,10 @@ def modes(params: dict, settings: dict) -> LeafModes:
                      damping=-lam.real / np.abs(lam), whirl=whirl,
                      settings={"exact": not notes}, notes=notes,
                      extra={**err, "max_re_per_s": float(np.max(lam.real))})
+
+
+def unbalance_response(params: dict, spins) -> tuple[np.ndarray, np.ndarray]:
+    """Steady unbalance tilt amplitudes a (θ = a e^{iΩt}, `compare.physics.rotor.
+    unbalance_response`) at each spin and their error: a few roundings of one complex ratio."""
+    a = physics.unbalance_response(params, spins)
+    return a, 8 * np.finfo(float).eps * np.abs(a)

@@ -19,16 +19,21 @@ from .euler_vector import kinematics, rhs
 MODES_SETTINGS = {"fd_step": 1e-6}
 
 
-def _reduced_jacobian(p, K0, h, c_ext=0.0, c_int=0.0):
+def _reduced_rhs(p, x, c_ext=0.0, c_int=0.0, phi=0.0):
+    """The reduced right-hand side (K', γ_x', γ_y') at x = (K, γ_x, γ_y) and axial turn φ, the
+    dampers' moments added to K'."""
     kin = np.empty(13)
+    y = np.zeros(8)
+    y[0:3], y[3:5], y[6] = x[0:3], x[3:5], phi
+    d = rhs(0.0, y, p)
+    kinematics(y, p, kin)                                  # kin[9:12]: ω in the fixed frame
+    d[0:3] -= c_ext * d[3:6] + c_int * (d[3:6] - np.cross(kin[9:12], y[3:6]))
+    return np.concatenate([d[0:3], d[3:5]])
 
+
+def _reduced_jacobian(p, K0, h, c_ext=0.0, c_int=0.0):
     def f(x):
-        y = np.zeros(8)
-        y[0:3], y[3:5] = x[0:3], x[3:5]
-        d = rhs(0.0, y, p)
-        kinematics(y, p, kin)                              # kin[9:12]: ω in the fixed frame
-        d[0:3] -= c_ext * d[3:6] + c_int * (d[3:6] - np.cross(kin[9:12], y[3:6]))
-        return np.concatenate([d[0:3], d[3:5]])
+        return _reduced_rhs(p, x, c_ext, c_int)
     x0 = np.concatenate([K0, [0.0, 0.0]])
     J = np.empty((5, 5))
     for j in range(5):
@@ -90,3 +95,37 @@ def modes(params, settings):
                      damping=-lam.real / np.abs(lam), settings=s, notes=notes,
                      extra={"frequency_error_hz": err,
                             "max_re_per_s": float(np.max(lam.real))})
+
+
+def _unbalance_amplitudes(params, spins, h):
+    """Forward tilt amplitudes a (θ = γ_x + iγ_y = a e^{iΩt}) from this model's linearisation
+    J about steady spin and its unbalance input: the derivative of the reduced right-hand side
+    with respect to the eccentricity e (central differences, step h·l) at the axial turn φ.
+    The unbalance turns with the rotor, B(φ) = Re(b e^{iφ}), so b = B(0) − i B(π/2) and the
+    steady response x = Re(X e^{iΩt}) solves (iΩ − J) X = b e; θ's forward part is
+    (X_γx + i X_γy)/2 (its backward part, (X̄_γx + i X̄_γy)/2, is zero for the round rotor)."""
+    base = dict(params, torque=0.0, eccentricity=0.0)
+    p0 = rotor.pack(base)
+    he = h * params["l"]
+    pp, pm = rotor.pack({**base, "eccentricity": he}), rotor.pack({**base, "eccentricity": -he})
+    ce, ci = params.get("c_ext", 0.0), params.get("c_int", 0.0)
+    I0 = p0[rotor.I0].reshape(3, 3)
+    out = []
+    for spin in spins:
+        K0 = I0 @ np.array([0.0, 0.0, spin])
+        x0 = np.concatenate([K0, [0.0, 0.0]])
+        J = _reduced_jacobian(p0, K0, h, ce, ci)
+        B = [(_reduced_rhs(pp, x0, ce, ci, phi) - _reduced_rhs(pm, x0, ce, ci, phi)) / (2 * he)
+             for phi in (0.0, np.pi / 2)]
+        X = np.linalg.solve(1j * spin * np.eye(5) - J, (B[0] - 1j * B[1]) * params["eccentricity"])
+        out.append((X[3] + 1j * X[4]) / 2)
+    return np.array(out)
+
+
+def unbalance_response(params, spins):
+    """(a, error) per spin: the steady unbalance tilt amplitudes of `_unbalance_amplitudes`;
+    the error is the central differences' change from step 2h to h (4/3 of it, as in `modes`)
+    plus a few roundings."""
+    h = MODES_SETTINGS["fd_step"]
+    a, a2 = _unbalance_amplitudes(params, spins, h), _unbalance_amplitudes(params, spins, 2 * h)
+    return a, 4 / 3 * np.abs(a - a2) + 8 * np.finfo(float).eps * np.abs(a)

@@ -127,6 +127,9 @@ class LeafInfo:
     modes_defaults: dict           # MODES_SETTINGS (frequency leaves)
     integrators: tuple             # Integrator records, in the leaf's order
     auto_dt: dict                  # integrator -> the number behind dt="auto"
+    # integrator -> a map point's cheap first step (CHEAP_DT: a step the leaf shows stable
+    # and whose regime a point's neighbours confirm, as for a loose tolerance)
+    cheap_dt: dict
     own_check: bool                # the leaf checks settings against the grid itself
     batch_regimes: bool            # the leaf classifies many runs in one batch call
     # unbalance_response(params, spins) -> (complex amplitudes, their errors): a frequency
@@ -202,9 +205,13 @@ class LeafInfo:
 
     def cheaper(self, settings: dict) -> dict | None:
         """A map point's cheap first run: an error-controlled method at a looser tolerance
-        (`Adaptive.cheap`); None for a fixed step (a larger one can cross its stability limit:
-        such a solver maps at its accurate step)."""
+        (`Adaptive.cheap`); a fixed step at the larger one its leaf declares (`CHEAP_DT`,
+        stable by the leaf's own measurement); else None: a larger step can cross a stability
+        limit, so such a solver maps at its accurate step."""
         k = self.knob(settings)
+        if isinstance(k, Fixed):
+            dt = self.cheap_dt.get(settings.get("integrator"))
+            return {**settings, "dt": dt} if _number(dt) and dt > k.dt else None
         c = k.cheap() if isinstance(k, Adaptive) else None
         return None if c is None else c.apply(settings)
 
@@ -248,6 +255,7 @@ def _build(leaf: ModuleType) -> LeafInfo:
     return LeafInfo(module=leaf, defaults=None if defaults is None else dict(defaults),
                     modes_defaults=dict(getattr(leaf, "MODES_SETTINGS", {})),
                     integrators=integrators, auto_dt=dict(getattr(leaf, "AUTO_DT", {})),
+                    cheap_dt=dict(getattr(leaf, "CHEAP_DT", {})),
                     own_check=hasattr(leaf, "check_settings"),
                     batch_regimes=hasattr(leaf, "regimes"),
                     unbalance_response=getattr(leaf, "unbalance_response", None))

@@ -13,7 +13,17 @@ import sys
 
 from ..errors import BadInput
 from . import bearing, mstmm, press, rotor, sail
-from .base import Campbell, Extreme, Finding, Linearisation, MapSpec, Response, Scene
+from .base import (  # noqa: F401  (the scene types, for plug-ins)
+    Campbell,
+    Extreme,
+    Finding,
+    Linearisation,
+    MapSpec,
+    ModesScene,
+    Response,
+    Scene,
+    TimeScene,
+)
 
 GROUP = "xval.scenes"
 

@@ -2,7 +2,7 @@
 which leaf serves it for each solver, and its hooks (Campbell sweep, 3D drawing, default
 campaign cases, findings). Nothing in `compare/` outside `compare/scenes/` names a scene."""
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -367,13 +367,15 @@ class Scene:
                            f"{self.name}`")
         held = {p.name: p.default if lin.held[p.name] is None else lin.held[p.name]
                 for p in self.params if p.name in lin.held}
-        return replace(self, kind="modes", linearisation=None, held=held,
-                       title=f"{self.title}: damped modes about {lin.operating_point}",
-                       params=tuple(p for p in self.params if p.name not in held),
-                       tolerances=lin.tolerances, allowance_cases=(), identify=lin.identify,
-                       energy_channel=None, findings=None, draw_3d=None, plots=None,
-                       campaign_cases=(), extremes=(), regime=None, map_observables={},
-                       maps=())
+        kept = {f.name: getattr(self, f.name) for f in fields(Scene) if f.name != "kind"}
+        return ModesScene(**{
+            **kept, "linearisation": None, "held": held,
+            "title": f"{self.title}: damped modes about {lin.operating_point}",
+            "params": tuple(p for p in self.params if p.name not in held),
+            "tolerances": lin.tolerances, "allowance_cases": (), "identify": lin.identify,
+            "energy_channel": None, "findings": None, "draw_3d": None, "plots": None,
+            "campaign_cases": (), "extremes": (), "regime": None, "map_observables": {},
+            "maps": ()})
 
     def output_grid(self, params):
         t_end, dt = params["t_end"], params["output_dt"]
@@ -392,3 +394,17 @@ class Finding:
     unit: str
     text: str
     at: dict | None = None
+
+
+@dataclass(frozen=True)
+class TimeScene(Scene):
+    """A scene `xval run` simulates: channels over time, compared pair by pair against the
+    solvers' error estimates and the allowances (`Scene(kind="time", …)` is the same)."""
+    kind: str = field(default="time", init=False)
+
+
+@dataclass(frozen=True)
+class ModesScene(Scene):
+    """A scene `xval modes` answers: frequencies, damping, Campbell diagram, critical speeds
+    (`Scene(kind="modes", …)` is the same)."""
+    kind: str = field(default="modes", init=False)

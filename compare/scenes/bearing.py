@@ -7,7 +7,7 @@ from ..analysis.identify import pencil_poles
 from ..contract import Channel
 from ..errors import BadInput
 from ..physics import bearing_rotor as physics
-from .base import Extreme, Finding, Linearisation, MapSpec, Scene
+from .base import Extreme, Finding, Linearisation, MapSpec, TimeScene
 from .params import Param, positive
 
 LEAVES = {"quaternion": "custom_models.bearing.quaternion",
@@ -238,11 +238,10 @@ def ring_down(params, run, solver_names=None):
     return rows, md
 
 
-BEARING_ROTOR = Scene(
+BEARING_ROTOR = TimeScene(
     name="bearing-rotor",
     title="Two-bearing rotor with a bearing defect, spun up by a DC motor",
     source=SOURCE,
-    kind="time",
     leaves=LEAVES,
     params=(
         positive("m", 6.0, "kg", "shaft mass"),

@@ -8,7 +8,7 @@ evidence is in custom_models/mstmm/helicopter.py and the spec.
 import numpy as np
 
 from . import mstmm_frames, mstmm_shapes
-from .base import UNBALANCE, Campbell, Excitation, PublishedTiming, Scene, per_rev
+from .base import UNBALANCE, Campbell, Excitation, ModesScene, PublishedTiming, per_rev
 from .params import Param, positive
 
 SOURCE = ("seed 002: Yao Song, Rui Xiaoting, Wang Jinghong, 'Calculation of helicopter "
@@ -133,11 +133,10 @@ def tension_torsion():
                  "torsional stiffness: off = the paper's eq. 30, on = GJ + T k_A² (Houbolt & "
                  "Brooks 1958)", kind="choice", choices=("off", "on"))
 
-ROTATING_BEAM = Scene(
+ROTATING_BEAM = ModesScene(
     name="rotating-beam",
     title="Rotating cantilever blade: flap, lag and torsion frequencies (Table 1)",
     source=SOURCE,
-    kind="modes",
     params=(
         positive("L", 6.0, "m", "blade length"),
         positive("chord", 0.5, "m", "chord b (in the rotor plane)"),
@@ -165,11 +164,10 @@ ROTATING_BEAM = Scene(
     "((GJ + T k_A²)φ')' − I_α(φ̈ + Ω²φ) = 0 with tension_torsion=on.",
 )
 
-SPINNING_SHAFT = Scene(
+SPINNING_SHAFT = ModesScene(
     name="spinning-shaft",
     title="Spinning cantilever shaft: forward/backward whirl (Table 2)",
     source=SOURCE,
-    kind="modes",
     params=(
         positive("L", 1.29, "m", "shaft length"),
         positive("EI_xx", 582.996, "N·m²", "bending stiffness in the YZ plane (v)"),
@@ -233,8 +231,7 @@ def helicopter_scene(name, title, system, n_modes, shapes, tolerances, **more):
     """What both helicopter scenes share: the parameters, the four leaves, the allowances,
     the paper's-model Campbell diagram and bench, the explanation of the engines' differences
     and the like-for-like campaign cases."""
-    return Scene(name=name, title=title, source=SOURCE, kind="modes",
-                 params=helicopter_params(n_modes),
+    return ModesScene(name=name, title=title, source=SOURCE, params=helicopter_params(n_modes),
                  leaves={**leaves(system), **engine_leaves(system)},
                  mode_shape_3d=shapes, energy_channel=None, tolerances=tolerances,
                  campbell=Campbell("speed", 0.0, 50.0, 11, excitation_hz=rotor_speed_hz,

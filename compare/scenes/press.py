@@ -5,7 +5,7 @@ import numpy as np
 
 from ..errors import BadInput
 from ..physics import press as phys
-from .base import Extreme, Finding, MapSpec, Scene
+from .base import Extreme, Finding, MapSpec, TimeScene
 from .params import Param, positive
 
 SOURCE = "seed 003 (clutchless crank press; Lagrange partial systems, linear-acceleration method)"
@@ -225,9 +225,9 @@ PRESS_EXTREMES = (
 )
 
 
-PRESS = Scene(
+PRESS = TimeScene(
     name="press", title="Crank–rocker press with slider, idle run (2 DOF)", source=SOURCE,
-    kind="time", leaves=PRESS_LEAVES,
+    leaves=PRESS_LEAVES,
     params=_MECHANISM + (positive("t_end", 0.05, "s", "horizon (paper: 0.05 s)", hi=1e3),
                          positive("output_dt", 0.00125, "s", "output grid (paper: 40 steps)")),
     channels=CHANNELS, tolerances=PRESS_TOLERANCES, key_channel="crank_rate", check=_check,
@@ -237,10 +237,10 @@ PRESS = Scene(
     campaign_cases=({"name": "press"},),
     notes="Energy balance = kinetic + spring + gravity − motor work + damper loss.")
 
-PRESS_CYCLE = Scene(
+PRESS_CYCLE = TimeScene(
     name="press-cycle",
     title="Press cycle: idle → rocker locks onto the slider → loaded stroke → release",
-    source=SOURCE, kind="time", leaves=PRESS_LEAVES,
+    source=SOURCE, leaves=PRESS_LEAVES,
     params=_MECHANISM + (
         Param("lock_after", 0.01, "s", "earliest lock time", lo=0.0, hi=1e3,
               physical=False),     # a threshold: the lock then waits for lock_angle

@@ -5,7 +5,16 @@ from ..analysis.identify import fft_peak, matrix_pencil, transverse_components
 from ..analysis.metrics import first_crossing
 from ..contract import Channel
 from ..physics.rotor import constants, rotations_from_quaternions, unbalance_response, whirl_damped
-from .base import Campbell, Extreme, Finding, MapSpec, Response, Scene, SpeedRegime
+from .base import (
+    Campbell,
+    Extreme,
+    Finding,
+    MapSpec,
+    ModesScene,
+    Response,
+    SpeedRegime,
+    TimeScene,
+)
 from .params import Param, positive
 
 SOURCE = "seed 000 (Euler-vector rotor), seed 001 (quaternion formulation)"
@@ -183,11 +192,10 @@ SPINUP_EXTREMES = (
 )
 
 
-SPINUP = Scene(
+SPINUP = TimeScene(
     name="rotor-spinup",
     title="Rotor on a spherical joint spun up through resonance",
     source=SOURCE,
-    kind="time",
     leaves={"euler-vector": "custom_models.rotor.euler_vector",
             "quaternion": "custom_models.rotor.quaternion",
             "exudyn": "reference_models.exudyn.rotor",
@@ -333,11 +341,10 @@ RESPONSE = Response(
           "measured angle (a keyphasor)")
 
 
-WHIRL = Scene(
+WHIRL = ModesScene(
     name="rotor-whirl",
     title="Whirl frequencies of the rotor at constant spin (Campbell diagram)",
     source=SOURCE,
-    kind="modes",
     leaves={"closed-form": "custom_models.rotor.closed_form",
             "euler-vector": "custom_models.rotor.whirl",
             "exudyn": "reference_models.exudyn.rotor",

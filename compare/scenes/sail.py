@@ -3,7 +3,7 @@ spec scene-sail.md)."""
 import numpy as np
 
 from ..physics import sail as phys
-from .base import AllowanceCase, Extreme, Finding, MapSpec, Scene
+from .base import AllowanceCase, Extreme, Finding, MapSpec, TimeScene
 from .params import Param, positive
 
 SOURCE = "seed 004 (constant-dimension spring–mass thread unwinding from a spool)"
@@ -120,11 +120,10 @@ SAIL_EXTREMES = (
 )
 
 
-SAIL = Scene(
+SAIL = TimeScene(
     name="sail-deploy",
     title="Two-blade heliogyro: threads unrolling from spools on a spinning hub",
-    source=SOURCE, kind="time",
-    leaves={"thread-spool": "custom_models.sail.thread_spool",
+    source=SOURCE, leaves={"thread-spool": "custom_models.sail.thread_spool",
             "thread-spool-conservative": "custom_models.sail.thread_spool",
             "exudyn": "reference_models.exudyn.sail", "mujoco": "reference_models.mujoco.sail"},
     params=(

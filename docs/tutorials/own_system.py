@@ -63,7 +63,7 @@ damping, so E = ½ m l² ω² − m g l cos θ is conserved."""
 import numpy as np
 
 from compare.contract import Channel
-from compare.scenes.base import Scene
+from compare.scenes.base import TimeScene
 from compare.scenes.params import Param, positive
 
 # each channel carries its unit: every plot and table reads it from here
@@ -85,11 +85,10 @@ def regime(params, trajectory):
     return "over the top" if over else "swings"
 
 
-SCENE = Scene(
+SCENE = TimeScene(
     name="pendulum",
     title="Plane pendulum (tutorial)",
     source="xval's tutorial: a system of your own",
-    kind="time",
     leaves={"pendulum-scipy": "my_pendulum.scipy_leaf", "mujoco": "my_pendulum.mujoco_leaf"},
     params=(positive("m", 1.0, "kg", "bob mass"),
             positive("l", 1.0, "m", "rod length"),

@@ -13,7 +13,16 @@ import sys
 
 from ..errors import BadInput
 from . import bearing, mstmm, press, rotor, sail
-from .base import Campbell, Extreme, Finding, Linearisation, MapSpec, Response, Scene
+from .base import (
+    Campbell,
+    Extreme,
+    Finding,
+    Linearisation,
+    MapSpec,
+    Response,
+    Scene,
+    Threshold,
+)
 
 GROUP = "xval.scenes"
 
@@ -75,5 +84,4 @@ def get_scene(name: str) -> Scene:
 load_plugins()
 
 __all__ = ["SCENES", "Scene", "Campbell", "Extreme", "Finding", "Linearisation", "MapSpec",
-           "Response",
-           "get_scene", "ORIGIN", "PLUGIN_SOLVERS", "load_plugins"]
+           "Response", "Threshold", "get_scene", "ORIGIN", "PLUGIN_SOLVERS", "load_plugins"]

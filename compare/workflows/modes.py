@@ -28,6 +28,7 @@ from ..results.modes import (
 from ..results.tables import VERDICT_HEADER, markdown, verdict_rows
 from ..scenes import Scene, get_scene
 from .plan import plan
+from .threshold import run_threshold
 
 SAME_MODE = 0.5     # a mode followed by label must share this much shape with its line (MAC)
 
@@ -367,7 +368,7 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
     unpaired = metrics.unpaired_modes(results)
     incomplete = [{"solver": r.solver, "status": r.status, "reason": r.reason}
                   for r in results if r.status != "ok"]
-    extra, report = {}, {"explain": [], "campbell": [], "identify": []}
+    extra, report = {}, {"explain": [], "campbell": [], "threshold": [], "identify": []}
     growing = growing_modes(results, sc.tolerances_for(params).get("damping", 0.0))
     if growing:                                  # only then: undamped answers stay as they were
         extra["unstable"] = growing
@@ -402,6 +403,9 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
             not sc.campbell.solvers or s.name in sc.campbell.solvers for s in chosen):
         obj_cb, crit, report["campbell"], drawing = campbell_diagram(sc, chosen, params, log,
                                                                      campbell_frame)
+    if sc.threshold is not None and sc.threshold.active(params):
+        extra["threshold"], report["threshold"] = run_threshold(sc, params, chosen,
+                                                                solver_names, log)
     if sc.identify and identify:
         rows, lines_md = sc.identify(params, _run_time, solver_names or None)
         if rows:

@@ -426,7 +426,8 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
     status, summary = modes_status(comparisons, {"incomplete": incomplete,
                                                  "unpaired_modes": unpaired,
                                                  "campbell": obj_cb,
-                                                 "unstable": growing})
+                                                 "unstable": growing,
+                                                 "threshold": extra.get("threshold")})
     return ModesResult(sc, params, results, comparisons, status=status, summary=summary,
                        critical_speeds=crit, campbell=obj_cb, unpaired_modes=unpaired,
                        incomplete=incomplete, extra=extra, report=report, drawing=drawing)
@@ -470,6 +471,12 @@ def modes_status(comparisons, obj) -> tuple[str, str]:
     unstable = sorted({g["solver"] for g in obj.get("unstable", [])})
     if unstable:                       # a finding about the system, not a verdict on solvers
         line += "; unstable (a mode grows) in " + ", ".join(unstable)
+    th = obj.get("threshold") or {}
+    off = [f"{r['solver']} {kind.replace('_', ' ')} {r['status'] if r['status'] != 'ok' else ''}"
+           .strip() for kind in ("eigenvalues", "time_domain") for r in th.get(kind, [])
+           if r["status"] != "ok" or not r["agrees"]]
+    if off:                            # a threshold not found, or off the closed form
+        line += "; threshold off the closed form: " + ", ".join(off)
     status = ("incomplete" if missing or not comparisons else
-              "disagree" if any(c.verdict != "agree" for c in comparisons) else "agree")
+              "disagree" if off or any(c.verdict != "agree" for c in comparisons) else "agree")
     return status, line

@@ -157,17 +157,19 @@ def run_threshold(scene, params: dict, chosen, names, log) -> tuple[dict, list[s
 
     def row(source, r):
         if r["status"] != "ok":
-            return f"| {source} | {r['status']}: {r['reason']} | | | | |"
+            return f"| {source} | {r['status']}: {r['reason']} | | | | | |"
         w = r["threshold_rad_s"]
         return (f"| {source} | {w:.10g} | {w * 30 / math.pi:.8g} | {r['error_rad_s']:.2g} | "
-                f"{w - w_cf:+.2g} | {r['evaluations']} in {r['wall_s']:.2f} s |")
-    md += [f"Closed form Ω_th = {w_cf:.10g} rad/s ({w_cf * 30 / math.pi:.8g} rpm). Eigenvalues: "
-           "the largest Re λ crossing zero (brentq). Time domain: the rotor released by "
-           f"{th.release:g} at constant speed, {RECORD_S:g} s records, the growing root fitted "
-           "by matrix pencil (error: the fit's change from half the record to all of it plus "
-           "the solver's own, from its tighter rerun), the zero of σ located by brentq.", "",
-           "| source | Ω_th [rad/s] | rpm | ± [rad/s] | − closed form | evaluations |",
-           "|---|---|---|---|---|---|"]
+                f"{w - w_cf:+.2g} | {'yes' if r['agrees'] else 'NO'} | "
+                f"{r['evaluations']} in {r['wall_s']:.2f} s |")
+    md += [f"Closed form Ω_th = {w_cf:.10g} rad/s ({w_cf * 30 / math.pi:.8g} rpm). "
+           "Eigenvalues: the largest Re λ crossing zero (brentq). Time domain: the rotor "
+           f"released from rest at a deflection of {th.release:g} at constant speed, "
+           f"{RECORD_S:g} s records, the growing root fitted by matrix pencil (error: the fit's "
+           "change from half the record to all of it plus the solver's own, from its tighter "
+           "rerun), the zero of σ located by brentq.", "",
+           "| source | Ω_th [rad/s] | rpm | ± [rad/s] | − closed form | within ± | evaluations |",
+           "|---|---|---|---|---|---|---|"]
     md += [row(r["solver"], r) for r in obj["eigenvalues"]]
     md += [row(f"{r['solver']} (time domain)", r) for r in obj["time_domain"]]
     md += ["", "Time-domain growth rates against the closed form at the measured speed:", "",

@@ -75,7 +75,8 @@ def test_modes_workflow_reports_unstable_above_the_threshold():
 
     def run(spin):
         return run_modes("rotor-whirl", names, {"c_int": "1", "c_ext": "1", "spin": str(spin)},
-                         log=lambda *a: None, campbell_sweep=False, identify=False)
+                         log=lambda *a: None, campbell_sweep=False, identify=False,
+                         threshold=False)
     above, below = run(w_th * 1.001), run(w_th * 0.999)
     assert "unstable" in above.summary and "unstable" not in below.summary
     assert [(g["solver"], g["mode"]) for g in above.extra["unstable"]] == [
@@ -115,7 +116,7 @@ def test_campbell_marks_where_the_forward_whirl_starts_to_grow():
     over = {"c_int": "1", "c_ext": "1", "spin": "100", "n_spin": "34"}
     w_th = instability_speed(SCENE.resolve(over))
     res = run_modes("rotor-whirl", list(SCENE.leaves), over, log=lambda *a: None,
-                    identify=False)
+                    identify=False, threshold=False)
     onsets = res.campbell["growing_from"]
     assert sorted(onsets) == sorted(SCENE.leaves)
     for name, rows in onsets.items():

@@ -348,10 +348,11 @@ def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float,
 
 
 def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=True,
-              identify=True, campbell_frame=None) -> ModesResult:
+              identify=True, campbell_frame=None, threshold=True) -> ModesResult:
     """Every chosen solver's modes, compared; the Campbell diagram (its figure in
-    `campbell_frame`, default the solvers' frame), the explanations and the identification
-    where the scene has them. Held in memory: `.save(folder)` writes it."""
+    `campbell_frame`, default the solvers' frame), the explanations, the threshold speed
+    (workflows/threshold.py) and the identification where the scene has them. Held in memory:
+    `.save(folder)` writes it."""
     sc = get_scene(scene_name).modal()       # a time scene answers by its linearisation
     if campbell_frame is not None and campbell_frame not in (
             sc.campbell.frames if sc.campbell else ()):
@@ -403,7 +404,7 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
             not sc.campbell.solvers or s.name in sc.campbell.solvers for s in chosen):
         obj_cb, crit, report["campbell"], drawing = campbell_diagram(sc, chosen, params, log,
                                                                      campbell_frame)
-    if sc.threshold is not None and sc.threshold.active(params):
+    if threshold and sc.threshold is not None and sc.threshold.active(params):
         extra["threshold"], report["threshold"] = run_threshold(sc, params, chosen,
                                                                 solver_names, log)
     if sc.identify and identify:

@@ -46,12 +46,10 @@ def growth_at(scene, params: dict, solver: str, speed: float) -> dict:
     bad = next((tr for tr in runs if tr.status != "ok"), None)
     if bad is not None:
         return {**row, "status": bad.status, "reason": bad.reason}
-    fits = []
-    for tr in runs:
-        z, u = spec.observe(p_, tr)
-        fits.append([growing_pole(z[:n], dt, th.roots, PENCIL) for n in (len(z) // 2, len(z))])
-        if tr is runs[0]:
-            spin = mean_spin(tr.t, u)
+    observed = [spec.observe(p_, tr) for tr in runs]
+    fits = [[growing_pole(z[:n], dt, th.roots, PENCIL) for n in (len(z) // 2, len(z))]
+            for z, _ in observed]
+    spin = mean_spin(runs[0].t, observed[0][1])
     lam = fits[0][1]
     change = abs(lam.real - fits[0][0].real)
     own = factor * abs(lam.real - fits[1][1].real) if len(fits) > 1 else 0.0
@@ -60,7 +58,7 @@ def growth_at(scene, params: dict, solver: str, speed: float) -> dict:
     return {**row, "status": "ok", "spin_rad_s": spin, "growth_per_s": lam.real,
             "whirl_rad_s": lam.imag, "record_change": change, "solver_error": own,
             "error": err, "error_by": how, "closed_form_growth_per_s": sigma,
-            "closed_form_whirl_rad_s": omega, "agrees": abs(lam.real - sigma) <= err,
+            "closed_form_whirl_rad_s": omega, "agrees": bool(abs(lam.real - sigma) <= err),
             "wall_s": sum(tr.wall_s for tr in runs)}
 
 
@@ -104,11 +102,11 @@ def time_threshold(scene, params: dict, solver: str, w_cf: float, log) -> dict:
     near = np.argsort(np.abs(w - at))[:3]
     roots = np.roots(np.polyfit(w[near] - at, s[near], 2)).real + at
     interp = float(np.min(np.abs(roots - at)))
-    err = max(e[below], e[above]) / abs(slope) + interp
+    err = float(max(e[below], e[above]) / abs(slope) + interp)
     return {**out, "status": "ok", "threshold_rad_s": float(at), "error_rad_s": float(err),
             "interpolation_rad_s": interp, "slope_per_s_per_rad_s": float(slope),
             "evaluations": len(points), "wall_s": time.perf_counter() - t0,
-            "agrees": abs(at - w_cf) <= err}
+            "agrees": bool(abs(at - w_cf) <= err)}
 
 
 def eigen_threshold(scene, solver, params: dict, w_cf: float) -> dict:
@@ -137,7 +135,7 @@ def eigen_threshold(scene, solver, params: dict, w_cf: float) -> dict:
     err = EIGEN_XTOL * w_cf
     return {**out, "status": "ok", "threshold_rad_s": float(at), "error_rad_s": err,
             "evaluations": len(memo), "wall_s": time.perf_counter() - t0,
-            "agrees": abs(at - w_cf) <= err}
+            "agrees": bool(abs(at - w_cf) <= err)}
 
 
 def run_threshold(scene, params: dict, chosen, names, log) -> tuple[dict, list[str]]:

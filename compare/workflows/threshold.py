@@ -24,10 +24,11 @@ EIGEN_XTOL = 1e-9   # relative resolution of the eigenvalue thresholds (their σ
 RESOLUTION = 1e-6   # relative resolution of the time-domain search (brentq's xtol)
 RECORD_S = 5.0      # each free response; fitted over its first half and over all of it
 SAMPLES = 16        # output samples per revolution (≥ 20 per period of a whirl slower than Ω)
-# lags of the pencil: a noise-free record of `roots` exponentials needs few; 64 keeps the SVD
-# at milliseconds (N/3 lags on 1400 samples took seconds on a shared core) — measured at
-# 0.95/1.05 Ω_th: σ the same to 1e-11 /s with N/3 lags
-PENCIL = 64
+# lags of the pencil: a record of `roots` exponentials needs few. 16 keeps the SVD at a
+# millisecond where BLAS runs threaded on busy cores (under pytest numpy loads before compare
+# caps its threads: 64 lags took 0.02–2.3 s there, N/3 up to 50 s); at 0.95/1.05 Ω_th σ was
+# the same to 2e-12 /s with 16, 32 and 64 lags and to 1e-11 with N/3
+PENCIL = 16
 
 
 def growth_at(scene, params: dict, solver: str, speed: float) -> dict:

@@ -198,3 +198,21 @@ def test_modes_reports_the_threshold_side_by_side():
     assert "threshold" not in run(c_ext=1).extra
     assert run(c_ext=9, c_int=1).extra["threshold"] == {"parameter": "spin",
                                                         "closed_form_rad_s": None}
+
+
+def test_a_threshold_off_the_closed_form_makes_the_run_disagree():
+    """The status rule: every modes verdict agrees, but one time-domain threshold lies off the
+    closed form by more than its bar (or was not found): the run is `disagree` and says which."""
+    from types import SimpleNamespace
+
+    from compare.workflows.modes import modes_status
+    ok = {"solver": "exudyn", "status": "ok", "agrees": True}
+    base = {"incomplete": [], "unpaired_modes": []}
+    agree = [SimpleNamespace(verdict="agree")]
+    th = {"eigenvalues": [ok], "time_domain": [ok, {**ok, "solver": "mujoco", "agrees": False}]}
+    status, line = modes_status(agree, {**base, "threshold": th})
+    assert status == "disagree" and "threshold off the closed form: mujoco time domain" in line
+    th["time_domain"][1] = {"solver": "mujoco", "status": "no zero"}
+    assert modes_status(agree, {**base, "threshold": th})[0] == "disagree"
+    th["time_domain"][1] = ok
+    assert modes_status(agree, {**base, "threshold": th}) == ("agree", "1 of 1 comparisons agree")

@@ -456,7 +456,12 @@ def cmd_modes(args):
     with stdout_to_stderr():
         r = api.modes(args.scene, args.solver, out=args.out, params=parse_sets(args.set),
                       log=_log, campbell_frame=args.campbell_frame)
-    return _finish(args, r.as_json(), list(r.runs.values()), r.comparisons)
+    rc = _finish(args, r.as_json(), list(r.runs.values()), r.comparisons)
+    if not args.json:
+        from .results.modes import threshold_lines
+        for line in threshold_lines(r.extra.get("threshold")):
+            print(line)
+    return rc
 
 
 def cmd_response(args):

@@ -75,7 +75,8 @@ def test_modes_workflow_reports_unstable_above_the_threshold():
 
     def run(spin):
         return run_modes("rotor-whirl", names, {"c_int": "1", "c_ext": "1", "spin": str(spin)},
-                         log=lambda *a: None, campbell_sweep=False, identify=False)
+                         log=lambda *a: None, campbell_sweep=False, identify=False,
+                         threshold=False)
     above, below = run(w_th * 1.001), run(w_th * 0.999)
     assert "unstable" in above.summary and "unstable" not in below.summary
     assert [(g["solver"], g["mode"]) for g in above.extra["unstable"]] == [
@@ -115,10 +116,103 @@ def test_campbell_marks_where_the_forward_whirl_starts_to_grow():
     over = {"c_int": "1", "c_ext": "1", "spin": "100", "n_spin": "34"}
     w_th = instability_speed(SCENE.resolve(over))
     res = run_modes("rotor-whirl", list(SCENE.leaves), over, log=lambda *a: None,
-                    identify=False)
+                    identify=False, threshold=False)
     onsets = res.campbell["growing_from"]
     assert sorted(onsets) == sorted(SCENE.leaves)
     for name, rows in onsets.items():
         assert [r["line"] for r in rows] == ["forward whirl"], name
         r = rows[0]
         assert r["lo"] < w_th < r["hi"] and abs(r["from"] - w_th) < 0.05 * (r["hi"] - r["lo"])
+
+
+# --- the threshold from the time domain (compare/workflows/threshold.py) ----------------------
+# Measured (c_int = c_ext = 1, tilt 1e-5 rad, 5 s records): |σ_fit − σ_closed| at 0.95 and
+# 1.05 Ω_th: Exudyn 1.8e-10, 1.0e-10 /s (error bars 3.8e-10, 3.1e-10, mostly its tighter
+# rerun's; the record change alone, 4e-11 and 8e-11, would not cover it), MuJoCo 3.2e-8, 6.0e-8
+# (bars 6.3e-8, 1.1e-7: RK4's damping at 1e-3 s); whirl frequency off by ≤ 1.4e-6 rad/s
+# (MuJoCo), 3.2e-9 (Exudyn). A 1 % error in c_int moves σ there by 3.9e-3, 4.7e-3 /s (MuJoCo,
+# seeded) and Ω_th by 0.50 rad/s.
+ENGINES = ("exudyn", "mujoco")
+BAR = {"exudyn": 4e-9, "mujoco": 1e-6}           # ≤ 10 × the bars measured
+
+
+@pytest.mark.parametrize("side", (-1, 1), ids=("below", "above"))
+@pytest.mark.parametrize("engine", ENGINES)
+def test_time_domain_growth_rate_matches_the_eigenvalues(engine, side):
+    """Each engine's rotor released at 0.95 / 1.05 Ω_th decays / grows at the closed form's
+    rate (its eigenvalue of the forward whirl at the speed the run measured), within the error
+    bar of the fit (record change + the solver's own error) — and that bar is small."""
+    from compare.physics.rotor import whirl_damped
+    from compare.workflows.threshold import growth_at
+    p = SCENE.resolve({"c_int": "1", "c_ext": "1"})
+    r = growth_at(SCENE, p, engine, instability_speed(p) * (1 + 0.05 * side))
+    assert r["status"] == "ok", r.get("reason")
+    lam = whirl_damped(p, r["spin_rad_s"])
+    fwd = lam[np.argmax(lam.imag)]                  # forward whirl: whirls with the spin
+    assert np.sign(r["growth_per_s"]) == side
+    assert abs(r["growth_per_s"] - fwd.real) <= r["error"] <= BAR[engine], r
+    assert abs(r["whirl_rad_s"] - fwd.imag) < 1.5e-5
+
+
+def _threshold_row(rows, name):
+    return next(r for r in rows if r["solver"] == name)
+
+
+@pytest.mark.parametrize("engine", [pytest.param("exudyn", marks=pytest.mark.slow), "mujoco"])
+def test_time_domain_threshold_agrees_with_the_closed_form(engine):
+    """The zero of the fitted growth rate lies within its error bar of the closed-form
+    Ω_th = 88.206192 rad/s (c_int = c_ext = 1); measured: Exudyn −1.6e-8 ± 4.0e-8 rad/s
+    (5 speeds, 5 s), MuJoCo +5.4e-6 ± 1.03e-5 (0.7 s) — RK4's σ bias −4.5e-8 /s over the
+    slope 0.0084 /s per rad/s. The bar itself stays ≤ 10 × that."""
+    from compare.workflows.threshold import time_threshold
+    p = SCENE.resolve({"c_int": "1", "c_ext": "1"})
+    w_th = instability_speed(p)
+    r = time_threshold(SCENE, p, engine, w_th, lambda *a: None)
+    assert r["status"] == "ok", r.get("reason")
+    assert abs(r["threshold_rad_s"] - w_th) <= r["error_rad_s"] <= {"exudyn": 4e-7,
+                                                                     "mujoco": 1e-4}[engine]
+    assert r["agrees"]
+
+
+def test_modes_reports_the_threshold_side_by_side():
+    """`xval modes rotor-whirl --set c_int=… --set c_ext=…`: a threshold block with the
+    closed form, each solver's eigenvalue Ω_th (brentq to 1e-9 relative: all within it) and
+    each engine's time-domain Ω_th; none without internal damping; none (every speed stable)
+    where r I_t < I_p."""
+    from compare.workflows.modes import run_modes
+
+    def run(**over):
+        return run_modes("rotor-whirl", ["closed-form", "euler-vector", "mujoco"],
+                         {k: str(v) for k, v in over.items()}, log=lambda *a: None,
+                         campbell_sweep=False, identify=False)
+    res = run(c_int=1, c_ext=1)
+    th = res.extra["threshold"]
+    w_th = instability_speed(SCENE.resolve({"c_int": "1", "c_ext": "1"}))
+    assert th["closed_form_rad_s"] == w_th
+    assert [r["solver"] for r in th["eigenvalues"]] == ["closed-form", "euler-vector", "mujoco"]
+    for r in th["eigenvalues"]:
+        assert abs(r["threshold_rad_s"] - w_th) <= 1e-9 * w_th, r
+    assert [r["solver"] for r in th["time_domain"]] == ["mujoco"]
+    assert res.status == "agree" and "threshold" not in res.summary
+    assert any(line.startswith("threshold mujoco time domain: 88.2") for line in res.lines())
+    assert "threshold" not in run(c_ext=1).extra
+    assert run(c_ext=9, c_int=1).extra["threshold"] == {"parameter": "spin",
+                                                        "closed_form_rad_s": None}
+
+
+def test_a_threshold_off_the_closed_form_makes_the_run_disagree():
+    """The status rule: every modes verdict agrees, but one time-domain threshold lies off the
+    closed form by more than its bar (or was not found): the run is `disagree` and says which."""
+    from types import SimpleNamespace
+
+    from compare.workflows.modes import modes_status
+    ok = {"solver": "exudyn", "status": "ok", "agrees": True}
+    base = {"incomplete": [], "unpaired_modes": []}
+    agree = [SimpleNamespace(verdict="agree")]
+    th = {"eigenvalues": [ok], "time_domain": [ok, {**ok, "solver": "mujoco", "agrees": False}]}
+    status, line = modes_status(agree, {**base, "threshold": th})
+    assert status == "disagree" and "threshold off the closed form: mujoco time domain" in line
+    th["time_domain"][1] = {"solver": "mujoco", "status": "no zero"}
+    assert modes_status(agree, {**base, "threshold": th})[0] == "disagree"
+    th["time_domain"][1] = ok
+    assert modes_status(agree, {**base, "threshold": th}) == ("agree", "1 of 1 comparisons agree")

@@ -4,6 +4,7 @@ time-domain-only models can be checked against modal results.
 - `pencil_poles` / `matrix_pencil`: Hua & Sarkar's matrix-pencil fit of damped exponentials
   (exact for a noise-free sum of modes, whatever the record length): poles of a real or complex
   record, or frequencies and damping ratios of a real one;
+- `growing_pole`: the fitted pole with the largest real part (a growth rate from a record);
 - `fft_peak`: Hann-windowed FFT with a parabola through the log-magnitude peak (its bias shrinks
   as the record lengthens).
 """
@@ -35,6 +36,13 @@ def matrix_pencil(x: np.ndarray, dt: float, n_modes: int = 2,
     zeta = -lam[keep].real / np.maximum(np.abs(lam[keep]), 1e-300)
     o = np.argsort(w)
     return w[o], zeta[o]
+
+
+def growing_pole(x: np.ndarray, dt: float, n_poles: int, pencil: int | None = None) -> complex:
+    """The pole λ [1/s] with the largest real part among `pencil_poles` of x: the root that
+    grows first, the time-domain counterpart of a linearisation's max Re λ."""
+    lam = pencil_poles(x, dt, n_poles, pencil)
+    return complex(lam[np.argmax(lam.real)])
 
 
 def fft_peak(x: np.ndarray, dt: float) -> float:

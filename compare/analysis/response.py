@@ -18,7 +18,12 @@ def synchronous_fit(t, z, u, t0, t1):
     sel = (t >= t0) & (t < t1)
     X = np.column_stack([u[sel], np.conj(u[sel]), np.ones(sel.sum())])
     a = np.linalg.lstsq(X, z[sel], rcond=None)[0][0]
-    return complex(a), float(np.polyfit(t[sel], np.unwrap(np.angle(u[sel])), 1)[0])
+    return complex(a), mean_spin(t[sel], u[sel])
+
+
+def mean_spin(t, u):
+    """The spin [rad/s] over the samples: the slope of the rotor's angle φ (u = e^{iφ})."""
+    return float(np.polyfit(t, np.unwrap(np.angle(u)), 1)[0])
 
 
 def lag_deg(a, high_spot=1.0):

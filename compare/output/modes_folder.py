@@ -11,7 +11,7 @@ from .study import write_study
 
 def write_modes_folder(out_dir: Path, result) -> dict:
     """Every file of a modes result made in memory (`result.report`: its Markdown sections
-    "head", "explain", "campbell", "identify"; `result.drawing`: the Campbell diagram's
+    "head", "explain", "campbell", "threshold", "identify"; `result.drawing`: the Campbell diagram's
     (values, the lines in the figure's frame, critical speeds, events, that frame, the lines in
     the solvers' frame, where each line's root grows)). `result.out_dir` and `result.files`
     name them; returns the JSON written."""
@@ -31,7 +31,7 @@ def write_modes_folder(out_dir: Path, result) -> dict:
         campbell_plot.png(out_dir / "campbell.png", sc, values, shown, entries, result.params,
                           events, frame, growing)
         files["recording"] = campbell_plot.rrd(out_dir / "campbell.rrd", sc, values, lines)
-    md += part["campbell"] + part["identify"]
+    md += part["campbell"] + part.get("threshold", []) + part["identify"]
     md[1:1] = ["", f"**{result.summary}**"]
     files["report"] = out_dir / "report.md"
     result.out_dir, result.files = out_dir, files

@@ -185,7 +185,7 @@ class ModesResult(Result):
                 (tables.VERDICT_HEADER, tables.verdict_rows(self.comparisons))]
 
     def lines(self):
-        return self._crit()
+        return self._crit() + threshold_lines(self.extra.get("threshold"))
 
     def _freq_rows(self):
         return [[s, m.status, tables.num(m.wall_s),
@@ -243,3 +243,19 @@ class ModesResult(Result):
     def side(self) -> Side:
         return Side(self.where(), "run", {self.scene_name: modes_case(self.scene_name,
                                                                       self.to_json())})
+
+
+def threshold_lines(th: dict | None) -> list[str]:
+    """One line per source of `xval modes`' threshold block (workflows/threshold.py)."""
+    if not th:
+        return []
+    if th["closed_form_rad_s"] is None:
+        return ["threshold: none (closed form: every speed stable)"]
+    out = [f"threshold closed form: {th['closed_form_rad_s']:.10g} rad/s"]
+    for kind in ("eigenvalues", "time_domain"):
+        out += [f"threshold {r['solver']} {kind.replace('_', ' ')}: "
+                + (f"{r['threshold_rad_s']:.10g} ± {r['error_rad_s']:.2g} rad/s"
+                   + ("" if r["agrees"] else " — disagrees with the closed form")
+                   if r["status"] == "ok" else f"{r['status']}: {r['reason']}")
+                for r in th[kind]]
+    return out

@@ -13,16 +13,26 @@ import sys
 
 from ..errors import BadInput
 from . import bearing, mstmm, press, rotor, sail
+<<<<<<< HEAD
 from .base import (  # noqa: F401  (the scene types, for plug-ins)
+=======
+from .base import (
+>>>>>>> h-growth
     Campbell,
     Extreme,
     Finding,
     Linearisation,
     MapSpec,
+<<<<<<< HEAD
     ModesScene,
     Response,
     Scene,
     TimeScene,
+=======
+    Response,
+    Scene,
+    Threshold,
+>>>>>>> h-growth
 )
 
 GROUP = "xval.scenes"
@@ -85,5 +95,4 @@ def get_scene(name: str) -> Scene:
 load_plugins()
 
 __all__ = ["SCENES", "Scene", "Campbell", "Extreme", "Finding", "Linearisation", "MapSpec",
-           "Response",
-           "get_scene", "ORIGIN", "PLUGIN_SOLVERS", "load_plugins"]
+           "Response", "Threshold", "get_scene", "ORIGIN", "PLUGIN_SOLVERS", "load_plugins"]

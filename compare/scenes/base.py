@@ -183,8 +183,9 @@ class Response:
     linear, damping that makes a steady state); `critical(params) -> (Ω_c, ζ)`: the first
     critical speed and its damping ratio, which place the speeds (denser within ±3ζ of Ω_c);
     `decay(params, spin)`: the slowest free decay rate [1/s] (the settling time);
-    `time_params(params, spin, t_end, output_dt, a)`: the time scene's parameters holding
-    that spin (`a`: the closed form's amplitude, for a drive that balances the damping);
+    `time_params(params, spin, t_end, output_dt, release=0.0)`: the time scene's parameters
+    holding that spin (and the extra parameters only its solvers take), the rotor released
+    from rest at a small deflection `release` (0: undeflected);
     `observe(params, trajectory) -> (z(t), e^{iφ(t)})`: the observable's samples and the
     rotor's angle from a run; `high_spot`: the factor turning a into the high spot's phasor relative
     to the heavy spot (the phase lag is −arg(high_spot·a))."""
@@ -198,6 +199,24 @@ class Response:
     high_spot: complex = 1.0
     amplitude: str = ""            # what |a| is, with its unit
     drive: str = ""                # how the time solvers hold the spin, in words
+
+
+@dataclass(frozen=True)
+class Threshold:
+    """A speed above which a root grows (`xval modes` reports it where `active(params)`): from
+    the closed form `speed(params)` (inf: stable at every speed), from each solver's
+    eigenvalues (the largest growth rate, `Modes.extra["max_re_per_s"]`, crossing zero in
+    `parameter`) and from the growth of free responses of the scene's `Response` time solvers,
+    released by `release` with no forcing (`free`: the parameters that remove it) and fitted
+    with `roots` damped exponentials. `growth(params, speed) -> (σ, ω)`: the closed form's
+    growing root at a speed, which the time-domain fits are checked against."""
+    parameter: str
+    active: Callable
+    speed: Callable
+    growth: Callable
+    release: float
+    free: dict = field(default_factory=dict)
+    roots: int = 2
 
 
 @dataclass(frozen=True)
@@ -263,6 +282,7 @@ class Scene:
     campbell: Campbell | None = None
     identify: Callable | None = None
     response: Response | None = None        # the unbalance response (`xval response`)
+    threshold: Threshold | None = None      # the speed where a root starts to grow
     # explain_frequencies(params, comparisons, modes_at(solver, params), tolerances) -> (json
     # rows, markdown lines): why the pairs that disagree do (measured), for the report
     explain_frequencies: Callable | None = None

@@ -28,6 +28,7 @@ from ..results.modes import (
 from ..results.tables import VERDICT_HEADER, markdown, verdict_rows
 from ..scenes import Scene, get_scene
 from .plan import plan
+from .threshold import run_threshold
 
 SAME_MODE = 0.5     # a mode followed by label must share this much shape with its line (MAC)
 
@@ -347,10 +348,11 @@ def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float,
 
 
 def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=True,
-              identify=True, campbell_frame=None) -> ModesResult:
+              identify=True, campbell_frame=None, threshold=True) -> ModesResult:
     """Every chosen solver's modes, compared; the Campbell diagram (its figure in
-    `campbell_frame`, default the solvers' frame), the explanations and the identification
-    where the scene has them. Held in memory: `.save(folder)` writes it."""
+    `campbell_frame`, default the solvers' frame), the explanations, the threshold speed
+    (workflows/threshold.py) and the identification where the scene has them. Held in memory:
+    `.save(folder)` writes it."""
     sc = get_scene(scene_name).modal()       # a time scene answers by its linearisation
     if campbell_frame is not None and campbell_frame not in (
             sc.campbell.frames if sc.campbell else ()):
@@ -367,7 +369,7 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
     unpaired = metrics.unpaired_modes(results)
     incomplete = [{"solver": r.solver, "status": r.status, "reason": r.reason}
                   for r in results if r.status != "ok"]
-    extra, report = {}, {"explain": [], "campbell": [], "identify": []}
+    extra, report = {}, {"explain": [], "campbell": [], "threshold": [], "identify": []}
     growing = growing_modes(results, sc.tolerances_for(params).get("damping", 0.0))
     if growing:                                  # only then: undamped answers stay as they were
         extra["unstable"] = growing
@@ -402,6 +404,9 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
             not sc.campbell.solvers or s.name in sc.campbell.solvers for s in chosen):
         obj_cb, crit, report["campbell"], drawing = campbell_diagram(sc, chosen, params, log,
                                                                      campbell_frame)
+    if threshold and sc.threshold is not None and sc.threshold.active(params):
+        extra["threshold"], report["threshold"] = run_threshold(sc, params, chosen,
+                                                                solver_names, log)
     if sc.identify and identify:
         rows, lines_md = sc.identify(params, _run_time, solver_names or None)
         if rows:
@@ -422,7 +427,8 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
     status, summary = modes_status(comparisons, {"incomplete": incomplete,
                                                  "unpaired_modes": unpaired,
                                                  "campbell": obj_cb,
-                                                 "unstable": growing})
+                                                 "unstable": growing,
+                                                 "threshold": extra.get("threshold")})
     return ModesResult(sc, params, results, comparisons, status=status, summary=summary,
                        critical_speeds=crit, campbell=obj_cb, unpaired_modes=unpaired,
                        incomplete=incomplete, extra=extra, report=report, drawing=drawing)
@@ -466,6 +472,12 @@ def modes_status(comparisons, obj) -> tuple[str, str]:
     unstable = sorted({g["solver"] for g in obj.get("unstable", [])})
     if unstable:                       # a finding about the system, not a verdict on solvers
         line += "; unstable (a mode grows) in " + ", ".join(unstable)
+    th = obj.get("threshold") or {}
+    off = [f"{r['solver']} {kind.replace('_', ' ')} {r['status'] if r['status'] != 'ok' else ''}"
+           .strip() for kind in ("eigenvalues", "time_domain") for r in th.get(kind, [])
+           if r["status"] != "ok" or not r["agrees"]]
+    if off:                            # a threshold not found, or off the closed form
+        line += "; threshold off the closed form: " + ", ".join(off)
     status = ("incomplete" if missing or not comparisons else
-              "disagree" if any(c.verdict != "agree" for c in comparisons) else "agree")
+              "disagree" if off or any(c.verdict != "agree" for c in comparisons) else "agree")
     return status, line

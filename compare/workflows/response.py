@@ -51,31 +51,40 @@ def _horizon(spec, params, spin):
                                   ((n - 1) * window, t_end)]
 
 
+def time_runs(spec, over: dict, extra: dict, solver: str):
+    """The time solver's run of `spec.time_scene` at `over` (its accurate settings) and its
+    rerun at the settings of its own error estimate: (params, runs, factor, how), the runs
+    stopping at the first that is not ok; factor·|y − y_tight| is the run's error."""
+    pl = plan(spec.time_scene, over, [solver])
+    tight, how = pl.tighter()
+    (s,) = pl.solvers
+    runs = []
+    for p_ in (pl, tight):
+        if not p_.solvers:
+            break
+        runs.append(solvers.simulate(p_.scene, s, {**p_.params, **extra},
+                                     p_.settings[s.name], t_out=p_.t_out))
+        if runs[-1].status != "ok":
+            break
+    return pl.params, runs, *how[s.name]
+
+
 def _time_point(scene, spec, params, solver, spin) -> dict:
     """One time solver at one spin: run to steady state at its accurate settings and again at
     its tighter ones (its own error), fit the last two windows at 1×. Error bar: the change
     between the two windows (what is left of the transient) plus the solver's own error."""
     t_end, dt_out, windows = _horizon(spec, params, spin)
     over, extra = spec.time_params(params, spin, t_end, dt_out)
-    pl = plan(spec.time_scene, over, [solver])
-    tight, how = pl.tighter()
-    (s,) = pl.solvers
+    p_, runs, factor, tighter = time_runs(spec, over, extra, solver)
     out = {"speed_rad_s": spin, "t_end_s": t_end}
-    fits, wall = [], 0.0
-    for p_ in (pl, tight):
-        if not p_.solvers:
-            break
-        tr = solvers.simulate(p_.scene, s, {**p_.params, **extra}, p_.settings[s.name],
-                              t_out=p_.t_out)
-        wall += tr.wall_s
-        if tr.status != "ok":
-            return {**out, "status": tr.status, "reason": tr.reason}
-        z, phi = spec.observe(p_.params, tr)
-        fits.append([resp.synchronous_fit(tr.t, z, phi, *w) for w in windows])
-        out.setdefault("settings", tr.settings)
+    bad = next((tr for tr in runs if tr.status != "ok"), None)
+    if bad is not None:
+        return {**out, "status": bad.status, "reason": bad.reason}
+    fits = [[resp.synchronous_fit(tr.t, *spec.observe(p_, tr), *w) for w in windows]
+            for tr in runs]
+    out["settings"], wall = runs[0].settings, sum(tr.wall_s for tr in runs)
     (a1, _), (a, spin_meas) = fits[0]
     change = abs(a - a1)
-    factor, tighter = how[s.name]
     own = factor * abs(a - fits[1][1][0]) if len(fits) > 1 else 0.0
     return {**out, "status": "ok", "spin_rad_s": spin_meas, "re": a.real, "im": a.imag,
             "window_change": change, "solver_error": own, "error": change + own,

@@ -13,26 +13,17 @@ import sys
 
 from ..errors import BadInput
 from . import bearing, mstmm, press, rotor, sail
-<<<<<<< HEAD
 from .base import (  # noqa: F401  (the scene types, for plug-ins)
-=======
-from .base import (
->>>>>>> h-growth
     Campbell,
     Extreme,
     Finding,
     Linearisation,
     MapSpec,
-<<<<<<< HEAD
     ModesScene,
     Response,
     Scene,
-    TimeScene,
-=======
-    Response,
-    Scene,
     Threshold,
->>>>>>> h-growth
+    TimeScene,
 )
 
 GROUP = "xval.scenes"

@@ -4,8 +4,13 @@ import numpy as np
 from ..analysis.identify import fft_peak, matrix_pencil, transverse_components
 from ..analysis.metrics import first_crossing
 from ..contract import Channel
-<<<<<<< HEAD
-from ..physics.rotor import constants, rotations_from_quaternions, unbalance_response, whirl_damped
+from ..physics.rotor import (
+    constants,
+    instability_speed,
+    rotations_from_quaternions,
+    unbalance_response,
+    whirl_damped,
+)
 from .base import (
     Campbell,
     Extreme,
@@ -14,18 +19,9 @@ from .base import (
     ModesScene,
     Response,
     SpeedRegime,
+    Threshold,
     TimeScene,
 )
-=======
-from ..physics.rotor import (
-    constants,
-    instability_speed,
-    rotations_from_quaternions,
-    unbalance_response,
-    whirl_damped,
-)
-from .base import Campbell, Extreme, Finding, MapSpec, Response, Scene, SpeedRegime, Threshold
->>>>>>> h-growth
 from .params import Param, positive
 
 SOURCE = "seed 000 (Euler-vector rotor), seed 001 (quaternion formulation)"
@@ -353,9 +349,6 @@ RESPONSE = Response(
           "measured angle (a keyphasor)")
 
 
-<<<<<<< HEAD
-WHIRL = ModesScene(
-=======
 def _growing_root(p, spin):
     """(σ, ω) of the closed form's root with the largest real part at `spin`."""
     lam = whirl_damped(p, spin)
@@ -373,8 +366,7 @@ THRESHOLD = Threshold(parameter="spin", active=lambda p: p["c_int"] > 0,
                       free={"eccentricity": 0.0})
 
 
-WHIRL = Scene(
->>>>>>> h-growth
+WHIRL = ModesScene(
     name="rotor-whirl",
     title="Whirl frequencies of the rotor at constant spin (Campbell diagram)",
     source=SOURCE,

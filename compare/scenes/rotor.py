@@ -415,4 +415,8 @@ WHIRL = ModesScene(
     identify=lambda params, run, names=None: (
         identify_free_response(params, run, names) if params["spin"] == 0 else ([], [])),
     campaign_cases=({"name": "rotor-whirl"},),
+    # `xval map rotor-whirl --x spin=LO:HI --observable growth_rate --level 0`: where each
+    # solver's largest Re λ crosses zero — the internal-damping threshold located by a map
+    map_observables={"growth_rate": (lambda p, m: m.extra.get("max_re_per_s"), "1/s",
+                                     "largest real part of the eigenvalues (> 0: a root grows)")},
 )

@@ -107,6 +107,8 @@ def evaluate_chunk(scene_name, solver_name, base, points, settings, what):
     Exudyn 384 → 111–122 ms (8 rotors per kinematic tree)."""
     sc, s = get_scene(scene_name), solvers.get_solver(solver_name)
     params = [sc.resolve({**base, **pt}) for pt in points]
+    if not sc.is_time:               # a frequency scene's observable: one eigen-analysis
+        return [_classify(sc, p, solvers.modes(sc, s, p), what) for p in params]
     batch = solvers.regimes(sc, s, params, settings) if what is None else None
     labels, wall = batch or ([None] * len(params), 0.0)
     out, warm = [], True
@@ -590,7 +592,8 @@ def estimate(sc, x_axis, y_axis, chosen, resolution, coarse, engines, params,
         (y_resolution or resolution) * (ny - 1)))))) if y_axis else 0)
     per_custom = (nx + 2 * rounds + 4) * (rows + traced)
     per_engine = (nx * rows + 2 * rows * rounds) if engines == "everywhere" else 8 * rows
-    samples = params["t_end"] / params["output_dt"] + 1
+    # a frequency scene's point is one eigen-analysis, costed like one output sample's run
+    samples = params["t_end"] / params["output_dt"] + 1 if sc.is_time else 1
     runs, secs = 0, 0.0
     for s in chosen:
         n = per_engine if is_engine(s) else per_custom
@@ -606,8 +609,9 @@ def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolutio
     """Everything checked before a run (one line, BadInput): scene, axes, parameters,
     solvers, the work against the budget."""
     sc = get_scene(scene_name)
-    if not sc.is_time:
-        raise BadInput(f"scene {sc.name!r} is a frequency scene: maps are of time scenes")
+    if not sc.is_time and not sc.map_observables:
+        raise BadInput(f"scene {sc.name!r} is a frequency scene with no map observable: maps "
+                       f"are of time scenes' regimes and of observables")
     if level is not None and observable is None:      # a level of which observable?
         raise BadInput(f"--level needs --observable NAME (of {sc.name}: "
                        f"{', '.join(sc.map_observables) or 'none'})")

@@ -5,6 +5,8 @@ import sys
 
 import pytest
 
+import compare  # noqa: F401  before numpy: one BLAS thread, as `xval` runs (compare/__init__.py)
+
 os.environ.setdefault("MPLCONFIGDIR", os.path.join(os.path.dirname(__file__), "..", "logs",
                                                    ".mplconfig"))
 
@@ -14,6 +16,24 @@ def xval(*args, cwd=None):
     p = subprocess.run([sys.executable, "-m", "compare", *args], capture_output=True,
                        text=True, cwd=cwd, timeout=900)
     return p.returncode, p.stdout, p.stderr
+
+
+# pytest-xdist (addopts `-n 2`): each module runs whole on one worker, so that its module-scoped
+# fixtures (a campaign, an engine run) run once. test_layers writes probe files into the source
+# tree, which the docs build and a campaign test (a copy of the packages) read whole: one worker
+# runs those three modules. (xdist 3.8's own `loadgroup` does not group under pytest 9.)
+SOURCE_TREE = ("tests/test_layers.py", "tests/test_docs.py", "tests/test_campaign.py")
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    from xdist.scheduler import LoadScopeScheduling
+
+    class ByModule(LoadScopeScheduling):
+        def _split_scope(self, nodeid):
+            module = nodeid.split("::", 1)[0]
+            return "source tree" if module in SOURCE_TREE else module
+    return ByModule(config, log)
 
 
 @pytest.fixture(scope="session")

@@ -45,6 +45,12 @@ def rotor_default_run(tmp_path_factory):
     return json.loads(so), out
 
 
+def pytest_configure(config):
+    # here, not in pyproject.toml: an ini filter naming numba's class imports numba, so numpy,
+    # before this file sets one BLAS thread
+    config.addinivalue_line("filterwarnings", "ignore::numba.NumbaPerformanceWarning")
+
+
 def pytest_addoption(parser):
     parser.addoption("--update-golden", action="store_true",
                      help="rewrite tests/golden/*.json from the current solvers (review the diff)")

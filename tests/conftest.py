@@ -38,7 +38,7 @@ def pytest_xdist_make_scheduler(config, log):
 
 @pytest.fixture(scope="session")
 def rotor_default_run(tmp_path_factory):
-    """`xval run rotor-spinup --json` with every solver, once per test session."""
+    """`xval run rotor-spinup --json` with every solver, once per xdist worker."""
     out = tmp_path_factory.mktemp("run")
     rc, so, se = xval("run", "rotor-spinup", "--json", "--out", str(out))
     assert rc == 0, se

@@ -11,11 +11,14 @@ Measured, per pair and channel: max|Δ| over the run (SI), the channel's scale, 
 own error estimate max(err_a + err_b) where both estimate one, and the deviation left beyond
 it, max(0, max|Δ| − err). Frequencies: max relative difference over the paired modes (no
 error estimates)."""
-import json
+import json  # noqa: I001  (compare before numpy)
 import os
 import sys
 from pathlib import Path
 
+# before numpy: one BLAS thread (compare/__init__.py), as `xval` measures; the frequencies'
+# round-off differs with two
+import compare  # noqa: F401
 import numpy as np
 
 TABLE = Path(os.environ.get("XVAL_ALLOWANCES_TABLE",

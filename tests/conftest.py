@@ -5,6 +5,8 @@ import sys
 
 import pytest
 
+import compare  # noqa: F401  before numpy: one BLAS thread, as `xval` runs (compare/__init__.py)
+
 os.environ.setdefault("MPLCONFIGDIR", os.path.join(os.path.dirname(__file__), "..", "logs",
                                                    ".mplconfig"))
 
@@ -16,13 +18,37 @@ def xval(*args, cwd=None):
     return p.returncode, p.stdout, p.stderr
 
 
+# pytest-xdist (addopts `-n 2`): each module runs whole on one worker, so that its module-scoped
+# fixtures (a campaign, an engine run) run once. test_layers writes probe files into the source
+# tree, which the docs build and a campaign test (a copy of the packages) read whole: one worker
+# runs those three modules. (xdist 3.8's own `loadgroup` does not group under pytest 9.)
+SOURCE_TREE = ("tests/test_layers.py", "tests/test_docs.py", "tests/test_campaign.py")
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    from xdist.scheduler import LoadScopeScheduling
+
+    class ByModule(LoadScopeScheduling):
+        def _split_scope(self, nodeid):
+            module = nodeid.split("::", 1)[0]
+            return "source tree" if module in SOURCE_TREE else module
+    return ByModule(config, log)
+
+
 @pytest.fixture(scope="session")
 def rotor_default_run(tmp_path_factory):
-    """`xval run rotor-spinup --json` with every solver, once per test session."""
+    """`xval run rotor-spinup --json` with every solver, once per xdist worker."""
     out = tmp_path_factory.mktemp("run")
     rc, so, se = xval("run", "rotor-spinup", "--json", "--out", str(out))
     assert rc == 0, se
     return json.loads(so), out
+
+
+def pytest_configure(config):
+    # here, not in pyproject.toml: an ini filter naming numba's class imports numba, so numpy,
+    # before this file sets one BLAS thread
+    config.addinivalue_line("filterwarnings", "ignore::numba.NumbaPerformanceWarning")
 
 
 def pytest_addoption(parser):

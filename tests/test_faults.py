@@ -19,7 +19,7 @@ from compare.cli import main
 from compare.output import guard
 
 # one job of euler-vector at dt 1e-5 over 20 s (RK4, error estimate at half the step) takes
-# ~3 s on this machine: long enough to interrupt or to overlap a second process
+# ~3 s on this machine (12 s under a load of 5): long enough to overlap a second process
 SLOW = """name = "slow"
 [[cases]]
 name = "spin"
@@ -28,6 +28,23 @@ solvers = ["euler-vector"]
 dt = 1e-5
 set = { t_end = 20 }
 sweep = { torque = { start = 1.0, stop = 2.0, num = %d } }
+"""
+# to interrupt: a quick job (0.2 s of spin), dispatched first, finishes while two slow ones (5 s
+# of spin: ~1 s each, ~8 s under a load of 4) still run
+QUICK_AND_SLOW = """name = "slow"
+[[cases]]
+name = "quick"
+scene = "rotor-spinup"
+solvers = ["euler-vector"]
+dt = 1e-5
+set = { t_end = 0.2 }
+[[cases]]
+name = "spin"
+scene = "rotor-spinup"
+solvers = ["euler-vector"]
+dt = 1e-5
+set = { t_end = 5 }
+sweep = { torque = [1.0, 2.0] }
 """
 
 
@@ -146,13 +163,15 @@ def test_temporaries_of_a_killed_writer_are_removed_once_the_lock_is_held(tmp_pa
 
 
 def test_ctrl_c_stops_the_workers_keeps_finished_jobs_and_says_how_to_resume(tmp_path, popen):
-    n = 8
+    n = 3
     f = tmp_path / "slow.toml"
-    f.write_text(SLOW % n)
+    f.write_text(QUICK_AND_SLOW)
     out = tmp_path / "out"
     store = out / "campaign" / "slow" / "jobs"
     p = popen(["campaign", str(f), "--out", str(out)])
-    _wait_for(lambda: len(list(store.glob("*.npz"))) >= 1 or p.poll() is not None)
+    # every job started (a worker opens its log first) and one finished: the two slow ones run
+    _wait_for(lambda: (len(list(store.glob("*.npz"))) >= 1 and len(list(store.glob("*.log"))) == n)
+              or p.poll() is not None)
     assert p.poll() is None
     workers = _children_of(p.pid)
     assert workers
@@ -165,7 +184,7 @@ def test_ctrl_c_stops_the_workers_keeps_finished_jobs_and_says_how_to_resume(tmp
     lines = [ln for ln in se.splitlines() if "interrupted" in ln]
     assert len(lines) == 1 and "resume with: xval campaign" in lines[0]
     assert stopped_in < 15                    # the running jobs were ended, not waited for
-    kept = len(list(store.glob("*.npz")))
+    kept = len(list(store.glob("*.npz")))     # waited for, the two running ones would be kept
     assert 1 <= kept < n and not list(store.glob(".*"))
     assert not (store.parent / ".lock").exists()
     rc, so, se = xval("diff", str(store.parent), str(store.parent), "--out", str(tmp_path / "d"))

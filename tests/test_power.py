@@ -73,3 +73,27 @@ def test_a_campaign_case_estimates_its_power_as_xval_power_confirms_it(tmp_path)
         assert lo / 1.01 <= r["epsilon"] <= hi * 1.5, (r, lo, hi)
     report = (tmp_path / "campaign" / "p" / "report.md").read_text()
     assert "worst ε*" in report and "Detection power" in report
+
+
+def test_damping_ratio_verdicts_give_power_over_the_internal_damper():
+    """With the dampers on, a change of c_int in one solver moves its ζ first: ε* is decided
+    by a ζ comparison and lies in [1, REFINE] × bound/|dζ/dε| (the linear estimate exactly, or
+    the upper end of a bisection bracket REFINE wide) — dζ/dε from the closed-form roots
+    (compare.physics.rotor.whirl_damped), not from power.py. (A ζ channel once made the search
+    loop forever: it read ζ as a frequency.)"""
+    import numpy as np
+
+    from compare.physics.rotor import whirl_damped
+    over = {"c_ext": "0.5", "c_int": "2", "spin": "60"}
+    sc = get_scene("rotor-whirl")
+    p = sc.resolve(over)
+    zeta = lambda q: np.sort([-lam.real / abs(lam) for lam in whirl_damped(q, q["spin"])])  # noqa: E731
+    h = 1e-6
+    dz = np.max(np.abs(zeta({**p, "c_int": p["c_int"] * (1 + h)}) - zeta(p))) / h
+    r = xval.power("rotor-whirl", parameters=["c_int"], solvers=["closed-form", "exudyn"],
+                   **over)
+    bound = sc.tolerances_for(p)["damping"]
+    from compare.workflows.power import REFINE
+    for x in r["power"]:
+        assert x["channel"].endswith("ζ"), x
+        assert bound / dz * (1 - 1e-3) <= x["epsilon"] <= REFINE * bound / dz * (1 + 1e-3), x

@@ -89,11 +89,14 @@ class _Study:
 
 
 def _change(sc, a, b, channel) -> float:
-    """max |a − b| of one channel (a time channel or a mode's frequency)."""
+    """max |a − b| of one channel (a time channel, a mode's frequency, or its ζ: "<mode> ζ")."""
     if sc.is_modes:
-        fa = dict(zip(a.labels, a.frequencies_hz))
-        fb = dict(zip(b.labels, b.frequencies_hz))
-        return abs(fa[channel] - fb[channel]) if channel in fa and channel in fb else math.inf
+        zeta = channel.endswith(" ζ")
+        if zeta and (a.damping is None or b.damping is None):
+            return math.inf
+        fa, fb = (dict(zip(m.labels, m.damping if zeta else m.frequencies_hz)) for m in (a, b))
+        key = channel[:-2] if zeta else channel
+        return abs(fa[key] - fb[key]) if key in fa and key in fb else math.inf
     return float(np.max(np.abs(a.channels[channel] - b.channels[channel])))
 
 
@@ -123,7 +126,7 @@ def _verdict_at(study, solver, name, eps):
 def _bisect(study, solver, name, eps):
     """ε* bracketed from `eps` by factors of 4, then halved in log scale to REFINE."""
     lo, hi = None, None
-    e = eps
+    e = max(eps, 1e-16)                  # an estimate of 0 would never grow
     while e <= EPS_MAX:
         flips = _verdict_at(study, solver, name, e)
         if flips:

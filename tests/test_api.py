@@ -27,7 +27,9 @@ def test_the_passage_case_ends_at_the_papers_spin_rate_with_every_solver(xval_ru
     text = str(r)
     for word in ("max|Δ|", "error est.", "allowance", "verdict", "90.8409"):
         assert word in text
-    assert sum(line.endswith(("  agree", "  agree (marginal)")) for line in text.splitlines()) \
+    # the verdict column, then "decided by" (the sentence that decided)
+    assert sum(("  agree  " in line or "  agree (marginal)  " in line)
+               and "decided by" not in line for line in text.splitlines()) \
         == len(r.comparisons) == 36
     xval.assert_agree(r, channels=["omega_norm", "tilt"])
 
@@ -258,7 +260,7 @@ def test_a_failing_modes_solver_is_incomplete_and_assert_agree_fails(monkeypatch
     import reference_models.mujoco.rotor as leaf
     both = ["closed-form", "euler-vector"]
     ok = xval.modes("rotor-whirl", both, spin=41.3)
-    assert ok.status == "agree" and len(ok.comparisons) == 2
+    assert ok.status == "agree" and len(ok.comparisons) == 4      # 2 frequencies, 2 ζ
     xval.assert_agree(ok)
 
     def boom(params, settings):
@@ -268,13 +270,13 @@ def test_a_failing_modes_solver_is_incomplete_and_assert_agree_fails(monkeypatch
     why = "incomplete: mujoco error (RuntimeError: injected)"
     obj = r.as_json()
     assert obj["status"] == "incomplete" and obj["incomplete"][0]["solver"] == "mujoco"
-    assert obj["summary"] == f"2 of 2 comparisons agree; {why}"
+    assert obj["summary"] == f"4 of 4 comparisons agree; {why}"
     assert why in (r.save(tmp_path / "m") / "report.md").read_text() and why in str(r)
     with pytest.raises(AssertionError, match=why.replace("(", r"\(").replace(")", r"\)")):
         xval.assert_agree(r)
     main(["modes", "rotor-whirl", *[f"--solver={s}" for s in both + ["mujoco"]],
           "--set", "spin=41.3", "--out", str(tmp_path)])
-    assert f"2 of 2 comparisons agree; {why}" in capsys.readouterr().out
+    assert f"4 of 4 comparisons agree; {why}" in capsys.readouterr().out
     one = xval.modes("rotor-whirl", ["closed-form"], spin=41.3)
     assert one.status == "incomplete"
     with pytest.raises(AssertionError, match="nothing was compared"):

@@ -29,9 +29,9 @@ CONTAINED, SHARP = 0.95, 0.1
 # 0.14 offset from it at every step). Sail: an explicit step at the stability bound (3.4e-6 s)
 # makes the 1/16-step reference cost 16 runs: a 0.2-s horizon (the thread paying out, no
 # release), where the thread mode's phase is unresolved at every step tried (see
-# solvers._halving_error). Points: 100 each; sail measured at seed 3: Exudyn contained 1.000,
-# median true/estimate 0.28 (1196 s), MuJoCo 1.000, 0.46 (2463 s; the two at once on 2 shared
-# cores, load 5–8).
+# solvers._halving_error). Points: 100 each; sail measured at seed 3: Exudyn contained 0.998,
+# median true/estimate 0.30 (637 s), MuJoCo 1.000, 0.45 (1685 s; the two at once on 2 shared
+# cores).
 ENGINES = {
     "rotor-spinup": ({"t_end": 2.0}, "quaternion", 100),
     "press": ({"t_end": 0.02}, {"exudyn": "lagrange-exact"}, 100),

@@ -313,7 +313,7 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
         if r >= 1 and d2 >= np.max(d0[c]) / 4:
             runs = np.array([tr.channels[c], half.channels[c], quarter.channels[c]])
             err[c] = 2 * np.maximum.accumulate(np.ptp(runs, axis=0))
-        elif r > 0.5 and c in slow:
+        elif 0.5 < r < 1 and c in slow:
             err[c] = d1[c] / (1 - r)
     return err
 

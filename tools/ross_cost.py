@@ -4,8 +4,8 @@ spinning cantilever shaft (issue 28's last acceptance line).
 ROSS cannot share xval's environment (its plotting stack pins plotly < 6), so this runs in
 two interpreters:
 
-    python -m venv /tmp/ross && /tmp/ross/bin/pip install ross-rotordynamics 'plotly<6'
-    /tmp/ross/bin/python tools/ross_cost.py ross          # ROSS: frequencies and s/point
+    python -m venv ross-env && ross-env/bin/pip install ross-rotordynamics 'plotly<6'
+    ross-env/bin/python tools/ross_cost.py ross           # ROSS: frequencies and s/point
     python tools/ross_cost.py xval                        # xval's solvers: the same
 
 The ROSS model: spinning-shaft's defaults (L 1.29 m, EI 582.996 N·m², m 2.87 kg/m) as 40

@@ -105,9 +105,10 @@ class Adaptive:
     def ladder() -> tuple[list[Adaptive], int]:
         return [Adaptive(r) for r in RTOLS], RTOLS.index(START_RTOL)
 
-    def cheap(self) -> Adaptive | None:
-        """The map's cheap level, None where this tolerance is loose already."""
-        r = min(self.rtol * CHEAP_LOOSENING, START_RTOL)
+    def cheap(self, rtol: float | None = None) -> Adaptive | None:
+        """The map's cheap level (`rtol`: the one the leaf declares, else the generic
+        loosening), None where this tolerance is loose already."""
+        r = rtol or min(self.rtol * CHEAP_LOOSENING, START_RTOL)
         return None if r <= self.rtol else Adaptive(
             r, None if self.atol is None else self.atol * r / self.rtol)
 
@@ -130,6 +131,9 @@ class LeafInfo:
     # integrator -> a map point's cheap first step (CHEAP_DT: a step the leaf shows stable
     # and whose regime a point's neighbours confirm, as for a loose tolerance)
     cheap_dt: dict
+    # integrator -> a map point's cheap first tolerance (CHEAP_RTOL: one whose error the leaf
+    # has measured far below the regime margins; else CHEAP_LOOSENING applies)
+    cheap_rtol: dict
     own_check: bool                # the leaf checks settings against the grid itself
     batch_regimes: bool            # the leaf classifies many runs in one batch call
     # unbalance_response(params, spins) -> (complex amplitudes, their errors): a frequency
@@ -205,14 +209,16 @@ class LeafInfo:
 
     def cheaper(self, settings: dict) -> dict | None:
         """A map point's cheap first run: an error-controlled method at a looser tolerance
-        (`Adaptive.cheap`); a fixed step at the larger one its leaf declares (`CHEAP_DT`,
-        stable by the leaf's own measurement); else None: a larger step can cross a stability
-        limit, so such a solver maps at its accurate step."""
+        (`Adaptive.cheap`, at the leaf's `CHEAP_RTOL` where it declares one); a fixed step at
+        the larger one its leaf declares (`CHEAP_DT`, stable by the leaf's own measurement);
+        else None: a larger step can cross a stability limit, so such a solver maps at its
+        accurate step."""
         k = self.knob(settings)
         if isinstance(k, Fixed):
             dt = self.cheap_dt.get(settings.get("integrator"))
             return {**settings, "dt": dt} if _number(dt) and dt > k.dt else None
-        c = k.cheap() if isinstance(k, Adaptive) else None
+        c = k.cheap(self.cheap_rtol.get(settings.get("integrator"))) \
+            if isinstance(k, Adaptive) else None
         return None if c is None else c.apply(settings)
 
     def steps(self, settings: dict, t_end: float) -> tuple[float, float] | None:
@@ -256,6 +262,7 @@ def _build(leaf: ModuleType) -> LeafInfo:
                     modes_defaults=dict(getattr(leaf, "MODES_SETTINGS", {})),
                     integrators=integrators, auto_dt=dict(getattr(leaf, "AUTO_DT", {})),
                     cheap_dt=dict(getattr(leaf, "CHEAP_DT", {})),
+                    cheap_rtol=dict(getattr(leaf, "CHEAP_RTOL", {})),
                     own_check=hasattr(leaf, "check_settings"),
                     batch_regimes=hasattr(leaf, "regimes"),
                     unbalance_response=getattr(leaf, "unbalance_response", None))

@@ -43,6 +43,7 @@ from .explicit import (
     FIXED_TABLEAUS,
     GUARD,
     _error_norm,
+    _weighted_rows,
     initial_step,
 )
 
@@ -97,21 +98,17 @@ FIXED = FIXED_TABLEAUS
 @nb.njit(cache=True)
 def _stage_state(y, h, A, K, s, ys):
     """ys = y + h Σ_r<s A[s, r] K[r]."""
+    _weighted_rows(A[s, :s], K, ys)
     for j in range(y.shape[0]):
-        acc = 0.0
-        for r in range(s):
-            acc += A[s, r] * K[r, j]
-        ys[j] = y[j] + h * acc
+        ys[j] = y[j] + h * ys[j]
 
 
 @nb.njit(cache=True)
 def _combine(y, h, B, K, out):
     """out = y + h Σ_s B[s] K[s]."""
+    _weighted_rows(B, K, out)
     for j in range(y.shape[0]):
-        acc = 0.0
-        for s in range(B.shape[0]):
-            acc += B[s] * K[s, j]
-        out[j] = y[j] + h * acc
+        out[j] = y[j] + h * out[j]
 
 
 @nb.njit(cache=True)
@@ -183,20 +180,14 @@ def _prepare_dense(f, p, t, y, y_new, h, K, n_st, A, dense, P, AX, CX, D, F, ys)
     ny = y.shape[0]
     if dense == DENSE_POLY:          # F[k] = Σ_s P[s, k] K[s]  (y = y0 + h Σ_k F[k] x^(k+1))
         for k in range(P.shape[1]):
-            for j in range(ny):
-                acc = 0.0
-                for s in range(P.shape[0]):
-                    acc += P[s, k] * K[s, j]
-                F[k, j] = acc
+            _weighted_rows(P[:, k], K, F[k])
         return 0
     n_k = n_st + 1                   # DOP853: three extra stages, then scipy's F rows
     for e in range(AX.shape[0]):
         s = n_k + e
+        _weighted_rows(AX[e, :s], K, ys)
         for j in range(ny):
-            acc = 0.0
-            for r in range(s):
-                acc += AX[e, r] * K[r, j]
-            ys[j] = y[j] + h * acc
+            ys[j] = y[j] + h * ys[j]
         f(t + CX[e] * h, ys, p, K[s])
     for j in range(ny):
         dy = y_new[j] - y[j]
@@ -204,11 +195,9 @@ def _prepare_dense(f, p, t, y, y_new, h, K, n_st, A, dense, P, AX, CX, D, F, ys)
         F[1, j] = h * K[0, j] - dy
         F[2, j] = 2.0 * dy - h * (K[n_st, j] + K[0, j])
     for r in range(D.shape[0]):
+        _weighted_rows(D[r], K, F[3 + r])
         for j in range(ny):
-            acc = 0.0
-            for s in range(D.shape[1]):
-                acc += D[r, s] * K[s, j]
-            F[3 + r, j] = h * acc
+            F[3 + r, j] *= h
     return AX.shape[0]
 
 
@@ -247,6 +236,7 @@ def integrate_adaptive_dense(f, guard, y0, p, t_out, rtol, atol, h_max, max_step
     y = y0.copy()
     y_new = np.empty(ny)
     scale = np.empty(ny)
+    w5, w3 = np.empty(ny), np.empty(ny)
     t0, t_end = t_out[0], t_out[n_out - 1]
     if h_max <= 0.0:
         h_max = np.inf
@@ -277,7 +267,7 @@ def integrate_adaptive_dense(f, guard, y0, p, t_out, rtol, atol, h_max, max_step
         evals += n_st
         for j in range(ny):
             scale[j] = atol + max(abs(y[j]), abs(y_new[j])) * rtol
-        err = _error_norm(K, h_try, scale, E, E3)
+        err = _error_norm(K, h_try, scale, E, E3, w5, w3)
         if not np.isfinite(err):
             err = 1e10           # a NaN trial step: retry smaller, fail by underflow
         if err >= 1.0:

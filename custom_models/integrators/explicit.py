@@ -77,20 +77,30 @@ def initial_step(y, fy, rtol, atol):
 
 
 @nb.njit(cache=True)
-def _error_norm(K, h, scale, E, E3):
+def _weighted_rows(c, K, out):
+    """out = Σ_s c[s] K[s], zero weights skipped, the inner loop along a row (vectorises)."""
+    for j in range(out.shape[0]):
+        out[j] = 0.0
+    for s in range(c.shape[0]):
+        a = c[s]
+        if a != 0.0:
+            for j in range(out.shape[0]):
+                out[j] += a * K[s, j]
+
+
+@nb.njit(cache=True)
+def _error_norm(K, h, scale, E, E3, w5, w3):
+    """The embedded error of a step; w5, w3: scratch rows of len(scale)."""
     ny = scale.shape[0]
+    _weighted_rows(E, K, w5)
     e5 = 0.0
-    e3 = 0.0
     for j in range(ny):
-        a = 0.0
-        for s in range(E.shape[0]):
-            a += E[s] * K[s, j]
-        e5 += (a / scale[j]) ** 2
-        if E3.shape[0] > 0:
-            b = 0.0
-            for s in range(E3.shape[0]):
-                b += E3[s] * K[s, j]
-            e3 += (b / scale[j]) ** 2
+        e5 += (w5[j] / scale[j]) ** 2
+    e3 = 0.0
+    if E3.shape[0] > 0:
+        _weighted_rows(E3, K, w3)
+        for j in range(ny):
+            e3 += (w3[j] / scale[j]) ** 2
     if E3.shape[0] == 0:           # ordinary embedded pair: RMS norm
         return abs(h) * np.sqrt(e5 / ny)
     if e5 == 0.0 and e3 == 0.0:    # DOP853's 5th/3rd-order blend (Hairer & Wanner)

@@ -24,6 +24,7 @@ from . import batch
 from . import model as rotor
 from .model import (  # noqa: F401  (re-exported: the leaf's settings)
     ADAPTIVE,
+    CHEAP_RTOL,
     DEFAULT_SETTINGS,
     I0,
     I0INV,

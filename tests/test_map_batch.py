@@ -143,3 +143,28 @@ def test_engine_batch_equals_its_single_runs(name, monkeypatch):
             assert v[i] == np.max(np.abs(tr.channels[c]))
     rows = maps.evaluate_chunk(sc.name, s.name, {}, points, st, None)
     assert [r["label"] for r in rows] == ref
+
+
+def test_mujoco_rolls_carry_their_own_numbers_and_a_flagged_roll_comes_back_failed():
+    """MuJoCo's rollout of several points sharing one model: each roll's k (userdata) and
+    torque (wrench) are its own, and a roll whose callback flags (here |ω| past an omega_max of
+    30 rad/s) comes back failed instead of running on past the flag (the per-step userdata
+    control clears the flag; the poisoned work keeps it). Independent reference: each point's
+    own `simulate` — the batch numbers equal them bit for bit, and the flagged run says why."""
+    sc, s = get_scene("rotor-spinup"), solvers.get_solver("mujoco")
+    points = [{"torque": 1.0, "k": 10.0, "eccentricity": 0.0125, "t_end": 10},
+              {"torque": 4.0, "eccentricity": 0.0125, "t_end": 10},
+              {"torque": 0.2, "k": 30.0, "eccentricity": 0.0125, "t_end": 10}]
+    ps = [sc.resolve(pt) for pt in points]
+    st = {**solvers.settings_for(s, sc.name, t_out=sc.output_grid(ps[0])), "omega_max": 30.0}
+    trs = [solvers.simulate(sc, s, p, st, warm_up=False) for p in ps]
+    assert [tr.status for tr in trs] == ["ok", "diverged", "ok"]
+    assert "omega_max" in trs[1].reason
+    levels = np.array([sc.regime.levels(p) for p in ps])
+    res = s.leaf(sc).regimes(ps, sc.output_grid(ps[0]), st, "omega_norm", levels,
+                             sc.regime.window)
+    assert list(res["code"] != 0) == [False, True, False]
+    for i in (0, 2):
+        e = trs[i].channels["energy_balance"]
+        assert res["drift"][i] == np.max(np.abs(e - e[0]))
+        assert res["max_abs"]["kinetic"][i] == np.max(np.abs(trs[i].channels["kinetic"]))

@@ -82,8 +82,11 @@ _RHS_PER_STEP = {"rk4": 4, "euler": 1, "implicitfast": 1, "implicit": 1}
 
 # --- userdata layout (doubles in mjData.userdata, read/written by the callback) -------------
 (_U_K, _U_TORQUE, _U_COS_PI, _U_OMEGA2, _U_FLAG, _U_TFAIL, _U_VARIANT, _U_COS_CARDAN, _U_CEXT,
- _U_CINT) = range(10)
-_NUSERDATA = 10
+ _U_CINT, _U_POISON) = range(11)
+_NUSERDATA = 11
+# _U_POISON ≠ 0 (the batch path, whose per-step userdata control clears the flag): a flagged
+# stage also makes its passive force NaN, so the state (auto-reset is off) and every later row
+# are NaN (a NaN work rate would not do: MuJoCo zeroes a bad ctrl)
 _PI_MARGIN = 1e-3            # stop when θ > π − this (the direction of −kγ is undefined at π)
 _CARDAN_MARGIN = 1e-3        # Cardan variant: stop when |cos β| < this (β → ±90°)
 _FLAG_REASONS = {
@@ -177,6 +180,8 @@ def _python_callback(m, d):
     if flag != 0.0:
         ud[_U_FLAG] = flag
         ud[_U_TFAIL] = d.time
+        if u[_U_POISON] != 0.0:
+            d.qfrc_passive[0] = math.nan
         return
     if u[_U_CEXT] != 0.0 or u[_U_CINT] != 0.0:
         dx, dy, dz = _damper_kernel(w, x, y, z, vx, vy, vz, omz, u[_U_CEXT], u[_U_CINT])
@@ -272,6 +277,8 @@ def _native_callback():
             if flag != 0.0:
                 ud[_U_FLAG] = flag
                 ud[_U_TFAIL] = carray(d, (nwords,), np.float64)[o_time]
+                if ud[_U_POISON] != 0.0:
+                    carray(_as_f64ptr(words[o_qfrc]), (3,))[0] = np.nan
                 return
             if ud[_U_CEXT] != 0.0 or ud[_U_CINT] != 0.0:
                 dx, dy, dz = damper(q[0], q[1], q[2], q[3], v[0], v[1], v[2], omz, ud[_U_CEXT],
@@ -381,17 +388,29 @@ def _build(params, settings, integrator, torque, model=None):
     m = _compile(params, settings, integrator) if model is None else model
     d = mujoco.MjData(m)
     bid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "rotor")
+    _load(d, bid, params, settings, torque)
+    return m, d, bid
+
+
+def _load(d, bid, params, settings, torque):
+    """The point's numbers into the data: the drive wrench, the callback's userdata, and the
+    initial state R0 = Rx(tilt0), spin0 about the body axis, no work."""
     d.xfrc_applied[bid, 3:6] = (0.0, 0.0, float(torque))
     ud = d.userdata
     ud[_U_K] = float(params["k"])
     ud[_U_TORQUE] = float(torque)
     ud[_U_COS_PI] = math.cos(math.pi - _PI_MARGIN)
     ud[_U_OMEGA2] = float(settings["omega_max"]) ** 2
+    ud[_U_FLAG] = ud[_U_TFAIL] = ud[_U_POISON] = 0.0
     ud[_U_VARIANT] = 0.0 if settings["spring"] == "cone" else 1.0
     ud[_U_COS_CARDAN] = _CARDAN_MARGIN
     ud[_U_CEXT] = float(params.get("c_ext", 0.0))
     ud[_U_CINT] = float(params.get("c_int", 0.0))
-    return m, d, bid
+    tilt0, spin0 = float(params.get("tilt0", 0.0)), float(params.get("spin0", 0.0))
+    d.time = 0.0
+    d.qpos[:] = (math.cos(tilt0 / 2), math.sin(tilt0 / 2), 0.0, 0.0)
+    d.qvel[:] = (0.0, 0.0, spin0)
+    d.act[0] = 0.0
 
 
 _ROLLOUT_BLOCK = 1 << 17             # steps per rollout call (bounds the state buffer)
@@ -499,12 +518,7 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> dict:
 
 def _run(params, t_out, s, model=None):
     """`simulate` on checked settings and grid; `model`: a compiled one to reuse (`_build`)."""
-    torque = float(params["torque"])
-    tilt0, spin0 = float(params["tilt0"]), float(params["spin0"])
-    m, d, bid = _build(params, s, s["integrator"], torque, model)
-    d.qpos[:] = (math.cos(tilt0 / 2), math.sin(tilt0 / 2), 0.0, 0.0)    # R0 = Rx(tilt0)
-    d.qvel[:] = (0.0, 0.0, spin0)                                       # spin0·n0, body frame
-    d.act[0] = 0.0
+    m, d, bid = _build(params, s, s["integrator"], float(params["torque"]), model)
 
     dt = s["dt"]
     intervals = np.diff(t_out)
@@ -587,21 +601,73 @@ def _run(params, t_out, s, model=None):
 
 
 def regimes(params_list, t_out, settings, channel, levels, window):
-    """The map's batch path: every point of `params_list` run by `_run` on the grid `t_out`,
-    one compiled model per distinct MODEL_FIELDS, and reduced to its regime on |ω|
-    (`physics.regime_summaries`; None for another channel). `levels`: (n, 2) per point."""
+    """The map's batch path, reduced to the regime on |ω| (`physics.regime_summaries`; None for
+    another channel). `levels`: (n, 2) per point. With the native callback on a uniform grid
+    (the normal case) the points sharing MODEL_FIELDS run as one `mujoco.rollout` call
+    (`_rolled_together`); else each point is `_run` on its group's model."""
     if channel != "omega_norm":
         return None
     s = check_settings(settings)
     t_out = np.asarray(t_out, dtype=float)
-    models, runs = {}, []
-    for p in params_list:
+    groups: dict = {}
+    for i, p in enumerate(params_list):
         key = repr([np.asarray(p[f], float).tolist() for f in MODEL_FIELDS])
-        if key not in models:
-            models[key] = _compile(p, s, s["integrator"])
-        runs.append(_run(p, t_out, s, models[key]))
+        groups.setdefault(key, []).append(i)
+    runs = [None] * len(params_list)
+    for idx in groups.values():
+        m = _compile(params_list[idx[0]], s, s["integrator"])
+        group = [params_list[i] for i in idx]
+        done = _rolled_together(m, group, t_out, s)
+        for i, r in zip(idx, done or [_run(p, t_out, s, m) for p in group]):
+            runs[i] = r
     levels = np.asarray(levels, float)
     return physics.regime_summaries(t_out, runs, levels[:, 0], levels[:, 1], window)
+
+
+_BATCH_ROWS = 1 << 18          # states per rollout call (rolls × steps): ≈ 20 MB for the rotor
+_USER = mujoco.mjtState.mjSTATE_USERDATA
+
+
+def _rolled_together(m, group, t_out, s):
+    """Every point of `group` (one model) in one `mujoco.rollout` call per ≤ _BATCH_ROWS
+    states: each roll's initial state, drive wrench and userdata are its own (the wrench and
+    the userdata as the rollout's constant control), the steps those of `_run`. A flagged stage
+    makes the roll's state NaN (`_U_POISON`): such a run comes back `diverged` and the caller
+    runs it alone, which says why. None where `_run` would not take one rollout (Python
+    callback, a step longer than the output step, an uneven grid)."""
+    intervals = np.diff(t_out)
+    if not intervals.size or np.ptp(intervals) > 1e-9 * intervals.mean() or \
+            s["dt"] > intervals.min() * (1 + 1e-9) or s["callback"] != "native" or \
+            _native_callback() is None:
+        return None
+    n_per = int(np.ceil(intervals[0] / s["dt"] - 1e-9))
+    m.opt.timestep = (t_out[-1] - t_out[0]) / (n_per * intervals.size)
+    d = mujoco.MjData(m)
+    bid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "rotor")
+    spec = _XFRC.value | _USER.value
+    x0 = np.empty((len(group), mujoco.mj_stateSize(m, _FULL)))
+    ctrl = np.empty((len(group), 1, mujoco.mj_stateSize(m, spec)))
+    for x, c, p in zip(x0, ctrl, group):
+        _load(d, bid, p, s, float(p["torque"]))
+        d.userdata[_U_POISON] = 1.0
+        mujoco.mj_getState(m, d, x, _FULL)
+        mujoco.mj_getState(m, d, c[0], spec)
+    nstep = n_per * intervals.size
+    per_call = max(1, _BATCH_ROWS // nstep)
+    nq, runs = 1 + m.nq, []
+    with _Callback("native"):
+        for a in range(0, len(group), per_call):
+            st, _ = mujoco.rollout.rollout(m, d, x0[a:a + per_call], ctrl[a:a + per_call],
+                                           control_spec=spec, nstep=nstep)
+            for p, rows in zip(group[a:a + per_call], st[:, n_per - 1::n_per]):
+                if not np.all(np.isfinite(rows)):
+                    runs.append(LeafResult(channels={}, status="diverged", t_fail=math.nan))
+                    continue
+                quat = np.vstack([x0[len(runs), 1:nq], rows[:, 1:nq]])
+                vel = np.vstack([x0[len(runs), nq:nq + m.nv], rows[:, nq:nq + m.nv]])
+                work = np.concatenate([[0.0], rows[:, nq + m.nv]])
+                runs.append(LeafResult(channels=_channels(p, s["spring"], quat, vel, work)))
+    return runs
 
 
 # ----------------------------------------------------------------------------------------------

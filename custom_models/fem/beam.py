@@ -12,33 +12,46 @@ GAUSS_X, GAUSS_W = np.polynomial.legendre.leggauss(5)
 
 
 def hermite(xi, h):
-    """Hermite shape functions on [0, h] at ξ ∈ [0, 1]: N, N', N''."""
-    N = np.array([1 - 3 * xi**2 + 2 * xi**3, h * (xi - 2 * xi**2 + xi**3),
-                  3 * xi**2 - 2 * xi**3, h * (-xi**2 + xi**3)])
-    dN = np.array([-6 * xi + 6 * xi**2, h * (1 - 4 * xi + 3 * xi**2),
-                   6 * xi - 6 * xi**2, h * (-2 * xi + 3 * xi**2)]) / h
-    ddN = np.array([-6 + 12 * xi, h * (-4 + 6 * xi), 6 - 12 * xi, h * (-2 + 6 * xi)]) / h**2
+    """Hermite shape functions on [0, h] at ξ ∈ [0, 1]: N, N', N'' (h may be an array of
+    element lengths: each then (4, elements))."""
+    one = np.ones_like(h)
+    N = np.array([(1 - 3 * xi**2 + 2 * xi**3) * one, h * (xi - 2 * xi**2 + xi**3),
+                  (3 * xi**2 - 2 * xi**3) * one, h * (-xi**2 + xi**3)])
+    dN = np.array([(-6 * xi + 6 * xi**2) * one, h * (1 - 4 * xi + 3 * xi**2),
+                   (6 * xi - 6 * xi**2) * one, h * (-2 * xi + 3 * xi**2)]) / h
+    ddN = np.array([(-6 + 12 * xi) * one, h * (-4 + 6 * xi), (6 - 12 * xi) * one,
+                    h * (-2 + 6 * xi)]) / h**2
     return N, dN, ddN
 
 
 def bending(nodes, EI, m, tension=None):
-    """Global K_EI, K_T (∫T y'²), M for a Hermite mesh, dofs [y0, y0', y1, y1', …]."""
-    n = len(nodes)
-    K = np.zeros((2 * n, 2 * n))
-    KT = np.zeros_like(K)
-    M = np.zeros_like(K)
-    for e in range(n - 1):
-        x0, h = nodes[e], nodes[e + 1] - nodes[e]
-        idx = slice(2 * e, 2 * e + 4)
-        for xg, wg in zip(GAUSS_X, GAUSS_W):
-            xi = 0.5 * (xg + 1)
-            w = 0.5 * wg * h
-            N, dN, ddN = hermite(xi, h)
-            K[idx, idx] += w * EI * np.outer(ddN, ddN)
-            M[idx, idx] += w * m * np.outer(N, N)
-            if tension is not None:
-                KT[idx, idx] += w * tension(x0 + xi * h) * np.outer(dN, dN)
-    return K, KT, M
+    """Global K_EI, K_T (∫T y'²), M for a Hermite mesh, dofs [y0, y0', y1, y1', …]; the
+    element matrices of all elements at once (`tension` is called with arrays of x)."""
+    nodes = np.asarray(nodes, float)
+    x0, h = nodes[:-1], np.diff(nodes)
+    Ke = np.zeros((len(h), 4, 4))
+    KTe = np.zeros_like(Ke)
+    Me = np.zeros_like(Ke)
+    for xg, wg in zip(GAUSS_X, GAUSS_W):
+        xi = 0.5 * (xg + 1)
+        w = 0.5 * wg * h
+        N, dN, ddN = hermite(xi, h)                      # each (4, elements)
+        Ke += np.einsum("e,ie,je->eij", w * EI, ddN, ddN)
+        Me += np.einsum("e,ie,je->eij", w * m, N, N)
+        if tension is not None:
+            T = np.broadcast_to(tension(x0 + xi * h), h.shape)
+            KTe += np.einsum("e,ie,je->eij", w * T, dN, dN)
+    return tuple(assemble(E, 2) for E in (Ke, KTe, Me))
+
+
+def assemble(E, step):
+    """Global matrix of element matrices E (elements, k, k) whose dofs start `step` apart."""
+    k = E.shape[1]
+    n = step * (len(E) - 1) + k
+    G = np.zeros((n, n))
+    for e, Ee in enumerate(E):
+        G[step * e:step * e + k, step * e:step * e + k] += Ee
+    return G
 
 
 def quadratic_nodes(n_el, L):

@@ -35,10 +35,10 @@ def isotropic_eigen(p, nodes, spin):
     nu2, W = lowest_modes(K, M, n)
     nu = np.sqrt(nu2)
     sigma = np.concatenate([nu - spin, -nu - spin])
-    W2 = np.concatenate([W, W], axis=1)
     if spin == 0:                 # planes decoupled: one planar mode in each ([W; 0], [0; W])
         V = np.block([[W, np.zeros_like(W)], [np.zeros_like(W), W]]).astype(complex)
     else:                         # circular whirl: u = W cos σt, v = W sin σt
+        W2 = np.concatenate([W, W], axis=1)
         V = np.concatenate([W2, -1j * np.sign(sigma) * W2])
     keep = np.abs(sigma) > 1e-9 * np.concatenate([nu, nu])    # σ = 0: static, no frequency
     order = np.argsort(np.abs(sigma[keep]), kind="stable")

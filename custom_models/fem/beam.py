@@ -25,33 +25,40 @@ def hermite(xi, h):
 
 
 def bending(nodes, EI, m, tension=None):
-    """Global K_EI, K_T (∫T y'²), M for a Hermite mesh, dofs [y0, y0', y1, y1', …]; the
-    element matrices of all elements at once (`tension` is called with arrays of x)."""
+    """Global K_EI, K_T (∫T y'²), M for a Hermite mesh, dofs [y0, y0', y1, y1', …]. The
+    Gauss-point terms of all elements are formed at once, then added element by element and
+    point by point: the summation order of a plain loop, so the matrices are the same to the
+    last bit (the helicopter's fem frequencies move by 4e-8 if the order changes)."""
     nodes = np.asarray(nodes, float)
     x0, h = nodes[:-1], np.diff(nodes)
-    Ke = np.zeros((len(h), 4, 4))
-    KTe = np.zeros_like(Ke)
-    Me = np.zeros_like(Ke)
+    terms = {"K": [], "KT": [], "M": []}
     for xg, wg in zip(GAUSS_X, GAUSS_W):
         xi = 0.5 * (xg + 1)
         w = 0.5 * wg * h
         N, dN, ddN = hermite(xi, h)                      # each (4, elements)
-        Ke += np.einsum("e,ie,je->eij", w * EI, ddN, ddN)
-        Me += np.einsum("e,ie,je->eij", w * m, N, N)
+        terms["K"].append(outer(w * EI, ddN))
+        terms["M"].append(outer(w * m, N))
         if tension is not None:
-            T = np.broadcast_to(tension(x0 + xi * h), h.shape)
-            KTe += np.einsum("e,ie,je->eij", w * T, dN, dN)
-    return tuple(assemble(E, 2) for E in (Ke, KTe, Me))
+            # called per point as in a plain loop (x**2 of a scalar and of an array may
+            # round differently)
+            T = np.array([tension(x) for x in x0 + xi * h], float)
+            terms["KT"].append(outer(w * T, dN))
+    n = 2 * len(nodes)
+    K, KT, M = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
+    for e in range(len(h)):
+        idx = slice(2 * e, 2 * e + 4)
+        for g in range(len(GAUSS_X)):
+            K[idx, idx] += terms["K"][g][e]
+            M[idx, idx] += terms["M"][g][e]
+            if tension is not None:
+                KT[idx, idx] += terms["KT"][g][e]
+    return K, KT, M
 
 
-def assemble(E, step):
-    """Global matrix of element matrices E (elements, k, k) whose dofs start `step` apart."""
-    k = E.shape[1]
-    n = step * (len(E) - 1) + k
-    G = np.zeros((n, n))
-    for e, Ee in enumerate(E):
-        G[step * e:step * e + k, step * e:step * e + k] += Ee
-    return G
+def outer(scale, f):
+    """scale_e · f_i f_j per element e, (elements, 4, 4), rounded as scale · np.outer(f, f)."""
+    scale = np.broadcast_to(scale, f.shape[1:])
+    return scale[:, None, None] * (f.T[:, :, None] * f.T[:, None, :])
 
 
 def quadratic_nodes(n_el, L):

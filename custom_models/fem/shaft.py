@@ -1,51 +1,74 @@
 """`fem` leaf for `spinning-shaft`: Hermite cubic elements in both bending planes, rotating
 frame, with the gyroscopic matrix of the physical Coriolis terms and the spin softening:
-    M q̈ + Ω G q̇ + (K − Ω² M) q = 0,   G = 2 [[0, −M_b], [M_b, 0]] (u, v blocks),
-solved as the quadratic eigenproblem in μ = 1/λ (K μ² + Ω G μ + M = 0, linearised), which
-keeps the low modes' digits. Eigenvalues with Re λ > 0 (static divergence inside an
-anisotropic instability band) are reported in notes and extra["unstable"], not as frequencies.
+    M q̈ + Ω G q̇ + (K − Ω² M) q = 0,   G = 2 [[0, −M_b], [M_b, 0]] (u, v blocks).
+Isotropic (K_u = K_v = K_b): w = u + i v turns this exactly into M_b ẅ + 2iΩ M_b ẇ +
+(K_b − Ω² M_b) w = 0, whose roots w ∝ e^{iσt} are σ = ±ν − Ω with K_b W = ν² M_b W, the
+shaft at rest — one symmetric eigenproblem of one plane. Anisotropic: solved as the
+quadratic eigenproblem in μ = 1/λ (K μ² + Ω G μ + M = 0, linearised), which keeps the low
+modes' digits. Eigenvalues with Re λ > 0 (static divergence inside an anisotropic
+instability band) are reported in notes and extra["unstable"], not as frequencies.
 Convergence: n and 2n elements, Richardson h⁴ extrapolation of the frequencies.
 """
 import numpy as np
-from scipy.linalg import eig
+from scipy.linalg import eig, eigvals
 
 from compare.contract import LeafModes, merge_settings
 from compare.physics.mstmm import spinning_shaft_omega0
 from compare.physics.whirl import whirl_labels
 
-from .beam import bending
+from .beam import bending, lowest_modes
 
 MODES_SETTINGS = {"elements": 24, "stations": 13, "richardson": True}
 
 
-def matrices(p, n_el, spin):
-    nodes = np.linspace(0.0, p["L"], n_el + 1)
-    Ku, _, Mb = bending(nodes, p["EI_yy"], p["m"])
-    Kv, _, _ = bending(nodes, p["EI_xx"], p["m"])
-    f = slice(2, None)                                   # clamped root
-    Ku, Kv, Mb = Ku[f, f], Kv[f, f], Mb[f, f]
+def plane(nodes, EI, m):
+    """K, M of one bending plane, root clamped."""
+    K, _, M = bending(nodes, EI, m)
+    return K[2:, 2:], M[2:, 2:]
+
+
+def isotropic_eigen(p, nodes, spin):
+    """λ = iσ and eigenvectors [u; v] of the isotropic shaft, sorted by |λ|: each ν gives
+    σ = ν − Ω and −ν − Ω; a root with σ < 0 is kept as its conjugate (|σ|, [W; iW])."""
+    K, M = plane(nodes, p["EI_xx"], p["m"])
+    n = K.shape[0]
+    nu2, W = lowest_modes(K, M, n)
+    nu = np.sqrt(nu2)
+    sigma = np.concatenate([nu - spin, -nu - spin])
+    if spin == 0:                 # planes decoupled: one planar mode in each ([W; 0], [0; W])
+        V = np.block([[W, np.zeros_like(W)], [np.zeros_like(W), W]]).astype(complex)
+    else:                         # circular whirl: u = W cos σt, v = W sin σt
+        W2 = np.concatenate([W, W], axis=1)
+        V = np.concatenate([W2, -1j * np.sign(sigma) * W2])
+    keep = np.abs(sigma) > 1e-9 * np.concatenate([nu, nu])    # σ = 0: static, no frequency
+    order = np.argsort(np.abs(sigma[keep]), kind="stable")
+    return 1j * np.abs(sigma[keep][order]), V[:, keep][:, order], n
+
+
+def state_eigen(p, nodes, spin, vectors=True):
+    """λ (rad/s, complex) and eigenvectors of M λ² + G λ + K = 0, sorted by |λ|."""
+    Ku, Mb = plane(nodes, p["EI_yy"], p["m"])
+    Kv, _ = plane(nodes, p["EI_xx"], p["m"])
     n = Mb.shape[0]
     Z = np.zeros((n, n))
     M = np.block([[Mb, Z], [Z, Mb]])
     K = np.block([[Ku, Z], [Z, Kv]]) - spin**2 * M
     G = 2 * spin * np.block([[Z, -Mb], [Mb, Z]])
-    return K, G, M, n
-
-
-def eigen(p, n_el, spin):
-    """λ (rad/s, complex) and eigenvectors of M λ² + G λ + K = 0, sorted by |λ|."""
-    K, G, M, n = matrices(p, n_el, spin)
     N = 2 * n
     A = np.block([[np.zeros((N, N)), np.eye(N)],
                   [-np.linalg.solve(K, M), -np.linalg.solve(K, G)]])
-    mu, V = eig(A)
+    mu, V = eig(A) if vectors else (eigvals(A), np.zeros((2 * N, 2 * N)))
     lam = 1.0 / mu
     order = np.argsort(np.abs(lam))
     return lam[order], V[:N, order], n
 
 
-def solve(p, n_el, spin, n_modes):
-    lam, V, n = eigen(p, n_el, spin)
+def solve(p, n_el, spin, n_modes, vectors=True):
+    nodes = np.linspace(0.0, p["L"], n_el + 1)
+    if p["EI_xx"] == p["EI_yy"]:
+        lam, V, n = isotropic_eigen(p, nodes, spin)
+    else:
+        lam, V, n = state_eigen(p, nodes, spin, vectors)
     keep = [i for i in range(len(lam)) if lam[i].imag > 1e-9 * abs(lam[i])]
     unstable = [float(lam[i].real) for i in range(len(lam))
                 if lam[i].real > 1e-9 * abs(lam[i]) and abs(lam[i].imag) <= 1e-9 * abs(lam[i])]
@@ -62,7 +85,7 @@ def modes(params: dict, settings: dict) -> LeafModes:
     k = n_st - 1
     n_el = max(int(s["elements"]), k * int(np.ceil(4 * p["n_modes"] / k)))
     n_el = k * int(np.ceil(n_el / k))
-    w, V, n, unstable = solve(p, n_el, spin, p["n_modes"])
+    w, V, n, unstable = solve(p, n_el, spin, p["n_modes"], vectors=not s["richardson"])
     err, change = 0.0, None
     if s["richardson"]:
         w2, V, n, unstable = solve(p, 2 * n_el, spin, p["n_modes"])

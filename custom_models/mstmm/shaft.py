@@ -26,7 +26,7 @@ from compare.contract import LeafModes, merge_settings
 from compare.physics.mstmm import spinning_shaft_omega0
 from compare.physics.whirl import whirl_labels
 
-from .elements import coupled_fourth_order_transfer, orthonormalize, shaft_coupling
+from .elements import shaft_tip_det
 from .roots import find_roots, root_error_hz
 
 MODES_SETTINGS = {"rtol": 1e-12, "stations": 13}
@@ -44,36 +44,13 @@ def first_order_matrix(EIx, EIy, m, omega, spin):
     return A
 
 
-def n_segments(EIx, EIy, m, omega, spin, L):
-    k = m * (abs(omega) + abs(spin)) ** 2
-    beta = (k / min(EIx, EIy)) ** 0.25
-    return max(1, int(np.ceil(beta * L / 1.5)))
-
-
-def clamped_tip_basis(p, omega, spin):
-    """Orthonormal basis of the clamped-root solutions at the tip, in derivative form."""
-    EIx, EIy, m, L = p["EI_xx"], p["EI_yy"], p["m"], p["L"]
-    n = n_segments(EIx, EIy, m, omega, spin, L)
-    U = coupled_fourth_order_transfer(shaft_coupling(EIx, EIy, m, omega, spin), L / n)
-    Q = np.zeros((8, 4))
-    Q[2, 0] = Q[3, 1] = Q[6, 2] = Q[7, 3] = 1.0          # U'', U''', V'', V''' free at the root
-    for _ in range(n):
-        Q = orthonormalize(U @ Q)
-    return Q
-
-
 def characteristic(p, spin, plane=None):
-    """Scaled det of the tip resultants. At rest the planes decouple and each has simple
-    roots (together they would give exact double roots): plane 'u' or 'v' solves one."""
-    rows, cols = {None: ([2, 3, 6, 7], slice(None)), "u": ([2, 3], [0, 1]),
-                  "v": ([6, 7], [2, 3])}[plane]
-
-    def g(omega):
-        Q = clamped_tip_basis(p, omega, spin)
-        if plane is not None:                    # basis columns stay in their plane at rest
-            Q = orthonormalize(np.ascontiguousarray(Q[:, cols]))
-        return float(np.linalg.det(Q[np.ix_(rows, range(Q.shape[1]))]))
-    return g
+    """Scaled det of the tip resultants (elements.shaft_tip_det). At rest the planes decouple
+    and each has simple roots (together they would give exact double roots): plane 'u' or
+    'v' solves one."""
+    code = {None: 0, "u": 1, "v": 2}[plane]
+    args = (float(p["EI_xx"]), float(p["EI_yy"]), float(p["m"]), float(p["L"]))
+    return lambda omega: shaft_tip_det(*args, float(omega), float(spin), code)
 
 
 def shape(p, omega, spin, stations):
@@ -84,8 +61,11 @@ def shape(p, omega, spin, stations):
     _, _, vt = np.linalg.svd(tip[np.ix_([2, 3, 6, 7], [2, 3, 6, 7])])
     y0 = np.zeros(8)
     y0[[2, 3, 6, 7]] = vt[-1]
-    xs = np.linspace(0, L, stations)
-    ys = np.array([expm(A * x) @ y0 for x in xs])
+    step = expm(A * L / (stations - 1))
+    ys = [y0]
+    for _ in range(stations - 1):
+        ys.append(step @ ys[-1])
+    ys = np.array(ys)
     s = np.concatenate([ys[:, 0], ys[:, 4]])
     return s / s[np.argmax(np.abs(s))]
 
@@ -97,7 +77,10 @@ def modes(params: dict, settings: dict) -> LeafModes:
     spin = p["spin_ratio"] * w0
     planes = ("u", "v") if spin == 0 else (None,)
     EImax = max(p["EI_xx"], p["EI_yy"])
-    omega_max = (4.0 + p["spin_ratio"]) * w0 * np.sqrt(EImax / p["EI_xx"])
+    # n_modes + 1 roots lie below the k-th non-rotating frequency (< (kπ)² ω₀) plus the spin
+    # for k = ⌈(n_modes + 1)/2⌉ (two roots per k: planes or whirls); the loop widens if not
+    k = (p["n_modes"] + 2) // 2
+    omega_max = ((k * np.pi) ** 2 + p["spin_ratio"]) * w0 * np.sqrt(EImax / p["EI_xx"])
     while True:
         # wavenumber grid: β L = (m (ω+Ω)²/EI)^¼ L in steps of 0.2 rad
         bl_max = (p["m"] * (omega_max + spin) ** 2 / min(p["EI_xx"], p["EI_yy"])) ** 0.25 * p["L"]

@@ -115,7 +115,7 @@ def test_second_campaign_on_the_same_folder_is_refused_naming_the_owner(tmp_path
     f = tmp_path / "slow.toml"
     f.write_text(TWO_QUICK)
     out = tmp_path / "out"
-    first = popen(["campaign", str(f), "--out", str(out)])
+    first = popen(["campaign", str(f), "--out", str(out), "--workers", "1"])
     lock = out / "campaign" / "slow" / ".lock"
     # its job store exists (a campaign folder to `xval diff`) once the first job has begun
     _wait_for(lambda: (_owner(lock) and (lock.parent / "jobs").is_dir())

@@ -63,10 +63,6 @@ def pytest_configure(config):
     # here, not in pyproject.toml: an ini filter naming numba's class imports numba, so numpy,
     # before this file sets one BLAS thread
     config.addinivalue_line("filterwarnings", "ignore::numba.NumbaPerformanceWarning")
-    if getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput"):
-        # the xdist controller: compile once, the workers load
-        import warm_numba
-        warm_numba.warm_all()
 
 
 def pytest_addoption(parser):

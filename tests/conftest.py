@@ -36,6 +36,20 @@ def pytest_xdist_make_scheduler(config, log):
     return ByModule(config, log)
 
 
+# the longest modules first (seconds per module, default run on 2 busy cores: test_diff 247,
+# test_faults 206, test_cross_solvers 184, test_sail 176, test_plugin 176, test_campaign_scale
+# 166, test_helicopter_engines 153; the rest ≤ 128): a worker takes the next module when it has
+# two tests left, so a long module taken last kept one worker busy alone at the end
+LONGEST = ("tests/test_diff.py", "tests/test_faults.py", "tests/test_cross_solvers.py",
+           "tests/test_sail.py", "tests/test_plugin.py", "tests/test_campaign_scale.py",
+           "tests/test_helicopter_engines.py")
+
+
+def pytest_collection_modifyitems(config, items):
+    rank = {m: i for i, m in enumerate(LONGEST)}
+    items.sort(key=lambda it: rank.get(it.nodeid.split("::", 1)[0], len(LONGEST)))
+
+
 @pytest.fixture(scope="session")
 def rotor_default_run(tmp_path_factory):
     """`xval run rotor-spinup --json` with every solver, once per xdist worker."""

@@ -69,7 +69,7 @@ def test_resume_reruns_a_job_whose_inputs_changed_and_reuses_it_when_they_come_b
         camp = _campaign(tmp_path, [{"name": "spin", "scene": "rotor-spinup",
                                      "set": {"torque": torque, "t_end": 1},
                                      "solvers": ["euler-vector", "quaternion"]}])
-        rc, so, se = xval("campaign", camp, "--out", out, "--json")
+        rc, so, se = xval("campaign", camp, "--out", out, "--json", "--workers", "1")
         assert rc == 0, se
         s = json.loads(so)
         finals.append((s["n_reused"], _final_omega(s)))

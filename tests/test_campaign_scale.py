@@ -57,9 +57,10 @@ def test_dask_local_cluster_gives_the_process_pools_results(tmp_path):
 
 
 def _start(camp, out):
+    # one worker: killing mid-run is the check, not parallel jobs
     return subprocess.Popen([sys.executable, "-m", "compare", "campaign", camp, "--out", out,
-                             "--json"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            start_new_session=True)     # its own process group, workers too
+                             "--json", "--workers", "1"], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, start_new_session=True)  # own group
 
 
 def _kill_group(p):

@@ -6,6 +6,8 @@ the verdict is the scene's own (deviation ≤ both solvers' error estimates + th
 allowance), on a short case of each scene. `test_a_one_percent_error_in_the_custom_solver_is_a_
 disagreement` proves the check's power on the press: J1 × 1.01 reaching both custom solvers.
 """
+import functools
+
 import numpy as np
 import pytest
 
@@ -31,22 +33,33 @@ PAIRS = [(sc, c) for sc in CASES for c in SCENES[sc].leaves
          if solvers.get_solver(c).engine not in ("exudyn", "mujoco")]
 
 
+def _run(scene_name, solver, change=None):
+    """`solver` on the scene's case (its parameters changed by `change`), at its defaults."""
+    sc = get_scene(scene_name)
+    p = sc.resolve(CASES[scene_name])
+    q = change(p) if change else p
+    s = solvers.get_solver(solver)
+    if sc.is_modes:
+        return solvers.modes(sc, s, q)
+    return solvers.simulate(sc, s, q, solvers.settings_for(s, sc.name),
+                            estimate_error=sc.error_estimate)
+
+
+@functools.cache
+def _engine_run(scene_name):
+    """The scene's engine on its case: once per module, shared by the scene's custom solvers
+    (the engine's inputs are the same for each; sail-deploy's MuJoCo run was half of each
+    of its two tests)."""
+    return _run(scene_name, ENGINE[scene_name])
+
+
 def verdicts(scene_name, custom, change=None):
     """The scene's comparisons of `custom` (its parameters changed by `change`) with the
     scene's engine at the case's parameters."""
     sc = get_scene(scene_name)
-    p = sc.resolve(CASES[scene_name])
-    runs = []
-    for name in (custom, ENGINE[scene_name]):
-        s = solvers.get_solver(name)
-        q = change(p) if change and name == custom else p
-        if sc.kind == "modes":
-            runs.append(solvers.modes(sc, s, q))
-        else:
-            runs.append(solvers.simulate(sc, s, q, solvers.settings_for(s, sc.name),
-                                         estimate_error=sc.error_estimate))
+    runs = [_run(scene_name, custom, change), _engine_run(scene_name)]
     assert all(r.status == "ok" for r in runs), [(r.solver, r.status, r.reason) for r in runs]
-    return sc.verdicts(p, runs)
+    return sc.verdicts(sc.resolve(CASES[scene_name]), runs)
 
 
 @pytest.mark.parametrize("scene_name, custom", PAIRS, ids=lambda x: x)

@@ -1,6 +1,7 @@
 """`xval diff` and baselines on a tiny campaign (2 cases × 2 rotor solvers, 0.5 s each) run
 three times: twice as is (A, B) and once with the drive torque of one case changed by 1e-6
-relative (C, from a copy of A: only that case's jobs run again)."""
+relative (C, from a copy of A: only that case's jobs run again). One worker per campaign: a
+second would only add its start-up (imports, kernels loaded) to jobs of a fraction of a second."""
 import json
 import shutil
 
@@ -35,10 +36,12 @@ def folders(tmp_path_factory):
     (root / "tiny.toml").write_text(TINY % TORQUE)
     (root / "moved.toml").write_text(TINY % (TORQUE * (1 + 1e-6)))
     for name in ("A", "B"):
-        rc, so, se = xval("campaign", str(root / "tiny.toml"), "--out", str(root / name))
+        rc, so, se = xval("campaign", str(root / "tiny.toml"), "--out", str(root / name),
+                          "--workers", "1")
         assert rc == 0, se
     shutil.copytree(root / "A", root / "C")
-    rc, so, se = xval("campaign", str(root / "moved.toml"), "--out", str(root / "C"))
+    rc, so, se = xval("campaign", str(root / "moved.toml"), "--out", str(root / "C"),
+                      "--workers", "1")
     assert rc == 0, se
     assert "2 run, 2 reused" in so            # only the changed case ran again
     return {k: root / k / "campaign" / "tiny" for k in "ABC"} | {"root": root}
@@ -239,7 +242,7 @@ def test_campaign_with_baseline_exits_1_when_results_moved(folders, tmp_path):
     sides.save_baseline(folders["A"], base)
     shutil.copytree(folders["root"] / "C", tmp_path / "C")
     rc, so, se = xval("campaign", str(folders["root"] / "moved.toml"), "--out",
-                      str(tmp_path / "C"), "--baseline", str(base))
+                      str(tmp_path / "C"), "--baseline", str(base), "--workers", "1")
     assert rc == 1, se
     assert "torque 2 → 2.000002: drive euler-vector" in so
     assert (tmp_path / "C" / "campaign" / "tiny" / "diff" / "report.md").exists()

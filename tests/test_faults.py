@@ -19,7 +19,7 @@ from compare.cli import main
 from compare.output import guard
 
 # one job of euler-vector at dt 1e-5 over 20 s (RK4, error estimate at half the step) takes
-# ~3 s on this machine (12 s under a load of 5): long enough to overlap a second process
+# ~3 s on this machine (12 s under a load of 5): long enough to be killed mid-run (test_kill)
 SLOW = """name = "slow"
 [[cases]]
 name = "spin"
@@ -29,8 +29,11 @@ dt = 1e-5
 set = { t_end = 20 }
 sweep = { torque = { start = 1.0, stop = 2.0, num = %d } }
 """
-# to interrupt: a quick job (0.2 s of spin), dispatched first, finishes while two slow ones (5 s
-# of spin: ~1 s each, ~8 s under a load of 4) still run
+# two jobs of 0.2 s of spin: the campaign that owns the folder is held (SIGSTOP) while others
+# try it, so the check does not race the jobs' length
+TWO_QUICK = SLOW.replace("t_end = 20", "t_end = 0.2") % 2
+# to interrupt: a quick job (0.2 s of spin), dispatched first, finishes while two slow ones (2 s
+# of spin: ~0.4 s each, ~3 s under a load of 4) still run: the second has just begun
 QUICK_AND_SLOW = """name = "slow"
 [[cases]]
 name = "quick"
@@ -43,7 +46,7 @@ name = "spin"
 scene = "rotor-spinup"
 solvers = ["euler-vector"]
 dt = 1e-5
-set = { t_end = 5 }
+set = { t_end = 2 }
 sweep = { torque = [1.0, 2.0] }
 """
 
@@ -110,23 +113,38 @@ def test_disk_full_during_run_one_line_no_partial_file_folder_marked(tmp_path, m
 
 def test_second_campaign_on_the_same_folder_is_refused_naming_the_owner(tmp_path, popen):
     f = tmp_path / "slow.toml"
-    f.write_text(SLOW % 2)
+    f.write_text(TWO_QUICK)
     out = tmp_path / "out"
-    first = popen(["campaign", str(f), "--out", str(out)])
+    first = popen(["campaign", str(f), "--out", str(out), "--workers", "1"])
     lock = out / "campaign" / "slow" / ".lock"
-    _wait_for(lambda: lock.exists() or first.poll() is not None)
-    assert first.poll() is None, first.communicate()
-    assert json.loads(lock.read_text())["pid"] == first.pid
-    rc, so, se = xval("campaign", str(f), "--out", str(out))
-    assert rc == 2 and len(se.strip().splitlines()) == 1
-    assert f"pid {first.pid}" in se and "in use" in se
-    rc, so, se = xval("diff", str(lock.parent), str(lock.parent), "--out", str(tmp_path / "d"))
-    assert rc == 2 and f"a campaign is writing this folder (pid {first.pid}" in se
+    # its job store exists (a campaign folder to `xval diff`) once the first job has begun
+    _wait_for(lambda: (_owner(lock) and (lock.parent / "jobs").is_dir())
+              or first.poll() is not None)
+    os.killpg(first.pid, signal.SIGSTOP)      # alive and holding the lock while the others try
+    try:
+        assert first.poll() is None, first.communicate()
+        assert _owner(lock) == first.pid
+        rc, so, se = xval("campaign", str(f), "--out", str(out))
+        assert rc == 2 and len(se.strip().splitlines()) == 1
+        assert f"pid {first.pid}" in se and "in use" in se
+        rc, so, se = xval("diff", str(lock.parent), str(lock.parent), "--out",
+                          str(tmp_path / "d"))
+        assert rc == 2 and f"a campaign is writing this folder (pid {first.pid}" in se
+    finally:
+        os.killpg(first.pid, signal.SIGCONT)
     so1, se1 = first.communicate(timeout=300)
     assert first.returncode == 0, se1
     assert "2 jobs (2 run, 0 reused)" in so1            # each job ran once, by the first
     assert len(list((out / "campaign" / "slow" / "jobs").glob("*.npz"))) == 2
     assert not lock.exists()
+
+
+def _owner(lock):
+    """The pid in a lock file once it is written whole, else None."""
+    try:
+        return json.loads(lock.read_text())["pid"]
+    except (OSError, ValueError):
+        return None
 
 
 def test_stale_lock_of_a_dead_process_is_taken_over_a_foreign_one_is_not(tmp_path):

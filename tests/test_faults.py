@@ -18,37 +18,23 @@ from conftest import xval
 from compare.cli import main
 from compare.output import guard
 
+
+def _case(name, t_end, sweep):
+    """One euler-vector case of the rotor spin-up at dt 1e-5 (RK4) over `t_end` s of spin."""
+    return (f'[[cases]]\nname = "{name}"\nscene = "rotor-spinup"\nsolvers = ["euler-vector"]\n'
+            f"dt = 1e-5\nset = {{ t_end = {t_end} }}\n" + (f"sweep = {sweep}\n" if sweep else ""))
+
+
 # one job of euler-vector at dt 1e-5 over 20 s (RK4, error estimate at half the step) takes
 # ~3 s on this machine (12 s under a load of 5): long enough to be killed mid-run (test_kill)
-SLOW = """name = "slow"
-[[cases]]
-name = "spin"
-scene = "rotor-spinup"
-solvers = ["euler-vector"]
-dt = 1e-5
-set = { t_end = 20 }
-sweep = { torque = { start = 1.0, stop = 2.0, num = %d } }
-"""
+SLOW = 'name = "slow"\n' + _case("spin", 20, "{ torque = { start = 1.0, stop = 2.0, num = %d } }")
 # two jobs of 0.2 s of spin: the campaign that owns the folder is held (SIGSTOP) while others
 # try it, so the check does not race the jobs' length
 TWO_QUICK = SLOW.replace("t_end = 20", "t_end = 0.2") % 2
 # to interrupt: a quick job (0.2 s of spin), dispatched first, finishes while two slow ones (2 s
 # of spin: ~0.4 s each, ~3 s under a load of 4) still run: the second has just begun
-QUICK_AND_SLOW = """name = "slow"
-[[cases]]
-name = "quick"
-scene = "rotor-spinup"
-solvers = ["euler-vector"]
-dt = 1e-5
-set = { t_end = 0.2 }
-[[cases]]
-name = "spin"
-scene = "rotor-spinup"
-solvers = ["euler-vector"]
-dt = 1e-5
-set = { t_end = 2 }
-sweep = { torque = [1.0, 2.0] }
-"""
+QUICK_AND_SLOW = ('name = "slow"\n' + _case("quick", 0.2, None)
+                  + _case("spin", 2, "{ torque = [1.0, 2.0] }"))
 
 
 @pytest.fixture

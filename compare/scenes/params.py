@@ -68,11 +68,14 @@ class Param:
                 raise BadInput(f"{self.name}: {value!r} is not one of "
                                f"{', '.join(map(str, self.choices))}")
             return value
-        values = np.atleast_1d(np.asarray(value, float))
-        if self.kind == "vector" and values.shape != (self.size,):
-            raise BadInput(f"{self.name}: needs {self.size} comma-separated numbers, "
-                           f"got {values.size}")
-        if not np.all(np.isfinite(values)):
+        if self.kind == "vector":
+            values = np.atleast_1d(np.asarray(value, float))
+            if values.shape != (self.size,):
+                raise BadInput(f"{self.name}: needs {self.size} comma-separated numbers, "
+                               f"got {values.size}")
+        else:           # a scalar without numpy's round trip: a map resolves every point
+            values = (float(value),)
+        if not all(math.isfinite(v) for v in values):
             raise BadInput(f"{self.name}: must be a finite number, got {value!r}")
         for v in values:
             low_bad = v <= self.lo if self.open_lo else v < self.lo

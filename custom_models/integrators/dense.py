@@ -130,7 +130,9 @@ def _hermite(y0, f0, y1, f1, h, x, out):
         out[j] = a0 * y0[j] + b0 * f0[j] + a1 * y1[j] + b1 * f1[j]
 
 
-def _fixed_dense(f, guard, y0, p, t_out, dt, A, B, C):
+@nb.njit(nt.Tuple((_MAT, nt.int64, nt.int64, nt.float64, nt.int64))(
+    RHS_INTO, GUARD, _VEC, _VEC, _VEC, nt.float64, _MAT, _VEC, _VEC), cache=True)
+def integrate_fixed_dense(f, guard, y0, p, t_out, dt, A, B, C):
     """Fixed step h = (t_end − t0)/N, N = ⌈(t_end − t0)/dt⌉ (h = dt when dt divides the span);
     outputs by cubic Hermite inside a step. Returns (Y, steps, rhs_evals, t_fail, code)."""
     n_out, ny, n_st = t_out.shape[0], y0.shape[0], B.shape[0]
@@ -172,7 +174,7 @@ def _fixed_dense(f, guard, y0, p, t_out, dt, A, B, C):
     return Y, n_steps, evals, np.nan, FAIL_OK
 
 
-@nb.njit(inline="always")    # f passed on as a value would keep a model's kernel off the cache
+@nb.njit(cache=True)
 def _prepare_dense(f, p, t, y, y_new, h, K, n_st, A, dense, P, AX, CX, D, F, ys):
     """Coefficients F of the step's interpolant; returns the extra evaluations it took."""
     ny = y.shape[0]
@@ -217,8 +219,11 @@ def _eval_dense(y, h, x, dense, F, n_f, out):
         out[j] = y[j] + acc
 
 
-def _adaptive_dense(f, guard, y0, p, t_out, rtol, atol, h_max, max_steps,
-                    A, B, C, E, E3, err_order, dense, P, AX, CX, D):
+@nb.njit(nt.Tuple((_MAT, nt.int64, nt.int64, nt.int64, nt.float64, nt.int64))(
+    RHS_INTO, GUARD, _VEC, _VEC, _VEC, nt.float64, nt.float64, nt.float64, nt.int64,
+    _MAT, _VEC, _VEC, _VEC, _VEC, nt.int64, nt.int64, _MAT, _MAT, _VEC, _MAT), cache=True)
+def integrate_adaptive_dense(f, guard, y0, p, t_out, rtol, atol, h_max, max_steps,
+                             A, B, C, E, E3, err_order, dense, P, AX, CX, D):
     """Error-controlled embedded RK (FSAL) with dense output; `h_max` ≤ 0 means no cap.
 
     Returns (Y, steps, rhs_evals, rejected, t_fail, code)."""
@@ -294,26 +299,6 @@ def _adaptive_dense(f, guard, y0, p, t_out, rtol, atol, h_max, max_steps,
         # a clipped last step says little about the next one: keep h unless it grew
         h = min(h_max, max(h, h_try * fac) if last else h_try * fac)
     return Y, steps, evals, rejected, np.nan, FAIL_OK
-
-
-# Each driver compiled twice. Once for every model: f and guard first-class (called through a
-# pointer), cached on disk, what `solve` runs. And typed on one model's own functions, for a
-# kernel that model compiles and caches itself (`rotor.batch`: a map's many runs): the model's
-# right-hand side inlined into the stages. A call through a pointer costs ~60 ns, about the
-# rotor's whole right-hand side (the drivers on an 8-state oscillator: 122 → 58 ns per
-# evaluation). The same arithmetic in the same order: bit for bit the same numbers. numba's disk
-# cache keys such a kernel on its own file only: after editing a driver here, delete the model
-# kernels' cache files (`custom_models/rotor/__pycache__/*points*`); a stale one fails
-# tests/test_map_batch.py, which holds the kernels' numbers to `solve`'s.
-integrate_fixed_dense = nb.njit(nt.Tuple((_MAT, nt.int64, nt.int64, nt.float64, nt.int64))(
-    RHS_INTO, GUARD, _VEC, _VEC, _VEC, nt.float64, _MAT, _VEC, _VEC), cache=True)(_fixed_dense)
-integrate_adaptive_dense = nb.njit(
-    nt.Tuple((_MAT, nt.int64, nt.int64, nt.int64, nt.float64, nt.int64))(
-        RHS_INTO, GUARD, _VEC, _VEC, _VEC, nt.float64, nt.float64, nt.float64, nt.int64,
-        _MAT, _VEC, _VEC, _VEC, _VEC, nt.int64, nt.int64, _MAT, _MAT, _VEC, _MAT),
-    cache=True)(_adaptive_dense)
-fixed_dense_inline = nb.njit(inline="always")(_fixed_dense)
-adaptive_dense_inline = nb.njit(inline="always")(_adaptive_dense)
 
 
 def solve(f, guard, y0: np.ndarray, p: np.ndarray, t_out: np.ndarray, integrator: str, *,

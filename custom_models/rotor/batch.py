@@ -2,9 +2,8 @@
 batch path (`regimes`, offered by both formulations).
 
 Every point runs the shared integrator core of `integrators.dense` on the formulation's own
-right-hand side and guard — the drivers `simulate` runs, here compiled with the formulation's
-functions inlined (bit for bit the same numbers) — on the same output grid; nothing per point
-returns to Python. From each run's rows it keeps what the map's decision
+right-hand side and guard — the same compiled calls `simulate` makes — on the same output grid;
+nothing per point returns to Python. From each run's rows it keeps what the map's decision
 needs: the integrator's code, the regime (the scene's speed levels on |ω|) and the energy
 numbers of the adapter's divergence rule (largest drift of the energy balance from its first
 value, largest |value| of each energy channel), so that the caller applies that rule as
@@ -12,15 +11,26 @@ value, largest |value| of each energy channel), so that the caller applies that 
 """
 import numba as nb
 import numpy as np
+from numba import types as nt
 
 from ..integrators import FIXED_TABLEAUS
-from ..integrators.dense import DENSE_TABLEAUS, adaptive_dense_inline, fixed_dense_inline
+from ..integrators.dense import (
+    DENSE_TABLEAUS,
+    RHS_INTO,
+    first_class,
+    integrate_adaptive_dense,
+    integrate_fixed_dense,
+)
+from ..integrators.explicit import _MAT, _VEC, GUARD
 from ..rotation import mat_tvec_t, mat_vec_t
 from .model import I0, K_, M_, RC0, G, check_settings, pack
 
+# kinematics(y, p, out): out = rotation body → fixed (9, row-major), fixed-frame ω (3), work
+KINEMATICS = nt.FunctionType(nt.void(_VEC, _VEC, _VEC))
 # per point: finite, max |E − E(0)|, then max |value| of each of ENERGY_CHANNELS
 ENERGY_CHANNELS = ("energy_balance", "kinetic", "potential", "work")
 _I0, _RC0, _G = I0.start, RC0.start, G.start
+_I64 = nt.int64[::1]
 
 
 @nb.njit(cache=True)
@@ -39,10 +49,9 @@ def _row(o, p):
     return np.sqrt(w0 * w0 + w1 * w1 + w2 * w2), kin, pot
 
 
-@nb.njit(inline="always")
+@nb.njit(cache=True)
 def _reduce(Y, p, t_out, kin, reach, stay, t_window, stats):
-    """The regime of one run's rows (`kin(y, p, out)`: out = rotation body → fixed, 9 row-major,
-    fixed-frame ω, work) (0: |ω| never reaches `reach` after t = 0, 2: it stays
+    """The regime of one run's rows (0: |ω| never reaches `reach` after t = 0, 2: it stays
     above `stay` from `t_window` on, else 1); fills `stats` (finite, drift, max |channel|)."""
     o = np.empty(13)
     first, w_min, e0, finite = -1, np.inf, 0.0, True
@@ -70,20 +79,20 @@ def _reduce(Y, p, t_out, kin, reach, stay, t_window, stats):
     return 2 if w_min > stay else 1
 
 
-@nb.njit(inline="always")
-def run_points(f, guard, kin, Y0, P, t_out, levels, window, dt, rtol, atol, h_max, max_steps,
-               tb, code, t_fail, regime, stats):
-    """A plain loop over points (dt > 0: the fixed-step driver, else the adaptive one), typed
-    on one formulation's own functions: each formulation compiles it into its `points` kernel
-    (cached there), the right-hand side inlined. The map's process pool runs one kernel per
-    core; a prange kernel in one worker was slower. `tb`: `tableau_args`."""
-    A, B, C, E, E3, err_order, dense, Pd, AX, CX, D = tb
+@nb.njit(nt.void(RHS_INTO, GUARD, KINEMATICS, _MAT, _MAT, _VEC, _MAT, nt.float64,
+                 nt.float64, nt.float64, nt.float64, nt.float64, nt.int64, _MAT, _VEC, _VEC,
+                 _VEC, _VEC, nt.int64, nt.int64, _MAT, _MAT, _VEC, _MAT, _I64, _VEC, _I64,
+                 _MAT), cache=True)
+def _kernel(f, guard, kin, Y0, P, t_out, levels, window, dt, rtol, atol, h_max, max_steps,
+            A, B, C, E, E3, err_order, dense, Pd, AX, CX, D, code, t_fail, regime, stats):
+    """A plain loop over points (dt > 0: the fixed-step driver, else the adaptive one): the
+    map's process pool runs one kernel per core; a prange kernel in one worker was slower."""
     t_window = window * t_out[t_out.shape[0] - 1]
     for i in range(Y0.shape[0]):
         if dt > 0.0:
-            Y, _, _, tf, c = fixed_dense_inline(f, guard, Y0[i], P[i], t_out, dt, A, B, C)
+            Y, _, _, tf, c = integrate_fixed_dense(f, guard, Y0[i], P[i], t_out, dt, A, B, C)
         else:
-            Y, _, _, _, tf, c = adaptive_dense_inline(
+            Y, _, _, _, tf, c = integrate_adaptive_dense(
                 f, guard, Y0[i], P[i], t_out, rtol, atol, h_max, max_steps, A, B, C, E, E3,
                 err_order, dense, Pd, AX, CX, D)
         code[i], t_fail[i] = c, tf
@@ -91,9 +100,9 @@ def run_points(f, guard, kin, Y0, P, t_out, levels, window, dt, rtol, atol, h_ma
                             stats[i])
 
 
-def regimes(points, initial_state, params_list, t_out, settings, channel, levels, window):
-    """Run every point of `params_list` on the grid `t_out` in one compiled call (`points`:
-    the formulation's kernel, `run_points` on its own functions); the regime
+def regimes(rhs_into, guard, kinematics, initial_state, params_list, t_out, settings,
+            channel, levels, window):
+    """Run every point of `params_list` on the grid `t_out` in one compiled call; the regime
     is read off `channel` (only |ω|, "omega_norm": else None). `levels`: (n, 2) per point
     (reach, stay above), `window`: the fraction of the run after which |ω| must stay above.
     Returns {"code", "t_fail", "regime", "finite", "drift", "max_abs": {channel: (n,)}}
@@ -112,11 +121,13 @@ def regimes(points, initial_state, params_list, t_out, settings, channel, levels
     tb = {**DENSE_TABLEAUS["dop853"], **(FIXED_TABLEAUS[s["integrator"]] if fixed
                                          else DENSE_TABLEAUS[s["integrator"]])}
     rtol = float(s["rtol"])
-    points(Y0, P, t_out, np.ascontiguousarray(levels, float), float(window),
-           float(s["dt"] or 1e-3) if fixed else 0.0, rtol, float(s["atol"] or rtol * 1e-2),
-           float(s["h_max"] or 0.0), int(s["max_steps"]),
-           tuple(tb[k] for k in ("A", "B", "C", "E", "E3", "err_order", "dense", "P", "AX",
-                                 "CX", "D")), code, t_fail, regime, stats)
+    _kernel(first_class(rhs_into, RHS_INTO), first_class(guard, GUARD),
+            first_class(kinematics, KINEMATICS), Y0, P, t_out,
+            np.ascontiguousarray(levels, float), float(window),
+            float(s["dt"] or 1e-3) if fixed else 0.0, rtol, float(s["atol"] or rtol * 1e-2),
+            float(s["h_max"] or 0.0), int(s["max_steps"]), tb["A"], tb["B"], tb["C"],
+            tb["E"], tb["E3"], tb["err_order"], tb["dense"], tb["P"], tb["AX"], tb["CX"],
+            tb["D"], code, t_fail, regime, stats)
     return {"code": code, "t_fail": t_fail, "regime": regime, "finite": stats[:, 0] > 0,
             "drift": stats[:, 1],
             "max_abs": {c: stats[:, 2 + k] for k, c in enumerate(ENERGY_CHANNELS)}}

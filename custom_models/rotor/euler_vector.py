@@ -147,15 +147,7 @@ def simulate(params, t_out, settings):
                         {"gamma_axial": float(gamma_axial)})
 
 
-@nb.njit(cache=True)
-def points(Y0, P, t_out, levels, window, dt, rtol, atol, h_max, max_steps, tb, code, t_fail,
-           regime, stats):
-    """`batch.run_points` on this formulation's functions (compiled and cached here)."""
-    batch.run_points(rhs_into, guard, kinematics, Y0, P, t_out, levels, window, dt, rtol, atol,
-                     h_max, max_steps, tb, code, t_fail, regime, stats)
-
-
 def regimes(params_list, t_out, settings, channel, levels, window):
     """Many points in one compiled call, each reduced to its regime (`batch.regimes`)."""
-    return batch.regimes(points, initial_state, params_list, t_out, settings, channel, levels,
-                         window)
+    return batch.regimes(rhs_into, guard, kinematics, initial_state, params_list, t_out,
+                         settings, channel, levels, window)

@@ -211,12 +211,15 @@ def _eval_dense(y, h, x, dense, F, n_f, out):
                 acc = (acc + F[k, j]) * x
             out[j] = y[j] + h * acc
         return
-    for j in range(ny):                          # scipy's Dop853DenseOutput
-        acc = 0.0
-        for i in range(n_f):
-            acc += F[n_f - 1 - i, j]
-            acc *= x if i % 2 == 0 else 1.0 - x
-        out[j] = y[j] + acc
+    # scipy's Dop853DenseOutput, the states in the inner loop (the same operations per state)
+    for j in range(ny):
+        out[j] = 0.0
+    for i in range(n_f):
+        m = x if i % 2 == 0 else 1.0 - x
+        for j in range(ny):
+            out[j] = (out[j] + F[n_f - 1 - i, j]) * m
+    for j in range(ny):
+        out[j] = y[j] + out[j]
 
 
 @nb.njit(nt.Tuple((_MAT, nt.int64, nt.int64, nt.int64, nt.float64, nt.int64))(

@@ -103,22 +103,23 @@ def guard(t, y, p):
 
 
 @nb.njit(cache=True)
-def kinematics(y, p, out):
-    """One row of `motion` (rotation row-major, fixed-frame ω, work) for the batch path; L and
-    ω = L I₀⁻¹ Lᵀ K as `rhs_into` forms them."""
-    Lg = rotation_t(y[3], y[4], y[5])
-    c, s = np.cos(y[6]), np.sin(y[6])
-    L = (c * Lg[0] + s * Lg[1], c * Lg[1] - s * Lg[0], Lg[2],
-         c * Lg[3] + s * Lg[4], c * Lg[4] - s * Lg[3], Lg[5],
-         c * Lg[6] + s * Lg[7], c * Lg[7] - s * Lg[6], Lg[8])
-    for k in range(9):
-        out[k] = L[k]
-    u = mat_tvec_t(L, y[0], y[1], y[2])
+def kinematics(Y, p, out):
+    """The rows of `motion` (rotation row-major, fixed-frame ω, work) for the batch path; L
+    and ω = L I₀⁻¹ Lᵀ K as `rhs_into` forms them."""
     J = p[_I0INV:_I0INV + 9]
-    out[9], out[10], out[11] = mat_vec_t(L, J[0] * u[0] + J[1] * u[1] + J[2] * u[2],
-                                         J[3] * u[0] + J[4] * u[1] + J[5] * u[2],
-                                         J[6] * u[0] + J[7] * u[1] + J[8] * u[2])
-    out[12] = y[7]
+    for i in range(Y.shape[0]):
+        Lg = rotation_t(Y[i, 3], Y[i, 4], Y[i, 5])
+        c, s = np.cos(Y[i, 6]), np.sin(Y[i, 6])
+        L = (c * Lg[0] + s * Lg[1], c * Lg[1] - s * Lg[0], Lg[2],
+             c * Lg[3] + s * Lg[4], c * Lg[4] - s * Lg[3], Lg[5],
+             c * Lg[6] + s * Lg[7], c * Lg[7] - s * Lg[6], Lg[8])
+        for k in range(9):
+            out[i, k] = L[k]
+        u = mat_tvec_t(L, Y[i, 0], Y[i, 1], Y[i, 2])
+        out[i, 9], out[i, 10], out[i, 11] = mat_vec_t(L, J[0] * u[0] + J[1] * u[1] + J[2] * u[2],
+                                                      J[3] * u[0] + J[4] * u[1] + J[5] * u[2],
+                                                      J[6] * u[0] + J[7] * u[1] + J[8] * u[2])
+        out[i, 12] = Y[i, 7]
 
 
 def motion(Y, p):

@@ -84,13 +84,14 @@ def guard(t, y, p):
 
 
 @nb.njit(cache=True)
-def kinematics(y, p, out):
-    """One row of `motion` (rotation row-major, fixed-frame ω, work) for the batch path."""
-    R = quat_matrix_t(y[0], y[1], y[2], y[3])
-    for k in range(9):
-        out[k] = R[k]
-    out[9], out[10], out[11] = mat_vec_t(R, y[4], y[5], y[6])
-    out[12] = y[7]
+def kinematics(Y, p, out):
+    """The rows of `motion` (rotation row-major, fixed-frame ω, work) for the batch path."""
+    for i in range(Y.shape[0]):
+        R = quat_matrix_t(Y[i, 0], Y[i, 1], Y[i, 2], Y[i, 3])
+        for k in range(9):
+            out[i, k] = R[k]
+        out[i, 9], out[i, 10], out[i, 11] = mat_vec_t(R, Y[i, 4], Y[i, 5], Y[i, 6])
+        out[i, 12] = Y[i, 7]
 
 
 def motion(Y, p):

@@ -22,11 +22,12 @@ MODES_SETTINGS = {"fd_step": 1e-6}
 def _reduced_rhs(p, x, c_ext=0.0, c_int=0.0, phi=0.0):
     """The reduced right-hand side (K', γ_x', γ_y') at x = (K, γ_x, γ_y) and axial turn φ, the
     dampers' moments added to K'."""
-    kin = np.empty(13)
+    kin = np.empty((1, 13))
     y = np.zeros(8)
     y[0:3], y[3:5], y[6] = x[0:3], x[3:5], phi
     d = rhs(0.0, y, p)
-    kinematics(y, p, kin)                                  # kin[9:12]: ω in the fixed frame
+    kinematics(y[None, :], p, kin)
+    kin = kin[0]                                           # kin[9:12]: ω in the fixed frame
     d[0:3] -= c_ext * d[3:6] + c_int * (d[3:6] - np.cross(kin[9:12], y[3:6]))
     return np.concatenate([d[0:3], d[3:5]])
 

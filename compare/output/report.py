@@ -33,7 +33,13 @@ def fmt_value(x, digits=6):
     return format(float(x), f".{digits}g") if isinstance(x, (float, np.floating)) else str(x)
 
 
-STYLE = {"axes.formatter.useoffset": False, "font.size": 9, "axes.formatter.limits": (-4, 5)}
+DPI = 110
+# figure.dpi = the saved dpi: tight_layout then measures the text with the canvas's renderer
+# that savefig reuses (Agg keeps it while size and dpi hold), so the text is laid out once,
+# not at 100 dpi for the layout and again at 110 for the file (text measurements per figure
+# halved; channels + deviation of a 1 s spin-up 1.94 → 1.66 CPU-s, mean of 5, shared machine)
+STYLE = {"axes.formatter.useoffset": False, "font.size": 9, "axes.formatter.limits": (-4, 5),
+         "figure.dpi": DPI}
 
 
 def plot_style():
@@ -55,7 +61,7 @@ _plt = plot_style
 def save_figure(fig, path):
     """Write the figure atomically; returns its file name (for the Markdown link)."""
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
+        fig.savefig(tmp, dpi=DPI, format="png")
     _plt().close(fig)
     return Path(path).name
 
@@ -89,15 +95,17 @@ def channels_figure(result, channels=None):
     where the scene has one. A bare matplotlib Figure (no pyplot state: a notebook shows the
     returned figure once, the report saves it)."""
     import matplotlib
-    from matplotlib.figure import Figure
     with matplotlib.rc_context(STYLE):     # the report's style, the caller's rcParams kept
-        return _channels_figure(result, list(channels or result.scene.channels), Figure)
+        return _channels_figure(result, list(channels or result.scene.channels))
 
 
-def _channels_figure(result, chs, Figure):
+def _channels_figure(result, chs):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
     ncol = 2 if len(chs) > 1 else 1
     nrow = (len(chs) + ncol - 1) // ncol
     fig = Figure(figsize=(11 if ncol == 2 else 7, 2.6 * nrow))
+    FigureCanvasAgg(fig)                   # its renderer, kept from the layout to the file
     axes = fig.subplots(nrow, ncol, sharex=True, squeeze=False)
     for ax, ch in zip(axes.flat, chs):
         flat = any(_flat(tr.channels[ch]) for tr in result.trajectories)

@@ -26,7 +26,7 @@ from ..rotation import mat_tvec_t, mat_vec_t
 from .model import I0, K_, M_, RC0, G, check_settings, pack
 
 # kinematics(Y, p, O): each row of O = rotation body → fixed (9, row-major), fixed-frame ω (3),
-# work of that row of Y — one call per run (a call through a pointer per row cost ~60 ns)
+# work of that row of Y — one call per run, not one call through a pointer per row
 KINEMATICS = nt.FunctionType(nt.void(_MAT, _VEC, _MAT))
 # per point: finite, max |E − E(0)|, then max |value| of each of ENERGY_CHANNELS
 ENERGY_CHANNELS = ("energy_balance", "kinetic", "potential", "work")

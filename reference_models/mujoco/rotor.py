@@ -516,6 +516,18 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict) -> dict:
     return _run(params, t_out, s)
 
 
+def _uniform_steps(t_out, dt):
+    """(steps per output interval, step) where the grid is uniform but for round-off (np.diff
+    of a linspace) and no coarser than dt: the whole run is one step size, so one rollout.
+    None otherwise."""
+    intervals = np.diff(t_out)
+    if not intervals.size or dt > intervals.min() * (1 + 1e-9) or \
+            np.ptp(intervals) > 1e-9 * intervals.mean():
+        return None
+    n = max(1, int(math.ceil(intervals[0] / dt - 1e-9)))
+    return n, float((t_out[-1] - t_out[0]) / (n * intervals.size))
+
+
 def _run(params, t_out, s, model=None):
     """`simulate` on checked settings and grid; `model`: a compiled one to reuse (`_build`)."""
     m, d, bid = _build(params, s, s["integrator"], float(params["torque"]), model)
@@ -530,10 +542,9 @@ def _run(params, t_out, s, model=None):
     else:
         ns = np.maximum(1, np.ceil(intervals / dt - 1e-9).astype(int))
         chunks = list(zip(ns.tolist(), (intervals / ns).tolist()))
-        # uniform but for round-off (np.diff of a linspace): one step, so one rollout
-        if intervals.size and np.ptp(intervals) <= 1e-9 * intervals.mean():
-            h = (t_out[-1] - t_out[0]) / (ns[0] * intervals.size)
-            chunks = [(int(ns[0]), float(h))] * intervals.size
+        one_step = _uniform_steps(t_out, dt)
+        if one_step:
+            chunks = [one_step] * intervals.size
         step_t = t_out
     nrec = len(chunks) + 1
     quat = np.full((nrec, 4), np.nan)
@@ -635,13 +646,10 @@ def _rolled_together(m, group, t_out, s):
     makes the roll's state NaN (`_U_POISON`): such a run comes back `diverged` and the caller
     runs it alone, which says why. None where `_run` would not take one rollout (Python
     callback, a step longer than the output step, an uneven grid)."""
-    intervals = np.diff(t_out)
-    if not intervals.size or np.ptp(intervals) > 1e-9 * intervals.mean() or \
-            s["dt"] > intervals.min() * (1 + 1e-9) or s["callback"] != "native" or \
-            _native_callback() is None:
+    one_step = _uniform_steps(t_out, s["dt"])
+    if one_step is None or s["callback"] != "native" or _native_callback() is None:
         return None
-    n_per = int(np.ceil(intervals[0] / s["dt"] - 1e-9))
-    m.opt.timestep = (t_out[-1] - t_out[0]) / (n_per * intervals.size)
+    n_per, m.opt.timestep = one_step
     d = mujoco.MjData(m)
     bid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "rotor")
     spec = _XFRC.value | _USER.value
@@ -652,7 +660,7 @@ def _rolled_together(m, group, t_out, s):
         d.userdata[_U_POISON] = 1.0
         mujoco.mj_getState(m, d, x, _FULL)
         mujoco.mj_getState(m, d, c[0], spec)
-    nstep = n_per * intervals.size
+    nstep = n_per * (len(t_out) - 1)
     per_call = max(1, _BATCH_ROWS // nstep)
     nq, runs = 1 + m.nq, []
     with _Callback("native"):

@@ -3,9 +3,11 @@ resume, Dask = process pool, work bounded before anything runs."""
 import json
 import subprocess
 import sys
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from conftest import xval
 
 from compare import solvers
 from compare.physics.rotor import constants
@@ -93,8 +95,8 @@ def test_dask_map_equals_the_process_pool(tmp_path):
 
 
 def _xval(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "compare", *args], cwd=cwd,
-                          capture_output=True, text=True)
+    rc, so, se = xval(*args, cwd=cwd)
+    return SimpleNamespace(returncode=rc, stdout=so, stderr=se)
 
 
 def test_work_over_the_budget_is_refused_with_one_line(tmp_path):

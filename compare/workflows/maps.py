@@ -155,9 +155,8 @@ class Runner:
 
     def run(self, tasks):
         """tasks: [(solver, settings, point)] → the rows, in order."""
-        todo = {}
-        for solver, settings, pt in tasks:
-            k = self._key(solver, settings, pt)
+        todo, keys = {}, [self._key(*task) for task in tasks]
+        for k, (solver, settings, pt) in zip(keys, tasks):
             if k in self.memo or k in todo:
                 continue
             stored = self.store and self.store / f"{k}.json"
@@ -192,7 +191,7 @@ class Runner:
                 self.memo[k] = row
                 if self.store:
                     store_point(self.store, k, row)
-        return [self.memo[self._key(s, st, pt)] for s, st, pt in tasks]
+        return [self.memo[k] for k in keys]
 
 
 # --- refinement ----------------------------------------------------------------------------

@@ -68,13 +68,13 @@ def pytest_xdist_make_scheduler(config, log):
     return ByModule(config, log)
 
 
-# the longest modules first (seconds per module, default run on 2 busy cores: test_diff 247,
-# test_faults 206, test_cross_solvers 184, test_sail 176, test_plugin 176, test_campaign_scale
-# 166, test_helicopter_engines 153; the rest ≤ 128): a worker takes the next module when it has
-# two tests left, so a long module taken last kept one worker busy alone at the end
-LONGEST = ("tests/test_diff.py", "tests/test_faults.py", "tests/test_cross_solvers.py",
-           "tests/test_sail.py", "tests/test_plugin.py", "tests/test_campaign_scale.py",
-           "tests/test_helicopter_engines.py")
+# the longest modules first (seconds per module, default run on 2 busy cores: test_golden 68,
+# test_plugin 60, test_helicopter_engines 56, test_sail 50, test_diff 38, test_campaign_scale
+# 37, test_faults 33, test_cross_solvers 31; the rest ≤ 30): a worker takes the next module when
+# it has two tests left, so a long module taken last kept one worker busy alone at the end
+LONGEST = ("tests/test_golden.py", "tests/test_plugin.py", "tests/test_helicopter_engines.py",
+           "tests/test_sail.py", "tests/test_diff.py", "tests/test_campaign_scale.py",
+           "tests/test_faults.py", "tests/test_cross_solvers.py")
 
 
 def pytest_collection_modifyitems(config, items):

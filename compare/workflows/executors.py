@@ -81,10 +81,46 @@ def make_executor(kind, scheduler, workers):
         return client.get_executor(), client
     # spawn: engines start threads; a forked child would inherit a half-initialised state.
     # The children inherit one BLAS thread each (compare/__init__.py)
-    return ProcessPoolExecutor(max_workers=workers or 2,
-                               mp_context=multiprocessing.get_context("spawn"),
-                               initializer=_worker_init,
-                               initargs=(os.getpid(),)), None
+    warm = _warm.pop(_pool_key(workers), None)
+    if warm is not None and not _usable(warm):        # a worker died while it waited
+        warm.shutdown(wait=False, cancel_futures=True)
+        warm = None
+    return warm or ProcessPoolExecutor(
+        max_workers=workers or 2, mp_context=multiprocessing.get_context("spawn"),
+        initializer=_worker_init, initargs=(os.getpid(),)), None
+
+
+# The local pool a study ended with, kept for the next study of this process (a campaign's
+# maps, the next call of a notebook or a test session): a spawned worker's imports and kernel
+# loads cost ~3 s of CPU each, which every study paid again. Kept only while what a spawned
+# worker starts from — worker count, working directory, sys.path, the environment — is the
+# same; the workers end with this process (atexit, as any pool) or when that changes.
+_warm: dict = {}
+
+
+def _pool_key(workers):
+    # PYTEST_CURRENT_TEST: pytest rewrites it for every test; no worker reads it
+    env = sorted((k, v) for k, v in os.environ.items() if k != "PYTEST_CURRENT_TEST")
+    return workers or 2, os.getcwd(), tuple(sys.path), tuple(env)
+
+
+def _keep_warm(ex, workers):
+    """Park a pool whose every call has returned; a broken or shut-down one, and the pools
+    parked under another working directory, path or environment, are ended instead."""
+    key = _pool_key(workers)
+    for k in [k for k in _warm if k[1:] != key[1:]]:
+        _warm.pop(k).shutdown(wait=False, cancel_futures=True)
+    if _usable(ex) and not ex._pending_work_items and key not in _warm:
+        _warm[key] = ex
+    else:
+        ex.shutdown(wait=True)
+
+
+def _usable(ex) -> bool:
+    """A process pool that takes work: not broken, not shut down, every worker alive (one
+    killed a moment ago is not yet marked broken)."""
+    return (isinstance(ex, ProcessPoolExecutor) and not ex._broken and not ex._shutdown_thread
+            and all(p.is_alive() for p in (ex._processes or {}).values()))
 
 
 def _is_main_test(node):
@@ -173,7 +209,9 @@ def worker_pool(kind="local", scheduler=None, workers=None, on_stop: Callable = 
     """The workers of one study, and everything about their lives: they die with this process
     (see `_worker_init`), SIGTERM is handled as Ctrl-C, and on either `on_stop(executor)` ends
     them (default `stop`; a campaign also removes its half-written files) before the
-    KeyboardInterrupt goes on to the caller; on a normal exit they finish and are shut down.
+    KeyboardInterrupt goes on to the caller; on any other exception they finish and are shut
+    down; on a normal exit, every call returned, a local pool is kept warm for the next study
+    of this process (`_warm`).
     `in_process_if_unguarded`: a script that called us outside its `__main__` guard gets None
     (run here, one call at a time) and one line saying what to add — its spawned workers would
     import it again and die."""
@@ -184,17 +222,21 @@ def worker_pool(kind="local", scheduler=None, workers=None, on_stop: Callable = 
         yield None
         return
     ex, client = make_executor(kind, scheduler, workers)
-    stopped = False
     try:
         with terminated_as_interrupt():
             yield ex
     except KeyboardInterrupt:
-        stopped = True
         on_stop(ex)
         raise
-    finally:
-        if not stopped:
+    except BaseException:
+        ex.shutdown(wait=True)
+        raise
+    else:
+        if client is None:
+            _keep_warm(ex, workers)
+        else:
             ex.shutdown(wait=True)
+    finally:
         if client is not None:
             client.close()
 

@@ -1,0 +1,43 @@
+"""The local worker pool kept warm between the studies of one process
+(compare/workflows/executors.py): the next study takes the same workers, never a dead or a
+stale one, and a study that failed leaves none behind."""
+import os
+import signal
+import time
+
+import pytest
+
+from compare.workflows import executors
+from compare.workflows.executors import execute_many, worker_pool
+
+
+def _worker_pids(n=3):
+    """The pids of the worker(s) that answered n calls of a one-worker study."""
+    with worker_pool("local", None, 1) as ex:
+        outs = list(execute_many({i: (os.getpid, ()) for i in range(n)}, ex))
+    assert all(o.error is None for o in outs), [o.error for o in outs]
+    return {o.value for o in outs}
+
+
+def test_next_study_takes_the_warm_worker_a_dead_one_is_replaced(tmp_path, monkeypatch):
+    first = _worker_pids()
+    assert len(first) == 1 and os.getpid() not in first
+    assert _worker_pids() == first                # the same process: nothing spawned again
+    (pid,) = first
+    parked = executors._warm[executors._pool_key(1)]
+    os.kill(pid, signal.SIGKILL)                  # dies while it waits for work
+    t0 = time.monotonic()
+    while parked._processes[pid].is_alive() and time.monotonic() - t0 < 10:
+        time.sleep(0.05)
+    fresh = _worker_pids()                        # every call answered, by a new worker
+    assert fresh and fresh != first
+    monkeypatch.chdir(tmp_path)                   # what a spawned worker starts from changed
+    assert _worker_pids().isdisjoint(fresh)
+
+
+def test_a_study_that_raised_keeps_no_pool():
+    with pytest.raises(RuntimeError, match="the caller failed"):
+        with worker_pool("local", None, 1) as ex:
+            list(execute_many({0: (os.getpid, ())}, ex))
+            raise RuntimeError("the caller failed")
+    assert executors._pool_key(1) not in executors._warm

@@ -99,6 +99,37 @@ def _xval(*args, cwd):
     return SimpleNamespace(returncode=rc, stdout=so, stderr=se)
 
 
+def test_python_m_compare_maps_on_the_worker_pool(tmp_path):
+    """`python -m compare` is `xval` (docs/commands/index.md): its map runs on the workers, not
+    in the main process one point at a time as for a script that calls it unguarded."""
+    r = subprocess.run([sys.executable, "-m", "compare", "map", "rotor-spinup", "--x",
+                        "torque=2.5:3.5", "--set", "eccentricity=0.005", "--solver", "quaternion",
+                        "--resolution", "0.2", "--coarse", "3", "--json", "--no-record",
+                        "--out", str(tmp_path)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "running in this process" not in r.stderr
+    assert json.loads(r.stdout)["scene"] == "rotor-spinup"
+
+
+def test_campaign_map_takes_coarse_as_the_command_does(tmp_path):
+    """`coarse = 3` in a campaign's [[maps]] is `--coarse 3` (it raised a TypeError); a string
+    is one line, exit 2, nothing written."""
+    f = tmp_path / "m.toml"
+    body = ('name = "m"\n[[maps]]\nname = "m"\nscene = "rotor-spinup"\nx = "torque=2.5:3.5"\n'
+            'solvers = ["quaternion"]\nresolution = 0.2\ncoarse = %s\n'
+            'set = { eccentricity = 0.005 }\n')
+    f.write_text(body % "3")
+    rc, so, se = xval("campaign", str(f), "--out", str(tmp_path / "o"), "--json")
+    assert rc == 0, se
+    xs = {p["params"]["torque"] for p in json.loads(
+        (tmp_path / "o" / "campaign" / "m" / "maps" / "m" / "map.json").read_text())["points"]}
+    assert {2.5, 3.0, 3.5} <= xs
+    f.write_text(body % '"3"')
+    rc, so, se = xval("campaign", str(f), "--out", str(tmp_path / "bad"))
+    assert rc == 2 and len(se.strip().splitlines()) == 1 and "coarse grid" in se, se
+    assert not (tmp_path / "bad").exists()
+
+
 def test_work_over_the_budget_is_refused_with_one_line(tmp_path):
     r = _xval("map", "rotor-spinup", "--x", "torque=1:5", "--y", "eccentricity=0:0.02",
               "--max-jobs", "100", "--out", str(tmp_path / "o"), cwd=tmp_path)

@@ -354,10 +354,9 @@ def plan_maps(camp, src="built-in campaign", max_jobs=None):
         if name in names:
             raise BadInput(f"{at}.name: duplicate map name {name!r}")
         names.add(name)
-        coarse = m.get("coarse")
         pl = _prefixed(at, plan_map, m["scene"], m["x"], m.get("y"), m.get("set"),
                        m.get("solvers"), m.get("resolution", 1e-3),
-                       tuple(coarse) if coarse else None, m.get("observable"), m.get("level"),
+                       m.get("coarse"), m.get("observable"), m.get("level"),
                        m.get("engines", "boundary"), max_jobs or camp.get("max_jobs"),
                        m.get("y_resolution"))
         out.append((name, pl))

@@ -11,6 +11,7 @@ import signal
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -54,6 +55,23 @@ def test_dask_local_cluster_gives_the_process_pools_results(tmp_path):
         for ch in a.channels:
             np.testing.assert_array_equal(a.channels[ch], b.channels[ch], err_msg=name)
     assert (tmp_path / "dask" / "campaign" / "c" / "spin" / "sweep.png").stat().st_size > 0
+
+
+def test_two_local_clusters_at_once_warn_nothing():
+    """A second LocalCluster while one runs (two campaigns, or two xdist workers): its
+    scheduler's HTTP routes used to ask for port 8787 and warn that it was taken."""
+    from compare.workflows.executors import make_executor
+    clusters = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        try:
+            for _ in range(2):
+                clusters.append(make_executor("dask", None, 1))
+            assert [ex.submit(sum, [i, 1]).result() for i, (ex, _) in
+                    enumerate(clusters)] == [1, 2]
+        finally:
+            for _, client in clusters:
+                client.close()
 
 
 def _start(camp, out):

@@ -76,8 +76,11 @@ def make_executor(kind, scheduler, workers):
         if scheduler:
             client = connect(scheduler)
         else:
+            # no dashboard; the scheduler's HTTP routes on a free port, not 8787 (taken by
+            # another cluster, it was a UserWarning on the campaign's stderr)
             client = Client(LocalCluster(n_workers=workers or 2, threads_per_worker=1,
-                                         dashboard_address=None, silence_logs=50))
+                                         dashboard_address=None, silence_logs=50,
+                                         scheduler_kwargs={"dashboard_address": ":0"}))
         return client.get_executor(), client
     # spawn: engines start threads; a forked child would inherit a half-initialised state.
     # The children inherit one BLAS thread each (compare/__init__.py)

@@ -84,11 +84,7 @@ def make_executor(kind, scheduler, workers):
         return client.get_executor(), client
     # spawn: engines start threads; a forked child would inherit a half-initialised state.
     # The children inherit one BLAS thread each (compare/__init__.py)
-    warm = _warm.pop(_pool_key(workers), None)
-    if warm is not None and not _usable(warm):        # a worker died while it waited
-        warm.shutdown(wait=False, cancel_futures=True)
-        warm = None
-    return warm or ProcessPoolExecutor(
+    return _take_warm(workers) or ProcessPoolExecutor(
         max_workers=workers or 2, mp_context=multiprocessing.get_context("spawn"),
         initializer=_worker_init, initargs=(os.getpid(),)), None
 
@@ -105,6 +101,16 @@ def _pool_key(workers):
     # PYTEST_CURRENT_TEST: pytest rewrites it for every test; no worker reads it
     env = sorted((k, v) for k, v in os.environ.items() if k != "PYTEST_CURRENT_TEST")
     return workers or 2, os.getcwd(), tuple(sys.path), tuple(env)
+
+
+def _take_warm(workers):
+    """The pool parked for this worker count, working directory, path and environment, if it
+    still takes work (a worker may have died while it waited); else None."""
+    warm = _warm.pop(_pool_key(workers), None)
+    if warm is not None and not _usable(warm):
+        warm.shutdown(wait=False, cancel_futures=True)
+        warm = None
+    return warm
 
 
 def _keep_warm(ex, workers):

@@ -167,3 +167,10 @@ def test_the_code_digest_follows_a_model_and_what_it_imports_only(tmp_path, monk
     d1 = digest_after("custom_models/integrators/dense.py")      # leaf → model → dense
     assert d1 != d0
     assert digest_after("custom_models/press/model.py") == d1
+    # the same process, the leaf now importing the press model: its imports are read anew
+    # (they are kept per source text), so the press model counts from then on
+    leaf_src = tmp_path / "custom_models/rotor/quaternion.py"
+    leaf_src.write_text(leaf_src.read_text() + "\nfrom ..press import model as _press  # noqa\n")
+    d2 = digest_after()
+    assert d2 != d1
+    assert digest_after("custom_models/press/model.py") != d2

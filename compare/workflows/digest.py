@@ -52,7 +52,7 @@ def _imports(module_name):
     """(source file, project modules it imports), read from the source (nothing imported)."""
     path, is_pkg = _source(module_name)
     if path is None:
-        return None, []
+        return None, ()
     return path, _imported(module_name, is_pkg, path.read_text())
 
 

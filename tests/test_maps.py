@@ -3,7 +3,6 @@ resume, Dask = process pool, work bounded before anything runs."""
 import json
 import subprocess
 import sys
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -94,11 +93,6 @@ def test_dask_map_equals_the_process_pool(tmp_path):
     assert a["points"] == b["points"] and a["boundaries"] == b["boundaries"]
 
 
-def _xval(*args, cwd):
-    rc, so, se = xval(*args, cwd=cwd)
-    return SimpleNamespace(returncode=rc, stdout=so, stderr=se)
-
-
 def test_python_m_compare_maps_on_the_worker_pool(tmp_path):
     """`python -m compare` is `xval` (docs/commands/index.md): its map runs on the workers, not
     in the main process one point at a time as for a script that calls it unguarded."""
@@ -131,26 +125,27 @@ def test_campaign_map_takes_coarse_as_the_command_does(tmp_path):
 
 
 def test_work_over_the_budget_is_refused_with_one_line(tmp_path):
-    r = _xval("map", "rotor-spinup", "--x", "torque=1:5", "--y", "eccentricity=0:0.02",
-              "--max-jobs", "100", "--out", str(tmp_path / "o"), cwd=tmp_path)
-    assert r.returncode == 2 and "exceed the budget of 100 runs" in r.stderr
-    assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "o").exists()
+    rc, _, err = xval("map", "rotor-spinup", "--x", "torque=1:5", "--y", "eccentricity=0:0.02",
+                      "--max-jobs", "100", "--out", str(tmp_path / "o"), cwd=tmp_path)
+    assert rc == 2 and "exceed the budget of 100 runs" in err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "o").exists()
     f = tmp_path / "big.toml"
     f.write_text('[[cases]]\nscene = "rotor-spinup"\n'
                  'sweep = { torque = { start = 1.0, stop = 4.0, num = 1000000 } }\n')
-    r = _xval("campaign", str(f), "--out", str(tmp_path / "o"), cwd=tmp_path)
-    assert r.returncode == 2 and "4000000 jobs" in r.stderr and "max_jobs" in r.stderr
-    assert len(r.stderr.strip().splitlines()) == 1
+    rc, _, err = xval("campaign", str(f), "--out", str(tmp_path / "o"), cwd=tmp_path)
+    assert rc == 2 and "4000000 jobs" in err and "max_jobs" in err
+    assert len(err.strip().splitlines()) == 1
 
 
 def test_map_json_has_the_contract_fields(tmp_path):
     """contract.md's `xval map --json`: x with its unit, points with regime and value, the
     boundaries, the pairwise comparisons, each solver's points per second, the map's image."""
-    r = _xval("map", "rotor-spinup", "--x", "torque=2.5:3.5", "--set", "eccentricity=0.005",
-              "--solver", "quaternion", "--solver", "euler-vector", "--resolution", "0.05",
-              "--coarse", "3", "--json", "--out", str(tmp_path), cwd=tmp_path)
-    assert r.returncode == 0, r.stderr
-    obj = json.loads(r.stdout)
+    rc, out, err = xval("map", "rotor-spinup", "--x", "torque=2.5:3.5", "--set",
+                        "eccentricity=0.005", "--solver", "quaternion", "--solver",
+                        "euler-vector", "--resolution", "0.05", "--coarse", "3", "--json",
+                        "--out", str(tmp_path), cwd=tmp_path)
+    assert rc == 0, err
+    obj = json.loads(out)
     assert obj["scene"] == "rotor-spinup" and obj["y"] is None
     assert obj["x"] == {"name": "torque", "lo": 2.5, "hi": 3.5, "unit": "N·m"}
     for p in obj["points"]:
@@ -220,9 +215,9 @@ def test_bench_points_runs_the_map_batch_path(tmp_path):
     (["--x", "torque=1:5", "--coarse", "1"], "at least 2 points"),
 ])
 def test_bad_map_input_is_one_line_and_exit_2(tmp_path, args, words):
-    r = _xval("map", "rotor-spinup", *args, "--out", str(tmp_path / "o"), cwd=tmp_path)
-    assert r.returncode == 2 and words in r.stderr, r.stderr
-    assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "o").exists()
+    rc, _, err = xval("map", "rotor-spinup", *args, "--out", str(tmp_path / "o"), cwd=tmp_path)
+    assert rc == 2 and words in err, err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "o").exists()
 
 
 def test_sail_deployment_time_observable_is_the_payout_closed_form():

@@ -43,7 +43,8 @@ def test_multi_blade_matrices_do_not_depend_on_the_azimuth(free):
         K0, D0, _, _ = hc.mbc_matrices(lin, p, 8, 0.0, free)
         K1, D1, _, _ = hc.mbc_matrices(lin, p, 8, 0.3, free)
         # measured ≤ 2.3e-11 (K) and ≤ 2.5e-5 (D, against 0.23 before the transform): the
-        # finite differences of transitionFD (eps 1e-6) and of Exudyn's velocity Jacobian
+        # finite differences (eps 1e-6) of MuJoCo's inverse dynamics and of Exudyn's velocity
+        # Jacobian
         assert np.abs(K1 - K0).max() / np.abs(K0).max() < 1e-9
         assert np.abs(D1 - D0).max() / np.abs(D0).max() < 5e-5
 

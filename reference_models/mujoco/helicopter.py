@@ -1,12 +1,15 @@
 """MuJoCo model of the whole helicopter (seed 002, Tables 3 and 4): the aircraft tree of
 `reference_models/helicopter_common.py` (the route, multi-blade coordinates, is described
-there) as nested bodies, linearised with `mjd_transitionFD`.
+there) as nested bodies, linearised by central differences (ε = 1e-6) of its inverse dynamics.
 
 The drive is a hinge about z with a large armature (its speed held; its row and column are
-then dropped); the massless frames carry 1e-9 kg (MuJoCo wants a physical body). The
-transition matrix of one explicit-Euler step of h = 1e-3 s gives A_q = ∂q̈/∂q and
-A_v = ∂q̈/∂q̇ exactly (q̈ enters the Euler step linearly), from central differences of
-ε = 1e-6.
+then dropped); the massless frames carry 1e-9 kg (MuJoCo wants a physical body).
+Linearisation: M(q) q̈(q, q̇) = f(q, q̇), so with f_inv = RNE(q, q̇, a = q̈₀) − passive(q, q̇)
+(MuJoCo's stage functions; armature·q̈₀ is constant) A_q = −M⁻¹ ∂f_inv/∂q and A_v =
+−M⁻¹ ∂f_inv/∂q̇ at (q₀, q̈₀), the a = q̈₀ term carrying ∂M/∂q·q̈₀: the Jacobian that
+mjd_transitionFD's Euler step gives, without its 2·nv re-factorisations of M (one here).
+Against it at N = 40: A_q to 9.5e-10, A_v to 1.4e-4 — the rounding noise of ε = 1e-6 in
+either route (each 1.2e-4 from ε = 1e-3, exact for q̈ quadratic in q̇) — frequencies to 1e-8.
 """
 from __future__ import annotations
 
@@ -19,7 +22,7 @@ from reference_models import helicopter_common as hc
 
 MODES_SETTINGS = hc.MODES_SETTINGS
 SPIN_ARMATURE = 1e10
-_FD_H, _FD_EPS = 1e-3, 1e-6
+_FD_EPS = 1e-6
 _KIND = {"hinge": mujoco.mjtJoint.mjJNT_HINGE, "spin": mujoco.mjtJoint.mjJNT_HINGE,
          "slide": mujoco.mjtJoint.mjJNT_SLIDE}
 
@@ -33,8 +36,6 @@ def _quat(R):
 def build(params: dict, n: int, free: bool = False):
     """The MjModel and, per degree of freedom, its coordinate name (part, family, index)."""
     spec = mujoco.MjSpec()
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
-    spec.option.timestep = _FD_H
     spec.option.gravity = [0.0, 0.0, 0.0]
     names: list = []
     made: list = []
@@ -53,25 +54,51 @@ def build(params: dict, n: int, free: bool = False):
     return spec.compile(), names
 
 
+def _inverse_dynamics(model, data, out):
+    """f_inv = RNE(q, q̇, a = data.qacc) − qfrc_passive at data's state, without the inertia
+    stage: mj_rne needs cinert, cdof (comPos) and cvel, cdof_dot (comVel); it has no armature."""
+    mujoco.mj_kinematics(model, data)
+    mujoco.mj_comPos(model, data)
+    mujoco.mj_comVel(model, data)
+    mujoco.mj_passive(model, data)
+    mujoco.mj_rne(model, data, 1, out)
+    return out - data.qfrc_passive
+
+
+def _jacobians(model, data):
+    """(∂q̈/∂q, ∂q̈/∂q̇) at data's state by central differences of the inverse dynamics."""
+    assert model.nq == model.nv and not model.dof_damping.any()   # hinges, slides; no damper
+    mujoco.mj_forward(model, data)             # q̈₀ in data.qacc, M factorised in data.qLD
+    out = np.empty(model.nv)
+    jac = []
+    for x in (data.qpos, data.qvel):
+        df = np.empty((model.nv, model.nv))    # row i: ∂f_inv/∂x_i
+        for i in range(model.nv):
+            x0 = x[i]
+            x[i] = x0 + _FD_EPS
+            fp = _inverse_dynamics(model, data, out)
+            x[i] = x0 - _FD_EPS
+            df[i] = (fp - _inverse_dynamics(model, data, out)) / (2 * _FD_EPS)
+            x[i] = x0
+        mujoco.mj_solveM(model, data, df, df.copy())    # row i: M⁻¹ ∂f_inv/∂x_i
+        jac.append(-df.T)
+    return jac
+
+
 def linearised(params: dict, n: int, psi: float = 0.0, free: bool = False):
     """A_q = ∂q̈/∂q and A_v = ∂q̈/∂q̇ about steady spin at rotor azimuth ψ (drive removed), in
     the model's own coordinates (blades rotating, shaft bending rotating, the rest fixed), the
-    coordinate names and the seconds spent in mjd_transitionFD."""
+    coordinate names and the seconds spent linearising."""
     model, names = build(params, n, free)
     data = mujoco.MjData(model)
     spin = model.joint("spin")
     data.qpos[spin.qposadr[0]] = psi
     data.qvel[spin.dofadr[0]] = params["speed"]
-    mujoco.mj_forward(model, data)
-    nv = model.nv
-    A = np.zeros((2 * nv, 2 * nv))
     t0 = time.perf_counter()
-    mujoco.mjd_transitionFD(model, data, _FD_EPS, True, A, None, None, None)
-    fd_s = time.perf_counter() - t0
-    keep = [i for i in range(nv) if i != spin.dofadr[0]]
-    Aq = (A[nv:, :nv] / _FD_H)[np.ix_(keep, keep)]
-    Av = ((A[nv:, nv:] - np.eye(nv)) / _FD_H)[np.ix_(keep, keep)]
-    return Aq, Av, [names[i] for i in keep], fd_s
+    Aq, Av = _jacobians(model, data)
+    secs = time.perf_counter() - t0
+    keep = [i for i in range(model.nv) if i != spin.dofadr[0]]
+    return Aq[np.ix_(keep, keep)], Av[np.ix_(keep, keep)], [names[i] for i in keep], secs
 
 
 def modes(params: dict, settings: dict | None = None):
@@ -84,4 +111,5 @@ def hover_modes(params: dict, settings: dict | None = None):
     return hc.aircraft_modes(linearised, params, settings, True, NOTE)
 
 
-NOTE = "MuJoCo nested bodies, mjd_transitionFD; fixed frame, multi-blade coordinates"
+NOTE = ("MuJoCo nested bodies, inverse-dynamics finite differences; fixed frame, "
+        "multi-blade coordinates")

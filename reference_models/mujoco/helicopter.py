@@ -65,7 +65,7 @@ def _inverse_dynamics(model, data, out):
     return out - data.qfrc_passive
 
 
-def _jacobians(model, data):
+def jacobians(model, data):
     """(∂q̈/∂q, ∂q̈/∂q̇) at data's state by central differences of the inverse dynamics."""
     assert model.nq == model.nv and not model.dof_damping.any()   # hinges, slides; no damper
     mujoco.mj_forward(model, data)             # q̈₀ in data.qacc, M factorised in data.qLD
@@ -95,7 +95,7 @@ def linearised(params: dict, n: int, psi: float = 0.0, free: bool = False):
     data.qpos[spin.qposadr[0]] = psi
     data.qvel[spin.dofadr[0]] = params["speed"]
     t0 = time.perf_counter()
-    Aq, Av = _jacobians(model, data)
+    Aq, Av = jacobians(model, data)
     secs = time.perf_counter() - t0
     keep = [i for i in range(model.nv) if i != spin.dofadr[0]]
     return Aq[np.ix_(keep, keep)], Av[np.ix_(keep, keep)], [names[i] for i in keep], secs

@@ -8,8 +8,9 @@ Linearisation: M(q) q̈(q, q̇) = f(q, q̇), so with f_inv = RNE(q, q̇, a = q̈
 (MuJoCo's stage functions; armature·q̈₀ is constant) A_q = −M⁻¹ ∂f_inv/∂q and A_v =
 −M⁻¹ ∂f_inv/∂q̇ at (q₀, q̈₀), the a = q̈₀ term carrying ∂M/∂q·q̈₀: the Jacobian that
 mjd_transitionFD's Euler step gives, without its 2·nv re-factorisations of M (one here).
-Against it at N = 40: A_q to 9.5e-10, A_v to 1.4e-4 — the rounding noise of ε = 1e-6 in
-either route (each 1.2e-4 from ε = 1e-3, exact for q̈ quadratic in q̇) — frequencies to 1e-8.
+Against it at N = 40: A_q to 9.5e-10, A_v to 1.4e-4 — rounding at ε = 1e-6 amplified by
+the ill-conditioned M (1e-9 kg frames, the drive's armature), each route 1.2e-4 from ε = 1e-3,
+exact for q̈ quadratic in q̇ — and the frequencies to 1e-8.
 """
 from __future__ import annotations
 

@@ -68,7 +68,9 @@ def _inverse_dynamics(model, data, out):
 
 def jacobians(model, data):
     """(∂q̈/∂q, ∂q̈/∂q̇) at data's state by central differences of the inverse dynamics."""
-    assert model.nq == model.nv and not model.dof_damping.any()   # hinges, slides; no damper
+    if model.nq != model.nv or model.dof_damping.any():
+        raise ValueError("jacobians: hinges and slides without dampers only (qpos is qvel's "
+                         "tangent, and no velocity term the differences would miss)")
     mujoco.mj_forward(model, data)             # q̈₀ in data.qacc, M factorised in data.qLD
     out = np.empty(model.nv)
     jac = []

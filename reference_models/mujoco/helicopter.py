@@ -68,9 +68,8 @@ def _inverse_dynamics(model, data, out):
 
 def jacobians(model, data):
     """(∂q̈/∂q, ∂q̈/∂q̇) at data's state by central differences of the inverse dynamics."""
-    if model.nq != model.nv or model.dof_damping.any():
-        raise ValueError("jacobians: hinges and slides without dampers only (qpos is qvel's "
-                         "tangent, and no velocity term the differences would miss)")
+    if model.nq != model.nv:               # a ball or free joint: qpos is not qvel's tangent
+        raise ValueError("jacobians: hinge and slide joints only")
     mujoco.mj_forward(model, data)             # q̈₀ in data.qacc, M factorised in data.qLD
     out = np.empty(model.nv)
     jac = []

@@ -40,6 +40,29 @@ def test_rotation_tensor_and_zhilin(theta):
     np.testing.assert_allclose(theta @ Z, theta, atol=1e-14)
 
 
+
+def test_row_conversions_match_scipy_and_leave_nan_rows_nan():
+    """matrices_to_quats against scipy (w ≥ 0), the Euler-vector leaf's rotations against
+    scipy's rotation vector then the spin about z; a row with a NaN (or an inf) stays NaN."""
+    from custom_models.rotor import euler_vector
+    rng = np.random.default_rng(3)
+    R = Rotation.random(5, random_state=4).as_matrix()
+    R[1, 2, 0], R[3, 0, 1] = np.nan, np.inf
+    q = rotation.matrices_to_quats(R)
+    good = [0, 2, 4]
+    ref = Rotation.from_matrix(R[good]).as_quat(scalar_first=True)
+    ref *= np.where(ref[:, :1] < 0, -1.0, 1.0)
+    np.testing.assert_allclose(q[good], ref, atol=1e-15)
+    assert np.isnan(q[[1, 3]]).all()
+    Y = rng.standard_normal((4, 8))
+    Y[2, 7] = np.nan                       # a NaN in the work channel alone still blanks the row
+    out = euler_vector.rotations(Y)
+    for i in (0, 1, 3):
+        ref = (Rotation.from_rotvec(Y[i, 3:6]) * Rotation.from_rotvec([0, 0, Y[i, 6]])).as_matrix()
+        np.testing.assert_allclose(out[i], ref, atol=1e-14)
+    assert np.isnan(out[2]).all()
+    assert rotation.all_finite(Y[0]) and not rotation.all_finite(Y[2])
+
 # --- the default scene: independent formulations agree, energy closes ---------------------
 
 @pytest.fixture(scope="module")

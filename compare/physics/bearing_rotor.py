@@ -329,7 +329,8 @@ def _axes(quats):
     """Shaft axis e3 = R(q)·(0, 0, 1) per row (n, 3)."""
     out = np.empty((quats.shape[0], 3))
     for i in range(quats.shape[0]):
-        out[i] = quat_matrix(quats[i])[:, 2]
+        R = quat_matrix(quats[i])
+        out[i, 0], out[i, 1], out[i, 2] = R[0, 2], R[1, 2], R[2, 2]
     return out
 
 

@@ -13,6 +13,7 @@ import numba as nb
 import numpy as np
 
 from ..rotation import (
+    all_finite,
     cross_t,
     mat_tvec_t,
     mat_vec_t,
@@ -52,8 +53,11 @@ def rotations(Y):
     """(n, 3, 3) rotations of the state rows; NaN rows give NaN."""
     out = np.full((Y.shape[0], 3, 3), np.nan)
     for i in range(Y.shape[0]):
-        if np.all(np.isfinite(Y[i])):
-            out[i] = rotation(Y[i])
+        if all_finite(Y[i]):
+            R = rotation(Y[i])
+            for a in range(3):
+                for b in range(3):
+                    out[i, a, b] = R[a, b]
     return out
 
 

@@ -36,7 +36,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from custom_models.rotation import quat_matrix  # noqa: F401  (the leaves' too)
+from custom_models.rotation import quat_matrix, quat_matrix_t  # noqa: F401  (the leaves' too)
 
 from ..contract import LeafModes
 
@@ -329,8 +329,8 @@ def _axes(quats):
     """Shaft axis e3 = R(q)·(0, 0, 1) per row (n, 3)."""
     out = np.empty((quats.shape[0], 3))
     for i in range(quats.shape[0]):
-        R = quat_matrix(quats[i])
-        out[i, 0], out[i, 1], out[i, 2] = R[0, 2], R[1, 2], R[2, 2]
+        R = quat_matrix_t(quats[i, 0], quats[i, 1], quats[i, 2], quats[i, 3])
+        out[i, 0], out[i, 1], out[i, 2] = R[2], R[5], R[8]
     return out
 
 

@@ -43,10 +43,12 @@ def test_a_runaway_output_grid_is_refused_before_anything_is_allocated(tmp_path,
     argv = ["run", "rotor-spinup", "--out", str(tmp_path / "o")]
     for s in sets:
         argv += ["--set", s]
-    # the command line as `xval` runs it, plus its own peak resident size written to a file
-    code = ("import resource, sys; from compare.cli import main; rc = main(sys.argv[2:]); "
-            "open(sys.argv[1], 'w').write(str(resource.getrusage(resource.RUSAGE_SELF)"
-            ".ru_maxrss)); sys.exit(rc)")
+    # the command line as `xval` runs it, plus its own peak resident size (VmHWM, kB) written to
+    # a file — not getrusage's ru_maxrss, which a child started by fork/vfork + exec inherits
+    # from its parent (this pytest worker's peak: 1046 MiB seen in one run)
+    code = ("import sys; from compare.cli import main; rc = main(sys.argv[2:]); "
+            "open(sys.argv[1], 'w').write(next(l.split()[1] for l in open('/proc/self/status')"
+            " if l.startswith('VmHWM'))); sys.exit(rc)")
     t0 = time.perf_counter()
     p = subprocess.run([sys.executable, "-c", code, str(rss), *argv], capture_output=True,
                        text=True, timeout=120)

@@ -10,6 +10,11 @@ import numba as nb
 import numpy as np
 
 _SMALL = 1e-4   # below this |θ| the coefficient series are exact to round-off
+# the scalar/tuple helpers of the right-hand sides: a zero divisor gives inf/NaN (numpy's error
+# model), not a raised ZeroDivisionError — numba's division check keeps a loop over SIMD lanes
+# that calls them from vectorising (`integrators.lanes`), and an exception raised behind a
+# first-class function pointer is only printed, never seen by the driver, which does see NaN
+tuple_math = nb.njit(cache=True, error_model="numpy", inline="always")
 
 
 @nb.njit(cache=True)
@@ -17,7 +22,7 @@ def skew(v):
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
-@nb.njit(cache=True)
+@tuple_math
 def _coefficients(t):
     """a = sin t/t, b = (1 − cos t)/t², c = (1 − a)/t², d = (1 − a/(2b))/t²."""
     t2 = t * t
@@ -134,7 +139,7 @@ def transverse_vector(n):
 # A 3×3 matrix is a row-major 9-tuple, a vector a 3-tuple: numba keeps both in registers, so a
 # right-hand side built from these allocates nothing (an np.empty(3) costs more than the maths).
 
-@nb.njit(cache=True)
+@tuple_math
 def rodrigues_t(t0, t1, t2, c1, c2):
     """E + c1·θ× + c2·(θ×)² as a 9-tuple, (θ×)² = θ⊗θ − |θ|²E."""
     d = 1.0 - c2 * (t0 * t0 + t1 * t1 + t2 * t2)
@@ -143,14 +148,14 @@ def rodrigues_t(t0, t1, t2, c1, c2):
             c2 * t2 * t0 - c1 * t1, c2 * t2 * t1 + c1 * t0, d + c2 * t2 * t2)
 
 
-@nb.njit(cache=True)
+@tuple_math
 def rotation_t(t0, t1, t2):
     """L(θ) as a 9-tuple (see `rotation_tensor`)."""
     a, b, _, _ = _coefficients(np.sqrt(t0 * t0 + t1 * t1 + t2 * t2))
     return rodrigues_t(t0, t1, t2, a, b)
 
 
-@nb.njit(cache=True)
+@tuple_math
 def rotation_zhilin_inverse_t(t0, t1, t2):
     """L(θ) and Z⁻¹(θ) (see `zhilin_inverse`) as 9-tuples from one evaluation of their
     coefficients (one sin, one cos: the Euler-vector right-hand side needs both each call)."""
@@ -158,7 +163,7 @@ def rotation_zhilin_inverse_t(t0, t1, t2):
     return rodrigues_t(t0, t1, t2, a, b), rodrigues_t(t0, t1, t2, -0.5, d)
 
 
-@nb.njit(cache=True)
+@tuple_math
 def quat_matrix_t(w, x, y, z):
     """Rotation matrix of a (not necessarily unit) quaternion as a 9-tuple."""
     s = 2.0 / (w * w + x * x + y * y + z * z)
@@ -178,25 +183,25 @@ def quat_matrix(q):
     return R
 
 
-@nb.njit(cache=True)
+@tuple_math
 def mat_vec_t(M, a, b, c):
     return (M[0] * a + M[1] * b + M[2] * c, M[3] * a + M[4] * b + M[5] * c,
             M[6] * a + M[7] * b + M[8] * c)
 
 
-@nb.njit(cache=True)
+@tuple_math
 def mat_tvec_t(M, a, b, c):
     """Mᵀ·v."""
     return (M[0] * a + M[3] * b + M[6] * c, M[1] * a + M[4] * b + M[7] * c,
             M[2] * a + M[5] * b + M[8] * c)
 
 
-@nb.njit(cache=True)
+@tuple_math
 def cross_t(a0, a1, a2, b0, b1, b2):
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
-@nb.njit(cache=True)
+@tuple_math
 def transverse_t(nx, ny, nz):
     """(γ_x, γ_y) of `transverse_vector` (γ_z = 0) for the unit axis n."""
     s = np.sqrt(nx * nx + ny * ny)

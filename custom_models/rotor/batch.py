@@ -22,70 +22,102 @@ from ..integrators.dense import (
     integrate_fixed_dense,
 )
 from ..integrators.explicit import _MAT, _VEC, GUARD
+from ..integrators.lanes import LANES, RHS_LANES, ROW_LANES, integrate_dop853_lanes, nine
 from ..rotation import mat_tvec_t, mat_vec_t
-from .model import I0, K_, M_, RC0, G, check_settings, pack
+from .model import I0, I0INV, K_, M_, RC0, G, check_settings, pack
 
 # kinematics(Y, p, O): each row of O = rotation body → fixed (9, row-major), fixed-frame ω (3),
 # work of that row of Y — one call per run, not one call through a pointer per row
 KINEMATICS = nt.FunctionType(nt.void(_MAT, _VEC, _MAT))
-# per point: finite, max |E − E(0)|, then max |value| of each of ENERGY_CHANNELS
 ENERGY_CHANNELS = ("energy_balance", "kinetic", "potential", "work")
+# a run's accumulators: the first row with |ω| ≥ reach (−1: none), the least |ω| from the window
+# on, the energy balance at row 0, finite (1/0), max |E − E(0)|, then max |value| of each of
+# ENERGY_CHANNELS
+_FIRST, _WMIN, _E0, _FINITE = 0, 1, 2, 3
+ACC0 = np.array([-1.0, np.inf, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+N_PACK = I0INV.stop                 # the packed parameters' length: lane rows go on with levels
+# the lanes' workspace (integrators.lanes): state and derivative (8 rows each), the point's
+# packed parameters with reach, stay and the window's start, ACC0, then the rows' motion (13)
+# and channels (3) as scratch
+NY, L = 8, LANES
+Z_DY, Z_P = NY * L, 2 * NY * L
+Z_ACC = Z_P + (N_PACK + 3) * L
+Z_O = Z_ACC + len(ACC0) * L
+Z_CH = Z_O + 13 * L
+N_SCRATCH = 16
 _I0, _RC0, _G = I0.start, RC0.start, G.start
 _I64 = nt.int64[::1]
 
 
-@nb.njit(cache=True)
-def _row(o, p):
-    """(|ω|, kinetic, potential) of one row o = (R, ω, work), as physics.rotor.channels."""
-    w0, w1, w2 = o[9], o[10], o[11]
-    b = mat_tvec_t(o, w0, w1, w2)                                   # body-frame ω
-    I = p[_I0:_I0 + 9]
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _channels(o, oo, ost, p, po, pst):
+    """(|ω|, kinetic, potential) of one row (R, ω, work) as physics.rotor.channels; its entry k
+    at o[oo + k·ost], the parameters' at p[po + k·pst] (strides 1, or LANES in a lane block)."""
+    R = nine(o, oo, ost)
+    w0, w1, w2 = o[oo + 9 * ost], o[oo + 10 * ost], o[oo + 11 * ost]
+    b = mat_tvec_t(R, w0, w1, w2)                                   # body-frame ω
+    I = nine(p, po + _I0 * pst, pst)
     kin = 0.5 * (b[0] * (I[0] * b[0] + I[1] * b[1] + I[2] * b[2])
                  + b[1] * (I[3] * b[0] + I[4] * b[1] + I[5] * b[2])
                  + b[2] * (I[6] * b[0] + I[7] * b[1] + I[8] * b[2]))
-    tilt = np.arctan2(np.hypot(o[2], o[5]), o[8])
-    rc = mat_vec_t(o, p[_RC0], p[_RC0 + 1], p[_RC0 + 2])
-    pot = 0.5 * p[K_] * tilt * tilt - p[M_] * (rc[0] * p[_G] + rc[1] * p[_G + 1]
-                                               + rc[2] * p[_G + 2])
+    tilt = np.arctan2(np.hypot(R[2], R[5]), R[8])
+    rc = mat_vec_t(R, p[po + _RC0 * pst], p[po + (_RC0 + 1) * pst], p[po + (_RC0 + 2) * pst])
+    pot = 0.5 * p[po + K_ * pst] * tilt * tilt - p[po + M_ * pst] * (
+        rc[0] * p[po + _G * pst] + rc[1] * p[po + (_G + 1) * pst]
+        + rc[2] * p[po + (_G + 2) * pst])
     return np.sqrt(w0 * w0 + w1 * w1 + w2 * w2), kin, pot
 
 
-@nb.njit(cache=True)
-def _reduce(Y, p, t_out, kin, reach, stay, t_window, stats):
-    """The regime of one run's rows (0: |ω| never reaches `reach` after t = 0, 2: it stays
-    above `stay` from `t_window` on, else 1); fills `stats` (finite, drift, max |channel|)."""
+@nb.njit(cache=True, inline="always")
+def _accumulate(wn, ke, pe, work, j, t, reach, t_window, acc, a, st):
+    """One row into a run's accumulators acc[a + k·st] (ACC0's layout), as `_reduce` adds it."""
+    e = ke + pe - work
+    if j == 0:
+        acc[a + _E0 * st] = e
+    e0 = acc[a + _E0 * st]
+    if not (np.isfinite(wn) and np.isfinite(e)):
+        acc[a + _FINITE * st] = 0.0
+    acc[a + 4 * st] = max(acc[a + 4 * st], abs(e - e0))
+    acc[a + 5 * st] = max(acc[a + 5 * st], abs(e))
+    acc[a + 6 * st] = max(acc[a + 6 * st], abs(ke))
+    acc[a + 7 * st] = max(acc[a + 7 * st], abs(pe))
+    acc[a + 8 * st] = max(acc[a + 8 * st], abs(work))
+    if acc[a + _FIRST * st] < 0 and wn >= reach:
+        acc[a + _FIRST * st] = j
+    if t >= t_window:
+        acc[a + _WMIN * st] = min(acc[a + _WMIN * st], wn)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _reduce(Y, p, t_out, kin, reach, t_window, acc):
+    """A run's rows into its accumulators `acc` (from ACC0)."""
     O = np.empty((Y.shape[0], 13))
     kin(Y, p, O)
-    first, w_min, e0, finite = -1, np.inf, 0.0, True
-    for k in range(1, 6):
-        stats[k] = 0.0
     for j in range(Y.shape[0]):
-        wn, ke, pe = _row(O[j], p)
-        e = ke + pe - O[j, 12]
-        if j == 0:
-            e0 = e
-        finite = finite and np.isfinite(wn) and np.isfinite(e)
-        stats[1] = max(stats[1], abs(e - e0))
-        stats[2] = max(stats[2], abs(e))
-        stats[3] = max(stats[3], abs(ke))
-        stats[4] = max(stats[4], abs(pe))
-        stats[5] = max(stats[5], abs(O[j, 12]))
-        if first < 0 and wn >= reach:
-            first = j
-        if t_out[j] >= t_window:
-            w_min = min(w_min, wn)
-    stats[0] = 1.0 if finite else 0.0
-    if first <= 0:                  # never, or already at t = 0: first_crossing gives None
-        return 0
-    return 2 if w_min > stay else 1
+        wn, ke, pe = _channels(O[j], 0, 1, p, 0, 1)
+        _accumulate(wn, ke, pe, O[j, 12], j, t_out[j], reach, t_window, acc, 0, 1)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def reduce_lanes(T, J, M, Z):
+    """`_reduce` for the row of each lane where M = 1, its motion already in the workspace's
+    Z_O rows (the formulation's `row_lanes` puts it there)."""
+    for lane in range(L):           # all lanes: the loop vectorises
+        wn, ke, pe = _channels(Z, Z_O + lane, L, Z, Z_P + lane, L)
+        Z[Z_CH + lane], Z[Z_CH + L + lane], Z[Z_CH + 2 * L + lane] = wn, ke, pe
+    for lane in range(L):
+        if M[lane] != 0.0:
+            _accumulate(Z[Z_CH + lane], Z[Z_CH + L + lane], Z[Z_CH + 2 * L + lane],
+                        Z[Z_O + 12 * L + lane], J[lane], T[lane], Z[Z_P + N_PACK * L + lane],
+                        Z[Z_P + (N_PACK + 2) * L + lane], Z, Z_ACC + lane, L)
 
 
 @nb.njit(nt.void(RHS_INTO, GUARD, KINEMATICS, _MAT, _MAT, _VEC, _MAT, nt.float64,
                  nt.float64, nt.float64, nt.float64, nt.float64, nt.int64, _MAT, _VEC, _VEC,
-                 _VEC, _VEC, nt.int64, nt.int64, _MAT, _MAT, _VEC, _MAT, _I64, _VEC, _I64,
-                 _MAT), cache=True)
+                 _VEC, _VEC, nt.int64, nt.int64, _MAT, _MAT, _VEC, _MAT, _I64, _VEC, _MAT),
+         cache=True)
 def _kernel(f, guard, kin, Y0, P, t_out, levels, window, dt, rtol, atol, h_max, max_steps,
-            A, B, C, E, E3, err_order, dense, Pd, AX, CX, D, code, t_fail, regime, stats):
+            A, B, C, E, E3, err_order, dense, Pd, AX, CX, D, code, t_fail, acc):
     """A plain loop over points (dt > 0: the fixed-step driver, else the adaptive one): the
     map's process pool runs one kernel per core; a prange kernel in one worker was slower."""
     t_window = window * t_out[t_out.shape[0] - 1]
@@ -97,15 +129,16 @@ def _kernel(f, guard, kin, Y0, P, t_out, levels, window, dt, rtol, atol, h_max, 
                 f, guard, Y0[i], P[i], t_out, rtol, atol, h_max, max_steps, A, B, C, E, E3,
                 err_order, dense, Pd, AX, CX, D)
         code[i], t_fail[i] = c, tf
-        regime[i] = _reduce(Y, P[i], t_out, kin, levels[i, 0], levels[i, 1], t_window,
-                            stats[i])
+        _reduce(Y, P[i], t_out, kin, levels[i, 0], t_window, acc[i])
 
 
 def regimes(rhs_into, guard, kinematics, initial_state, params_list, t_out, settings,
-            channel, levels, window):
+            channel, levels, window, lanes=None):
     """Run every point of `params_list` on the grid `t_out` in one compiled call; the regime
     is read off `channel` (only |ω|, "omega_norm": else None). `levels`: (n, 2) per point
     (reach, stay above), `window`: the fraction of the run after which |ω| must stay above.
+    `lanes`: the formulation's (rhs_lanes, row_lanes), with which DOP853 runs LANES points at
+    once (`integrators.lanes`: bit for bit the scalar driver's numbers, ~2× the points a second).
     Returns {"code", "t_fail", "regime", "finite", "drift", "max_abs": {channel: (n,)}}
     (code ≠ 0: the run failed)."""
     if channel != "omega_norm":
@@ -114,21 +147,35 @@ def regimes(rhs_into, guard, kinematics, initial_state, params_list, t_out, sett
     t_out = np.ascontiguousarray(t_out, float)
     P = np.stack([pack(p) for p in params_list])
     Y0 = np.stack([initial_state(p, pk) for p, pk in zip(params_list, P)])
+    levels = np.ascontiguousarray(levels, float)
     n = len(params_list)
-    code, regime = np.zeros(n, np.int64), np.zeros(n, np.int64)
-    t_fail, stats = np.full(n, np.nan), np.zeros((n, 2 + len(ENERGY_CHANNELS)))
+    code, t_fail = np.zeros(n, np.int64), np.full(n, np.nan)
+    acc = np.tile(ACC0, (n, 1))
     fixed = s["integrator"] in FIXED_TABLEAUS
     # one signature for both drivers: a fixed-step method leaves the adaptive slots unused
     tb = {**DENSE_TABLEAUS["dop853"], **(FIXED_TABLEAUS[s["integrator"]] if fixed
                                          else DENSE_TABLEAUS[s["integrator"]])}
     rtol = float(s["rtol"])
-    _kernel(first_class(rhs_into, RHS_INTO), first_class(guard, GUARD),
-            first_class(kinematics, KINEMATICS), Y0, P, t_out,
-            np.ascontiguousarray(levels, float), float(window),
-            float(s["dt"] or 1e-3) if fixed else 0.0, rtol, float(s["atol"] or rtol * 1e-2),
-            float(s["h_max"] or 0.0), int(s["max_steps"]), tb["A"], tb["B"], tb["C"],
-            tb["E"], tb["E3"], tb["err_order"], tb["dense"], tb["P"], tb["AX"], tb["CX"],
-            tb["D"], code, t_fail, regime, stats)
-    return {"code": code, "t_fail": t_fail, "regime": regime, "finite": stats[:, 0] > 0,
-            "drift": stats[:, 1],
-            "max_abs": {c: stats[:, 2 + k] for k, c in enumerate(ENERGY_CHANNELS)}}
+    atol, h_max = float(s["atol"] or rtol * 1e-2), float(s["h_max"] or 0.0)
+    t_window = float(window) * t_out[-1]
+    if lanes and s["integrator"] == "dop853":
+        rhs_lanes, row_lanes = lanes
+        P_rows = np.hstack([P, levels, np.full((n, 1), t_window)])     # N_PACK: reach, stay, t₀
+        integrate_dop853_lanes(
+            first_class(rhs_lanes, RHS_LANES), first_class(guard, GUARD),
+            first_class(row_lanes, ROW_LANES), Y0, P_rows, t_out, rtol, atol, h_max,
+            int(s["max_steps"]), tb["A"], tb["B"], tb["C"], tb["E"], tb["E3"], tb["err_order"],
+            tb["AX"], tb["CX"], tb["D"], ACC0, N_SCRATCH, code, t_fail, acc)
+    else:
+        _kernel(first_class(rhs_into, RHS_INTO), first_class(guard, GUARD),
+                first_class(kinematics, KINEMATICS), Y0, P, t_out, levels, float(window),
+                float(s["dt"] or 1e-3) if fixed else 0.0, rtol, atol, h_max,
+                int(s["max_steps"]), tb["A"], tb["B"], tb["C"], tb["E"], tb["E3"],
+                tb["err_order"], tb["dense"], tb["P"], tb["AX"], tb["CX"], tb["D"], code, t_fail,
+                acc)
+    # the regime (0: |ω| never reaches `reach` after t = 0, 2: it stays above `stay` from the
+    # window on, else 1; reaching it at row 0 is "never", as first_crossing gives None there)
+    regime = np.where(acc[:, _FIRST] <= 0, 0, np.where(acc[:, _WMIN] > levels[:, 1], 2, 1))
+    return {"code": code, "t_fail": t_fail, "regime": regime, "finite": acc[:, _FINITE] > 0,
+            "drift": acc[:, 4],
+            "max_abs": {c: acc[:, 5 + k] for k, c in enumerate(ENERGY_CHANNELS)}}

@@ -12,12 +12,12 @@ which `rotor.tilt_guard_z` reports.
 import numba as nb
 import numpy as np
 
+from ..integrators.lanes import LANES, nine
 from ..rotation import (
     all_finite,
     cross_t,
     mat_tvec_t,
     mat_vec_t,
-    rotation_t,
     rotation_tensor,
     rotation_z,
     rotation_zhilin_inverse_t,
@@ -61,33 +61,61 @@ def rotations(Y):
     return out
 
 
-@nb.njit(cache=True)
-def rhs_into(t, y, p, dy):
-    """Fused scalar form of the equations above (3×3 matrices as 9-tuples: no allocation)."""
-    g0, g1, g2 = y[3], y[4], y[5]
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _axes(g0, g1, g2, phi):
+    """L = L(γ)·L(φ e_z) and Z⁻¹(γ) as 9-tuples, and L(γ) itself."""
     Lg, Zi = rotation_zhilin_inverse_t(g0, g1, g2)
-    c, s = np.cos(y[6]), np.sin(y[6])
-    L = (c * Lg[0] + s * Lg[1], c * Lg[1] - s * Lg[0], Lg[2],        # L = L(γ)·L(φ e_z)
+    c, s = np.cos(phi), np.sin(phi)
+    L = (c * Lg[0] + s * Lg[1], c * Lg[1] - s * Lg[0], Lg[2],
          c * Lg[3] + s * Lg[4], c * Lg[4] - s * Lg[3], Lg[5],
          c * Lg[6] + s * Lg[7], c * Lg[7] - s * Lg[6], Lg[8])
-    u = mat_tvec_t(L, y[0], y[1], y[2])                             # body-frame momentum
-    J = p[_I0INV:_I0INV + 9]
-    om = mat_vec_t(L, J[0] * u[0] + J[1] * u[1] + J[2] * u[2],
-                   J[3] * u[0] + J[4] * u[1] + J[5] * u[2],
-                   J[6] * u[0] + J[7] * u[1] + J[8] * u[2])           # ω = L I₀⁻¹ Lᵀ K
+    return L, Zi, Lg
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _omega(L, K0, K1, K2, p, po, st):
+    """ω = L I₀⁻¹ Lᵀ K, I₀⁻¹'s entry k at p[po + (I0INV + k)·st]."""
+    u = mat_tvec_t(L, K0, K1, K2)                                   # body-frame momentum
+    J = nine(p, po + _I0INV * st, st)
+    return mat_vec_t(L, J[0] * u[0] + J[1] * u[1] + J[2] * u[2],
+                     J[3] * u[0] + J[4] * u[1] + J[5] * u[2],
+                     J[6] * u[0] + J[7] * u[1] + J[8] * u[2])
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _derivatives(y, yo, p, po, st):
+    """The equations above as an 8-tuple (3×3 matrices as 9-tuples: no allocation); entry k of
+    the state and of the parameters is y[yo + k·st], p[po + k·st]: st = 1 for one point,
+    LANES for a lane of the lanes' workspace."""
+    g0, g1, g2 = y[yo + 3 * st], y[yo + 4 * st], y[yo + 5 * st]
+    L, Zi, Lg = _axes(g0, g1, g2, y[yo + 6 * st])
+    om = _omega(L, y[yo], y[yo + st], y[yo + 2 * st], p, po, st)
     a0, a1, a2 = Lg[2], Lg[5], Lg[8]                                # L(γ)·e, the spin axis
     phi_dot = ((Zi[6] * om[0] + Zi[7] * om[1] + Zi[8] * om[2])
                / (Zi[6] * a0 + Zi[7] * a1 + Zi[8] * a2))
     dg = mat_vec_t(Zi, om[0] - phi_dot * a0, om[1] - phi_dot * a1, om[2] - phi_dot * a2)
-    rc = mat_vec_t(L, p[_RC0], p[_RC0 + 1], p[_RC0 + 2])
-    cg = cross_t(rc[0], rc[1], rc[2], p[_G], p[_G + 1], p[_G + 2])
-    k, m, torque = p[K_], p[M_], p[TORQUE]
-    dy[0] = -k * g0 + m * cg[0]
-    dy[1] = -k * g1 + m * cg[1]
-    dy[2] = -k * g2 + m * cg[2] + torque
-    dy[3], dy[4], dy[5] = dg[0], dg[1], dg[2]
-    dy[6] = phi_dot
-    dy[7] = torque * om[2]
+    rc = mat_vec_t(L, p[po + _RC0 * st], p[po + (_RC0 + 1) * st], p[po + (_RC0 + 2) * st])
+    cg = cross_t(rc[0], rc[1], rc[2], p[po + _G * st], p[po + (_G + 1) * st],
+                 p[po + (_G + 2) * st])
+    k, m, torque = p[po + K_ * st], p[po + M_ * st], p[po + TORQUE * st]
+    return (-k * g0 + m * cg[0], -k * g1 + m * cg[1], -k * g2 + m * cg[2] + torque,
+            dg[0], dg[1], dg[2], phi_dot, torque * om[2])
+
+
+@nb.njit(cache=True)
+def rhs_into(t, y, p, dy):
+    d = _derivatives(y, 0, p, 0, 1)
+    for k in range(8):
+        dy[k] = d[k]
+
+
+@nb.njit(cache=True, error_model="numpy")
+def rhs_lanes(T, Z):
+    """`rhs_into` on every lane of the lanes' workspace (`batch`'s layout)."""
+    for lane in range(LANES):
+        d = _derivatives(Z, lane, Z, batch.Z_P + lane, LANES)
+        for k in range(8):
+            Z[batch.Z_DY + k * LANES + lane] = d[k]
 
 
 @nb.njit(cache=True)
@@ -106,24 +134,31 @@ def guard(t, y, p):
     return rotor.FAIL_TILT if th > rotor.TILT_LIMIT else 0
 
 
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _motion(y, o, p, po, st):
+    """One row of `motion` as a 13-tuple (rotation row-major, fixed-frame ω, work); L and ω as
+    `rhs_into` forms them."""
+    L, _, _ = _axes(y[o + 3 * st], y[o + 4 * st], y[o + 5 * st], y[o + 6 * st])
+    return L + _omega(L, y[o], y[o + st], y[o + 2 * st], p, po, st) + (y[o + 7 * st],)
+
+
 @nb.njit(cache=True)
 def kinematics(Y, p, out):
-    """The rows of `motion` (rotation row-major, fixed-frame ω, work) for the batch path; L
-    and ω = L I₀⁻¹ Lᵀ K as `rhs_into` forms them."""
-    J = p[_I0INV:_I0INV + 9]
+    """The rows of `motion` for the batch path."""
     for i in range(Y.shape[0]):
-        Lg = rotation_t(Y[i, 3], Y[i, 4], Y[i, 5])
-        c, s = np.cos(Y[i, 6]), np.sin(Y[i, 6])
-        L = (c * Lg[0] + s * Lg[1], c * Lg[1] - s * Lg[0], Lg[2],
-             c * Lg[3] + s * Lg[4], c * Lg[4] - s * Lg[3], Lg[5],
-             c * Lg[6] + s * Lg[7], c * Lg[7] - s * Lg[6], Lg[8])
-        for k in range(9):
-            out[i, k] = L[k]
-        u = mat_tvec_t(L, Y[i, 0], Y[i, 1], Y[i, 2])
-        out[i, 9], out[i, 10], out[i, 11] = mat_vec_t(L, J[0] * u[0] + J[1] * u[1] + J[2] * u[2],
-                                                      J[3] * u[0] + J[4] * u[1] + J[5] * u[2],
-                                                      J[6] * u[0] + J[7] * u[1] + J[8] * u[2])
-        out[i, 12] = Y[i, 7]
+        m = _motion(Y[i], 0, p, 0, 1)
+        for k in range(13):
+            out[i, k] = m[k]
+
+
+@nb.njit(cache=True, error_model="numpy")
+def row_lanes(T, J, M, Z):
+    """The batch's row reduce on every lane (`batch.reduce_lanes`)."""
+    for lane in range(LANES):
+        m = _motion(Z, lane, Z, batch.Z_P + lane, LANES)
+        for k in range(13):
+            Z[batch.Z_O + k * LANES + lane] = m[k]
+    batch.reduce_lanes(T, J, M, Z)
 
 
 def motion(Y, p):
@@ -155,4 +190,4 @@ def simulate(params, t_out, settings):
 def regimes(params_list, t_out, settings, channel, levels, window):
     """Many points in one compiled call, each reduced to its regime (`batch.regimes`)."""
     return batch.regimes(rhs_into, guard, kinematics, initial_state, params_list, t_out,
-                         settings, channel, levels, window)
+                         settings, channel, levels, window, (rhs_lanes, row_lanes))

@@ -11,6 +11,7 @@ The right-hand side is fused scalar code writing into `dy` (no allocation per ev
 import numba as nb
 import numpy as np
 
+from ..integrators.lanes import LANES, nine
 from ..rotation import (
     cross_t,
     mat_tvec_t,
@@ -40,33 +41,48 @@ from .model import (  # noqa: F401  (re-exported: the leaf's settings)
 _I0, _I0INV, _RC0, _G = I0.start, I0INV.start, RC0.start, G.start
 
 
-@nb.njit(cache=True)
-def rhs_into(t, y, p, dy):
-    w, x, qy, z = y[0], y[1], y[2], y[3]
-    W0, W1, W2 = y[4], y[5], y[6]
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _derivatives(y, yo, p, o, st):
+    """The right-hand side as an 8-tuple; entry k of the state and of the parameters is
+    y[yo + k·st], p[o + k·st]: st = 1 for one point, LANES for a lane of the lanes' workspace."""
+    w, x, qy, z = y[yo], y[yo + st], y[yo + 2 * st], y[yo + 3 * st]
+    W0, W1, W2 = y[yo + 4 * st], y[yo + 5 * st], y[yo + 6 * st]
     R = quat_matrix_t(w, x, qy, z)
     # fixed-frame moment: spring −kγ (γ of the body axis R·e_z), gravity r_c × m g, drive M e_z
     gx, gy = transverse_t(R[2], R[5], R[8])
-    rc = mat_vec_t(R, p[_RC0], p[_RC0 + 1], p[_RC0 + 2])
-    cg = cross_t(rc[0], rc[1], rc[2], p[_G], p[_G + 1], p[_G + 2])
-    k, m, torque = p[K_], p[M_], p[TORQUE]
+    rc = mat_vec_t(R, p[o + _RC0 * st], p[o + (_RC0 + 1) * st], p[o + (_RC0 + 2) * st])
+    cg = cross_t(rc[0], rc[1], rc[2], p[o + _G * st], p[o + (_G + 1) * st],
+                 p[o + (_G + 2) * st])
+    k, m, torque = p[o + K_ * st], p[o + M_ * st], p[o + TORQUE * st]
     mb = mat_tvec_t(R, -k * gx + m * cg[0], -k * gy + m * cg[1], m * cg[2] + torque)
     # Euler's equations in body axes: Ω' = I₀⁻¹ (Rᵀ M − Ω × I₀Ω)
-    I = p[_I0:_I0 + 9]
-    IW = (I[0] * W0 + I[1] * W1 + I[2] * W2, I[3] * W0 + I[4] * W1 + I[5] * W2,
-          I[6] * W0 + I[7] * W1 + I[8] * W2)
+    I0_, I1, I2, I3, I4, I5, I6, I7, I8 = nine(p, o + _I0 * st, st)
+    IW = (I0_ * W0 + I1 * W1 + I2 * W2, I3 * W0 + I4 * W1 + I5 * W2,
+          I6 * W0 + I7 * W1 + I8 * W2)
     gyro = cross_t(W0, W1, W2, IW[0], IW[1], IW[2])
     b0, b1, b2 = mb[0] - gyro[0], mb[1] - gyro[1], mb[2] - gyro[2]
-    J = p[_I0INV:_I0INV + 9]
-    dy[4] = J[0] * b0 + J[1] * b1 + J[2] * b2
-    dy[5] = J[3] * b0 + J[4] * b1 + J[5] * b2
-    dy[6] = J[6] * b0 + J[7] * b1 + J[8] * b2
+    J0, J1, J2, J3, J4, J5, J6, J7, J8 = nine(p, o + _I0INV * st, st)
     # q' = ½ q ⊗ (0, Ω) with the unnormalised q
-    dy[0] = 0.5 * (-x * W0 - qy * W1 - z * W2)
-    dy[1] = 0.5 * (w * W0 + qy * W2 - z * W1)
-    dy[2] = 0.5 * (w * W1 + z * W0 - x * W2)
-    dy[3] = 0.5 * (w * W2 + x * W1 - qy * W0)
-    dy[7] = torque * (R[6] * W0 + R[7] * W1 + R[8] * W2)
+    return (0.5 * (-x * W0 - qy * W1 - z * W2), 0.5 * (w * W0 + qy * W2 - z * W1),
+            0.5 * (w * W1 + z * W0 - x * W2), 0.5 * (w * W2 + x * W1 - qy * W0),
+            J0 * b0 + J1 * b1 + J2 * b2, J3 * b0 + J4 * b1 + J5 * b2,
+            J6 * b0 + J7 * b1 + J8 * b2, torque * (R[6] * W0 + R[7] * W1 + R[8] * W2))
+
+
+@nb.njit(cache=True)
+def rhs_into(t, y, p, dy):
+    d = _derivatives(y, 0, p, 0, 1)
+    for k in range(8):
+        dy[k] = d[k]
+
+
+@nb.njit(cache=True, error_model="numpy")
+def rhs_lanes(T, Z):
+    """`rhs_into` on every lane of the lanes' workspace (`batch`'s layout)."""
+    for lane in range(LANES):
+        d = _derivatives(Z, lane, Z, batch.Z_P + lane, LANES)
+        for k in range(8):
+            Z[batch.Z_DY + k * LANES + lane] = d[k]
 
 
 @nb.njit(cache=True)
@@ -83,15 +99,32 @@ def guard(t, y, p):
     return rotor.tilt_guard_z(1.0 - 2.0 * (x * x + qy * qy) / (w * w + x * x + qy * qy + z * z))
 
 
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _motion(y, o, st):
+    """One row of `motion` as a 13-tuple (rotation row-major, fixed-frame ω, work), entry k of
+    the state at y[o + k·st]."""
+    R = quat_matrix_t(y[o], y[o + st], y[o + 2 * st], y[o + 3 * st])
+    w = mat_vec_t(R, y[o + 4 * st], y[o + 5 * st], y[o + 6 * st])
+    return R + w + (y[o + 7 * st],)
+
+
 @nb.njit(cache=True)
 def kinematics(Y, p, out):
-    """The rows of `motion` (rotation row-major, fixed-frame ω, work) for the batch path."""
+    """The rows of `motion` for the batch path."""
     for i in range(Y.shape[0]):
-        R = quat_matrix_t(Y[i, 0], Y[i, 1], Y[i, 2], Y[i, 3])
-        for k in range(9):
-            out[i, k] = R[k]
-        out[i, 9], out[i, 10], out[i, 11] = mat_vec_t(R, Y[i, 4], Y[i, 5], Y[i, 6])
-        out[i, 12] = Y[i, 7]
+        m = _motion(Y[i], 0, 1)
+        for k in range(13):
+            out[i, k] = m[k]
+
+
+@nb.njit(cache=True, error_model="numpy")
+def row_lanes(T, J, M, Z):
+    """The batch's row reduce on every lane (`batch.reduce_lanes`)."""
+    for lane in range(LANES):
+        m = _motion(Z, lane, LANES)
+        for k in range(13):
+            Z[batch.Z_O + k * LANES + lane] = m[k]
+    batch.reduce_lanes(T, J, M, Z)
 
 
 def motion(Y, p):
@@ -120,4 +153,4 @@ def simulate(params, t_out, settings):
 def regimes(params_list, t_out, settings, channel, levels, window):
     """Many points in one compiled call, each reduced to its regime (`batch.regimes`)."""
     return batch.regimes(rhs_into, guard, kinematics, initial_state, params_list, t_out,
-                         settings, channel, levels, window)
+                         settings, channel, levels, window, (rhs_lanes, row_lanes))

@@ -55,16 +55,16 @@ def nine(a, i, st):
 
 @nb.njit(cache=True, error_model="numpy")
 def _stage(y, h, A, K, s, ny, ys):
-    """ys = y + h Σ_r<s A[s, r] K[r] per lane, as `dense._stage_state` sums it."""
+    """ys = y + h Σ_r<s A[s, r] K[r] per lane, as `dense._stage_state` sums it. K is indexed
+    in place: a row view K[r] per term costs a reference count in and out (two calls)."""
     L = LANES
     for k in range(ny * L):
         ys[k] = 0.0
     for r in range(s):
         a = A[r]
         if a != 0.0:
-            Kr = K[r]
             for k in range(ny * L):
-                ys[k] += a * Kr[k]
+                ys[k] += a * K[r, k]
     for j in range(ny):
         for lane in range(L):
             k = j * L + lane
@@ -74,14 +74,14 @@ def _stage(y, h, A, K, s, ny, ys):
 @nb.njit(cache=True, error_model="numpy")
 def _sum(c, K, n, out):
     """out = Σ_s<n c[s] K[s] (zero weights skipped), as `explicit._weighted_rows`."""
-    for k in range(out.shape[0]):
+    m = K.shape[1]
+    for k in range(m):
         out[k] = 0.0
     for s in range(n):
         a = c[s]
         if a != 0.0:
-            Ks = K[s]
-            for k in range(out.shape[0]):
-                out[k] += a * Ks[k]
+            for k in range(m):
+                out[k] += a * K[s, k]
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -105,20 +105,24 @@ def _finish(lane, pt, c, tf, Z, z_acc, code, t_fail, acc):
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _error_norms(K, h, scale, E, E3, ny, w5, w3, err):
-    """`explicit._error_norm` per lane."""
+def _error_norms(K, h, scale, E, E3, ny, w5, w3, e53, err):
+    """`explicit._error_norm` per lane (e53: scratch, 2 × LANES)."""
     L = LANES
     _sum(E, K, E.shape[0], w5)
     if E3.shape[0] > 0:
         _sum(E3, K, E3.shape[0], w3)
     for lane in range(L):
-        e5 = 0.0
+        e53[0, lane] = 0.0
+        e53[1, lane] = 0.0
+    for j in range(ny):             # lanes innermost (vectorises), each lane's sum in j order
+        for lane in range(L):
+            e53[0, lane] += (w5[j * L + lane] / scale[j * L + lane]) ** 2
+    if E3.shape[0] > 0:
         for j in range(ny):
-            e5 += (w5[j * L + lane] / scale[j * L + lane]) ** 2
-        e3 = 0.0
-        if E3.shape[0] > 0:
-            for j in range(ny):
-                e3 += (w3[j * L + lane] / scale[j * L + lane]) ** 2
+            for lane in range(L):
+                e53[1, lane] += (w3[j * L + lane] / scale[j * L + lane]) ** 2
+    for lane in range(L):
+        e5, e3 = e53[0, lane], e53[1, lane]
         if E3.shape[0] == 0:
             err[lane] = abs(h[lane]) * np.sqrt(e5 / ny)
         elif e5 == 0.0 and e3 == 0.0:
@@ -160,12 +164,12 @@ def _eval_dense(y, y_new, h, x, exact, F, n_f, ny, out):
     for k in range(ny * L):
         out[k] = 0.0
     for i in range(n_f):
-        Fi = F[n_f - 1 - i]
+        r = n_f - 1 - i
         for j in range(ny):
             for lane in range(L):
                 k = j * L + lane
                 m = x[lane] if i % 2 == 0 else 1.0 - x[lane]
-                out[k] = (out[k] + Fi[k]) * m
+                out[k] = (out[k] + F[r, k]) * m
     for j in range(ny):
         for lane in range(L):
             k = j * L + lane
@@ -195,6 +199,7 @@ def integrate_dop853_lanes(f, guard, row, Y0, P, t_out, rtol, atol, h_max, max_s
     w5, w3, out, scale = np.empty(ny * L), np.empty(ny * L), np.empty(ny * L), np.empty(ny * L)
     Z = np.zeros((2 * ny + n_p + n_a + n_s) * L)
     z_p, z_acc = 2 * ny * L, (2 * ny + n_p) * L
+    e53 = np.zeros((2, L))
     lane_f = np.zeros((10, L))          # per lane: times, row index, mask, x, step, error
     T, Tr, Jr, M, x = lane_f[0], lane_f[1], lane_f[2], lane_f[3], lane_f[4]
     t, h, h_try, t_new, err = lane_f[5], lane_f[6], lane_f[7], lane_f[8], lane_f[9]
@@ -272,7 +277,7 @@ def integrate_dop853_lanes(f, guard, row, Y0, P, t_out, rtol, atol, h_max, max_s
         _call(f, T, y_new, Z, K[n_st])
         for k in range(ny * L):
             scale[k] = atol + max(abs(y[k]), abs(y_new[k])) * rtol
-        _error_norms(K, h_try, scale, E, E3, ny, w5, w3, err)
+        _error_norms(K, h_try, scale, E, E3, ny, w5, w3, e53, err)
         any_dense = False
         for lane in range(L):
             if pt[lane] < 0:

@@ -9,6 +9,7 @@ import pytest
 from compare import solvers
 from compare.scenes import get_scene
 from compare.workflows import maps
+from custom_models.rotor import batch
 
 SOLVERS = ("quaternion", "euler-vector")
 ENGINES = ("mujoco", "exudyn")
@@ -187,3 +188,40 @@ def test_mujoco_rolls_carry_their_own_numbers_and_a_flagged_roll_comes_back_fail
         e = trs[i].channels["energy_balance"]
         assert res["drift"][i] == np.max(np.abs(e - e[0]))
         assert res["max_abs"]["kinetic"][i] == np.max(np.abs(trs[i].channels["kinetic"]))
+
+
+@pytest.mark.parametrize("name", SOLVERS)
+def test_lanes_give_the_scalar_drivers_numbers_bit_for_bit(name):
+    """DOP853 over SIMD lanes (`integrators.lanes`, the batch's path for dop853) against the
+    scalar driver on the same right-hand side (`batch.regimes` without lanes; the scalar path is
+    checked against single runs above): 21 points — not a multiple of the 8 lanes, of unequal
+    step counts, so lanes refill while others run; one tilted near π at rest — at the map's
+    cheap and accurate tolerances, and with a step budget some points exhaust (a failure
+    mid-block). Every number is equal: each lane runs the scalar driver's arithmetic in its
+    order (measured difference 0). Seeded: the step allowed to grow right after a rejection,
+    the interpolant's x/(1−x) alternation dropped, a lane's row counted without its mask —
+    each fails here."""
+    sc, s = get_scene("rotor-spinup"), solvers.get_solver(name)
+    leaf = s.leaf(sc)
+    rng = np.random.default_rng(7)
+    ps = [sc.resolve({"t_end": 10, "torque": float(rng.uniform(1, 5)),
+                      "eccentricity": float(rng.uniform(0, 0.02))}) for _ in range(20)]
+    ps.append(sc.resolve({"t_end": 10, "torque": 0.0, "tilt0": 3.0, "spin0": 0.0}))
+    t_out = sc.output_grid(ps[0])
+    levels = np.array([sc.regime.levels(p) for p in ps])
+    args = (leaf.rhs_into, leaf.guard, leaf.kinematics, leaf.initial_state, ps, t_out)
+    codes = set()
+    for st in ({"rtol": 1e-4}, {"rtol": 1e-11}, {"rtol": 1e-4, "max_steps": 300}):
+        st = {**leaf.DEFAULT_SETTINGS, **st}
+        scalar = batch.regimes(*args, st, "omega_norm", levels, sc.regime.window)
+        lanes = batch.regimes(*args, st, "omega_norm", levels, sc.regime.window,
+                              (leaf.rhs_lanes, leaf.row_lanes))
+        assert np.array_equal(lanes["code"], scalar["code"])
+        assert np.array_equal(lanes["t_fail"], scalar["t_fail"], equal_nan=True)
+        ok = scalar["code"] == 0
+        for k in ("regime", "finite", "drift"):
+            assert np.array_equal(lanes[k][ok], scalar[k][ok])
+        for c in scalar["max_abs"]:
+            assert np.array_equal(lanes["max_abs"][c][ok], scalar["max_abs"][c][ok])
+        codes |= set(scalar["code"])
+    assert len(codes) >= 2                     # finished and failed points both compared

@@ -34,14 +34,14 @@ from .explicit import (
 LANES = 8
 # The lanes' workspace Z, flat [row · LANES + lane], rows in this order: the state y (ny rows),
 # its derivative dy (ny), the point's parameters p (n_p), the row reduce's accumulators (n_a),
-# scratch (n_s). One array, not five: each access is then Z[constant + lane], which LLVM can
+# an output row's time, index and mask (3: `row` reduces the lanes whose mask is 1), scratch
+# (n_s). One array, not five: each access is then Z[constant + lane], which LLVM can
 # prove free of overlap; between separate arrays it needs runtime alias checks and, for an
 # 8-iteration loop, does not vectorise at all (measured: no vector instruction).
 # f(T, Z): dy = f(y) on every lane, T the lanes' times
 RHS_LANES = nt.FunctionType(nt.void(_VEC, _VEC))
-# row(T, J, M, Z): one output row (in y) into the accumulators of each lane where M = 1 (J: the
-# row's index, T its time)
-ROW_LANES = nt.FunctionType(nt.void(_VEC, _VEC, _VEC, _VEC))
+# row(Z): one output row (in y) into the accumulators of each lane whose mask is 1
+ROW_LANES = nt.FunctionType(nt.void(_VEC))
 _I64 = nt.int64[::1]
 
 
@@ -197,11 +197,12 @@ def integrate_dop853_lanes(f, guard, row, Y0, P, t_out, rtol, atol, h_max, max_s
     F = np.empty((n_f, ny * L))
     y, y_new, ys, fy = np.zeros(ny * L), np.zeros(ny * L), np.zeros(ny * L), np.zeros(ny * L)
     w5, w3, out, scale = np.empty(ny * L), np.empty(ny * L), np.empty(ny * L), np.empty(ny * L)
-    Z = np.zeros((2 * ny + n_p + n_a + n_s) * L)
+    Z = np.zeros((2 * ny + n_p + n_a + 3 + n_s) * L)
     z_p, z_acc = 2 * ny * L, (2 * ny + n_p) * L
+    Tr, Jr, M = Z[z_acc + n_a * L:], Z[z_acc + (n_a + 1) * L:], Z[z_acc + (n_a + 2) * L:]
     e53 = np.zeros((2, L))
     lane_f = np.zeros((10, L))          # per lane: times, row index, mask, x, step, error
-    T, Tr, Jr, M, x = lane_f[0], lane_f[1], lane_f[2], lane_f[3], lane_f[4]
+    T, x = lane_f[0], lane_f[4]
     t, h, h_try, t_new, err = lane_f[5], lane_f[6], lane_f[7], lane_f[8], lane_f[9]
     lane_i = np.zeros((3, L), np.int64)
     steps, rejected, i_out = lane_i[0], lane_i[1], lane_i[2]
@@ -241,7 +242,7 @@ def integrate_dop853_lanes(f, guard, row, Y0, P, t_out, rtol, atol, h_max, max_s
                     h[lane] = min(initial_step(ysc, fsc, rtol, atol), h_max)
             for k in range(ny * L):
                 Z[k] = y[k]
-            row(Tr, Jr, M, Z)
+            row(Z)
         busy = False
         for lane in range(L):
             accepted[lane] = False
@@ -319,7 +320,7 @@ def integrate_dop853_lanes(f, guard, row, Y0, P, t_out, rtol, atol, h_max, max_s
             if not pending:
                 break
             _eval_dense(y, y_new, h_try, x, exact, F, n_f, ny, Z)
-            row(Tr, Jr, M, Z)
+            row(Z)
             for lane in range(L):
                 if M[lane] != 0.0:
                     i_out[lane] += 1

@@ -38,13 +38,14 @@ ACC0 = np.array([-1.0, np.inf, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0])
 N_PACK = I0INV.stop                 # the packed parameters' length: lane rows go on with levels
 # the lanes' workspace (integrators.lanes): state and derivative (8 rows each), the point's
 # packed parameters with reach, stay and the window's start, ACC0, then the rows' motion (13)
-# and channels (3) as scratch
+# as scratch
 NY, L = 8, LANES
 Z_DY, Z_P = NY * L, 2 * NY * L
 Z_ACC = Z_P + (N_PACK + 3) * L
-Z_O = Z_ACC + len(ACC0) * L
-Z_CH = Z_O + 13 * L
-N_SCRATCH = 16
+Z_T = Z_ACC + len(ACC0) * L        # the row's time, index, mask
+Z_J, Z_M = Z_T + L, Z_T + 2 * L
+Z_O = Z_T + 3 * L
+N_SCRATCH = 13
 _I0, _RC0, _G = I0.start, RC0.start, G.start
 _I64 = nt.int64[::1]
 
@@ -69,23 +70,30 @@ def _channels(o, oo, ost, p, po, pst):
 
 
 @nb.njit(cache=True, inline="always")
-def _accumulate(wn, ke, pe, work, j, t, reach, t_window, acc, a, st):
-    """One row into a run's accumulators acc[a + k·st] (ACC0's layout), as `_reduce` adds it."""
+def _keep_max(on, acc, i, v):
+    acc[i] = max(acc[i], v) if on else acc[i]
+
+
+@nb.njit(cache=True, inline="always")
+def _accumulate(on, wn, ke, pe, work, j, t, reach, t_window, acc, a, st):
+    """One row into a run's accumulators acc[a + k·st] (ACC0's layout) where `on`; written
+    with selects, not branches, so that the loop over lanes vectorises."""
     e = ke + pe - work
-    if j == 0:
-        acc[a + _E0 * st] = e
-    e0 = acc[a + _E0 * st]
-    if not (np.isfinite(wn) and np.isfinite(e)):
-        acc[a + _FINITE * st] = 0.0
-    acc[a + 4 * st] = max(acc[a + 4 * st], abs(e - e0))
-    acc[a + 5 * st] = max(acc[a + 5 * st], abs(e))
-    acc[a + 6 * st] = max(acc[a + 6 * st], abs(ke))
-    acc[a + 7 * st] = max(acc[a + 7 * st], abs(pe))
-    acc[a + 8 * st] = max(acc[a + 8 * st], abs(work))
-    if acc[a + _FIRST * st] < 0 and wn >= reach:
-        acc[a + _FIRST * st] = j
-    if t >= t_window:
-        acc[a + _WMIN * st] = min(acc[a + _WMIN * st], wn)
+    i = a + _E0 * st
+    acc[i] = e if on & (j == 0) else acc[i]
+    e0 = acc[i]
+    i = a + _FINITE * st
+    fin = np.isfinite(wn) & np.isfinite(e)
+    acc[i] = acc[i] if fin or not on else 0.0
+    _keep_max(on, acc, a + 4 * st, abs(e - e0))
+    _keep_max(on, acc, a + 5 * st, abs(e))
+    _keep_max(on, acc, a + 6 * st, abs(ke))
+    _keep_max(on, acc, a + 7 * st, abs(pe))
+    _keep_max(on, acc, a + 8 * st, abs(work))
+    i = a + _FIRST * st
+    acc[i] = j if on & (acc[i] < 0) & (wn >= reach) else acc[i]
+    i = a + _WMIN * st
+    acc[i] = min(acc[i], wn) if on & (t >= t_window) else acc[i]
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -95,21 +103,18 @@ def _reduce(Y, p, t_out, kin, reach, t_window, acc):
     kin(Y, p, O)
     for j in range(Y.shape[0]):
         wn, ke, pe = _channels(O[j], 0, 1, p, 0, 1)
-        _accumulate(wn, ke, pe, O[j, 12], j, t_out[j], reach, t_window, acc, 0, 1)
+        _accumulate(True, wn, ke, pe, O[j, 12], j, t_out[j], reach, t_window, acc, 0, 1)
 
 
-@nb.njit(cache=True, error_model="numpy")
-def reduce_lanes(T, J, M, Z):
-    """`_reduce` for the row of each lane where M = 1, its motion already in the workspace's
-    Z_O rows (the formulation's `row_lanes` puts it there)."""
-    for lane in range(L):           # all lanes: the loop vectorises
-        wn, ke, pe = _channels(Z, Z_O + lane, L, Z, Z_P + lane, L)
-        Z[Z_CH + lane], Z[Z_CH + L + lane], Z[Z_CH + 2 * L + lane] = wn, ke, pe
-    for lane in range(L):
-        if M[lane] != 0.0:
-            _accumulate(Z[Z_CH + lane], Z[Z_CH + L + lane], Z[Z_CH + 2 * L + lane],
-                        Z[Z_O + 12 * L + lane], J[lane], T[lane], Z[Z_P + N_PACK * L + lane],
-                        Z[Z_P + (N_PACK + 2) * L + lane], Z, Z_ACC + lane, L)
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def reduce_lane(Z, lane):
+    """`_reduce` for the row of one lane where its mask is 1, the row's motion already in the
+    workspace's Z_O rows (the formulation's `row_lanes` forms it in a loop over the lanes of
+    its own, which vectorises; this one, with its selects, does not — fused, neither did)."""
+    wn, ke, pe = _channels(Z, Z_O + lane, L, Z, Z_P + lane, L)
+    _accumulate(Z[Z_M + lane] != 0.0, wn, ke, pe, Z[Z_O + 12 * L + lane], Z[Z_J + lane],
+                Z[Z_T + lane], Z[Z_P + N_PACK * L + lane], Z[Z_P + (N_PACK + 2) * L + lane], Z,
+                Z_ACC + lane, L)
 
 
 @nb.njit(nt.void(RHS_INTO, GUARD, KINEMATICS, _MAT, _MAT, _VEC, _MAT, nt.float64,

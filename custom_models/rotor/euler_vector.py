@@ -152,13 +152,14 @@ def kinematics(Y, p, out):
 
 
 @nb.njit(cache=True, error_model="numpy")
-def row_lanes(T, J, M, Z):
-    """The batch's row reduce on every lane (`batch.reduce_lanes`)."""
+def row_lanes(Z):
+    """The batch's row reduce on every lane (`batch.reduce_lane`)."""
     for lane in range(LANES):
         m = _motion(Z, lane, Z, batch.Z_P + lane, LANES)
         for k in range(13):
             Z[batch.Z_O + k * LANES + lane] = m[k]
-    batch.reduce_lanes(T, J, M, Z)
+    for lane in range(LANES):
+        batch.reduce_lane(Z, lane)
 
 
 def motion(Y, p):

@@ -1,33 +1,37 @@
 """DOP853 with dense output over LANES points at once: the map's batch on the CPU's SIMD lanes.
 
-`dense.integrate_adaptive_dense` runs one point; its right-hand side is scalar code, ~70–100 ns
-an evaluation for the rotor, and a cheap map point is ~4000 of them. Here LANES points step side
+`dense.integrate_adaptive_dense` runs one point; its right-hand side is scalar code, ~60–100 ns
+an evaluation for the rotor, and a cheap map point is ~4800 of them. Here LANES points step side
 by side, each with its own time, step size, error and acceptance, exactly as the scalar driver
 steps it: every stage sum, error norm, step-size rule and dense evaluation is the scalar
-driver's expression evaluated per lane, so each lane's numbers are bit for bit the scalar
-driver's (tests/test_map_batch.py). What the lanes share is the loop over them: the stage sums,
-the right-hand side `f(T, Y, P, DY)` and the per-row reduce `row(T, J, M, Y, P, ACC)` loop over
-the lanes innermost, which LLVM vectorises (measured on the rotor's quaternion right-hand side:
-27 against 71 ns a point-evaluation). The arrays are flat, [row · LANES + lane]: with one
-compile-time stride per array the loop needs few runtime alias checks — a right-hand side over
-[row, point] arrays with many separate row pointers did not vectorise at all.
+driver's expression evaluated per lane, in its order, so each lane's numbers are bit for bit
+the scalar driver's (tests/test_map_batch.py). What the lanes share is the loop over them: the
+stage sums, the right-hand side `f(T, Z)` and the per-row reduce `row(Z)` loop over the lanes
+innermost, which LLVM vectorises (the rotor's quaternion right-hand side: 23–37 ns a lane
+against 57–71 ns scalar, measured in the same process, twice).
 
 A lane whose point is done (or failed) takes the next point at once, so no lane waits for the
 slowest. Outputs: per point the failure code and time (as the scalar driver's) and the row
-reduce's accumulators (`row` keeps them in ACC, [k · LANES + lane]; a point starts from `acc0`).
+reduce's accumulators (kept in the workspace's accumulator rows; a point starts from `acc0`).
 For a failed point the accumulators cover the rows before the failure only.
+
+What it took to vectorise (each measured on the compiled code's instructions): one workspace
+array, not one array per quantity (below); the model's helpers inlined at numba's level
+(`inline="always"`: left to LLVM's inliner, they were inlined too late for the loop
+vectoriser) and compiled in numpy's error model (numba's division check raises, and a loop
+with a raise does not vectorise); rows indexed in place (a row view per term costs a
+reference-count call pair). Loops whose body is short are unrolled instead and stay scalar
+(the row reduce's selects).
 """
 import numba as nb
 import numpy as np
 from numba import types as nt
 
 from .explicit import (
-    _MAT,
     _VEC,
     FAIL_MAX_STEPS,
     FAIL_OK,
     FAIL_STEP_UNDERFLOW,
-    GUARD,
     initial_step,
 )
 
@@ -176,9 +180,7 @@ def _eval_dense(y, y_new, h, x, exact, F, n_f, ny, out):
             out[k] = y_new[k] if exact[lane] else y[k] + out[k]
 
 
-@nb.njit(nt.void(RHS_LANES, GUARD, ROW_LANES, _MAT, _MAT, _VEC, nt.float64, nt.float64,
-                 nt.float64, nt.int64, _MAT, _VEC, _VEC, _VEC, _VEC, nt.int64, _MAT, _VEC,
-                 _MAT, _VEC, nt.int64, _I64, _VEC, _MAT), cache=True)
+@nb.njit(cache=True)       # typed on first use, not at import: most processes never call it
 def integrate_dop853_lanes(f, guard, row, Y0, P, t_out, rtol, atol, h_max, max_steps,
                            A, B, C, E, E3, err_order, AX, CX, D, acc0, n_s, code, t_fail, acc):
     """Every point i (state Y0[i], parameters P[i]) on the output grid `t_out`; fills code[i],

@@ -303,3 +303,17 @@ def test_a_solver_that_fails_makes_the_map_incomplete(monkeypatch):
     assert v["verdict"] == "incomplete" and "RuntimeError: injected" in v["why"][0], v
     assert res["status"]["status"] == "incomplete" and res["status"]["incomplete"] == 1
     assert "quaternion vs mujoco: incomplete" in text
+
+
+def test_a_points_store_key_is_the_digest_of_its_whole_task():
+    """The Runner builds its keys from a batch's shared parts serialised once; a stored point
+    must keep the key it had when the whole task dict was serialised (campaigns resume on
+    it): the same digest, for several solvers, settings and points in one batch."""
+    sc = get_scene("rotor-spinup")
+    runner = maps.Runner(sc, {"t_end": 10, "spin0": 5.0}, None, salt="s1")
+    st_a, st_b = {"integrator": "dop853", "rtol": 1e-4, "atol": None}, {"rtol": 1e-11}
+    tasks = [("quaternion", st_a, {"torque": 1.5, "eccentricity": 0.01}),
+             ("euler-vector", st_b, {"torque": 2.0}), ("quaternion", st_b, {"torque": 2.0})]
+    assert runner._keys(tasks) == [
+        maps._digest({"scene": sc.name, "base": runner.base, "solver": s, "settings": st,
+                      "point": pt, "what": None, "salt": "s1"}) for s, st, pt in tasks]

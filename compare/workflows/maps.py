@@ -168,6 +168,9 @@ class Runner:
             out.append(hashlib.sha256((a + text(pt) + b).encode()).hexdigest())
         return out
 
+    def _key(self, solver, settings, pt):
+        return self._keys([(solver, settings, pt)])[0]
+
     def run(self, tasks):
         """tasks: [(solver, settings, point)] → the rows, in order."""
         todo, keys = {}, self._keys(tasks)

@@ -4,6 +4,8 @@
 - `dense`: the drivers, with dense output (DOP853's 7th-order extension, Dopri5/RK23
   interpolants, cubic Hermite for fixed steps): the step is set by the tolerance or `dt` alone;
   the right-hand side writes into a given array, `f(t, y, p, dy)`.
+- `lanes`: DOP853 with dense output over 8 points at once on the SIMD lanes (a map's batch),
+  each lane bit for bit `dense`'s driver.
 - `linear_acceleration`: the linear-acceleration (Wilson-θ) method for M(q) q'' = Q(q, q', t).
 - `implicit`: building blocks for stiff systems (O(n) block-tridiagonal Newton solves for
   spring–mass chains, bordered by one extra unknown).

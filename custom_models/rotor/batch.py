@@ -37,15 +37,16 @@ _FIRST, _WMIN, _E0, _FINITE = 0, 1, 2, 3
 ACC0 = np.array([-1.0, np.inf, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0])
 N_PACK = I0INV.stop                 # the packed parameters' length: lane rows go on with levels
 # the lanes' workspace (integrators.lanes): state and derivative (8 rows each), the point's
-# packed parameters with reach, stay and the window's start, ACC0, then the rows' motion (13)
-# as scratch
+# packed parameters with reach, stay and the window's start, ACC0, an output row's time,
+# index and mask, then the row's motion (13) and channels (3) as scratch
 NY, L = 8, LANES
 Z_DY, Z_P = NY * L, 2 * NY * L
 Z_ACC = Z_P + (N_PACK + 3) * L
 Z_T = Z_ACC + len(ACC0) * L        # the row's time, index, mask
 Z_J, Z_M = Z_T + L, Z_T + 2 * L
 Z_O = Z_T + 3 * L
-N_SCRATCH = 13
+Z_CH = Z_O + 13 * L                 # the row's |ω|, kinetic and potential energy
+N_SCRATCH = 16
 _I0, _RC0, _G = I0.start, RC0.start, G.start
 _I64 = nt.int64[::1]
 
@@ -61,7 +62,9 @@ def _channels(o, oo, ost, p, po, pst):
     kin = 0.5 * (b[0] * (I[0] * b[0] + I[1] * b[1] + I[2] * b[2])
                  + b[1] * (I[3] * b[0] + I[4] * b[1] + I[5] * b[2])
                  + b[2] * (I[6] * b[0] + I[7] * b[1] + I[8] * b[2]))
-    tilt = np.arctan2(np.hypot(R[2], R[5]), R[8])
+    # √ rather than hypot: hypot is a libm call with its own branches, which kept the loop over
+    # lanes from vectorising (≤ 1 ulp apart; physics.rotor.tilt keeps hypot)
+    tilt = np.arctan2(np.sqrt(R[2] * R[2] + R[5] * R[5]), R[8])
     rc = mat_vec_t(R, p[po + _RC0 * pst], p[po + (_RC0 + 1) * pst], p[po + (_RC0 + 2) * pst])
     pot = 0.5 * p[po + K_ * pst] * tilt * tilt - p[po + M_ * pst] * (
         rc[0] * p[po + _G * pst] + rc[1] * p[po + (_G + 1) * pst]
@@ -106,15 +109,20 @@ def _reduce(Y, p, t_out, kin, reach, t_window, acc):
         _accumulate(True, wn, ke, pe, O[j, 12], j, t_out[j], reach, t_window, acc, 0, 1)
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
-def reduce_lane(Z, lane):
-    """`_reduce` for the row of one lane where its mask is 1, the row's motion already in the
-    workspace's Z_O rows (the formulation's `row_lanes` forms it in a loop over the lanes of
-    its own, which vectorises; this one, with its selects, does not — fused, neither did)."""
-    wn, ke, pe = _channels(Z, Z_O + lane, L, Z, Z_P + lane, L)
-    _accumulate(Z[Z_M + lane] != 0.0, wn, ke, pe, Z[Z_O + 12 * L + lane], Z[Z_J + lane],
-                Z[Z_T + lane], Z[Z_P + N_PACK * L + lane], Z[Z_P + (N_PACK + 2) * L + lane], Z,
-                Z_ACC + lane, L)
+@nb.njit(cache=True, error_model="numpy")
+def reduce_lanes(Z):
+    """`_reduce` for the row of each lane whose mask is 1, the row's motion already in the
+    workspace's Z_O rows (the formulation's `row_lanes` forms it). Three loops over the lanes,
+    each vectorised or not on its own: the motion's and the channels' (these two vectorise),
+    then the accumulators' selects (unrolled, scalar; fused with either, neither vectorised)."""
+    for lane in range(L):
+        Z[Z_CH + lane], Z[Z_CH + L + lane], Z[Z_CH + 2 * L + lane] = _channels(
+            Z, Z_O + lane, L, Z, Z_P + lane, L)
+    for lane in range(L):
+        _accumulate(Z[Z_M + lane] != 0.0, Z[Z_CH + lane], Z[Z_CH + L + lane],
+                    Z[Z_CH + 2 * L + lane], Z[Z_O + 12 * L + lane], Z[Z_J + lane],
+                    Z[Z_T + lane], Z[Z_P + N_PACK * L + lane], Z[Z_P + (N_PACK + 2) * L + lane],
+                    Z, Z_ACC + lane, L)
 
 
 @nb.njit(nt.void(RHS_INTO, GUARD, KINEMATICS, _MAT, _MAT, _VEC, _MAT, nt.float64,

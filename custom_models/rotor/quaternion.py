@@ -119,13 +119,12 @@ def kinematics(Y, p, out):
 
 @nb.njit(cache=True, error_model="numpy")
 def row_lanes(Z):
-    """The batch's row reduce on every lane (`batch.reduce_lane`)."""
+    """The batch's row reduce on every lane (`batch.reduce_lanes`)."""
     for lane in range(LANES):
         m = _motion(Z, lane, LANES)
         for k in range(13):
             Z[batch.Z_O + k * LANES + lane] = m[k]
-    for lane in range(LANES):
-        batch.reduce_lane(Z, lane)
+    batch.reduce_lanes(Z)
 
 
 def motion(Y, p):

@@ -354,7 +354,7 @@ class Scene:
         if self.check:
             self.check(values)
         if self.is_time:
-            self.output_grid(values)               # the grid must fit before anything runs
+            self.output_steps(values)              # the grid must fit before anything runs
         return values
 
     def tolerances_for(self, params):
@@ -397,12 +397,16 @@ class Scene:
             "campaign_cases": (), "extremes": (), "regime": None, "map_observables": {},
             "maps": ()})
 
-    def output_grid(self, params):
+    def output_steps(self, params):
+        """The output grid's number of steps; BadInput unless output_dt divides t_end."""
         t_end, dt = params["t_end"], params["output_dt"]
         n = int(round(t_end / dt))
         if n < 1 or abs(n * dt - t_end) > 1e-9 * t_end:
             raise BadInput(f"output_dt: {dt:g} s must divide t_end = {t_end:g} s into whole steps")
-        return np.linspace(0.0, t_end, n + 1)
+        return n
+
+    def output_grid(self, params):
+        return np.linspace(0.0, params["t_end"], self.output_steps(params) + 1)
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ from ..integrators.dense import (
 from ..integrators.explicit import _MAT, _VEC, GUARD
 from ..integrators.lanes import LANES, RHS_LANES, ROW_LANES, integrate_dop853_lanes, nine
 from ..rotation import mat_tvec_t, mat_vec_t
-from .model import I0, I0INV, K_, M_, RC0, G, check_settings, pack
+from .model import I0, I0INV, K_, M_, RC0, G, check_settings, pack_many
 
 # kinematics(Y, p, O): each row of O = rotation body → fixed (9, row-major), fixed-frame ω (3),
 # work of that row of Y — one call per run, not one call through a pointer per row
@@ -158,7 +158,7 @@ def regimes(rhs_into, guard, kinematics, initial_state, params_list, t_out, sett
         return None
     s = check_settings(settings, t_out)
     t_out = np.ascontiguousarray(t_out, float)
-    P = np.stack([pack(p) for p in params_list])
+    P = pack_many(params_list)
     Y0 = np.stack([initial_state(p, pk) for p, pk in zip(params_list, P)])
     levels = np.ascontiguousarray(levels, float)
     n = len(params_list)

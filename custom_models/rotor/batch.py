@@ -5,7 +5,11 @@ Every point runs the shared integrator core of `integrators.dense` on the formul
 right-hand side and guard — the same compiled calls `simulate` makes — on the same output grid;
 nothing per point returns to Python. With DOP853 (the map's cheap and accurate levels) the
 points run 8 at a time on the SIMD lanes (`integrators.lanes`, the formulation's `rhs_lanes` and
-`row_lanes`), each lane bit for bit the scalar driver: about twice the points a second. From each run's rows it keeps what the map's decision
+`row_lanes`), each lane bit for bit the scalar driver: about twice the points a second.
+Each formulation writes its own four short wrappers over its inline cores (`rhs_into`,
+`rhs_lanes`, `kinematics`, `row_lanes`), alike in both files: numba takes no function as a
+compile-time argument, and wrappers made by a factory are closures, which missed numba's disk
+cache in every new process (measured: a second process compiled and saved a second entry). From each run's rows it keeps what the map's decision
 needs: the integrator's code, the regime (the scene's speed levels on |ω|) and the energy
 numbers of the adapter's divergence rule (largest drift of the energy balance from its first
 value, largest |value| of each energy channel), so that the caller applies that rule as

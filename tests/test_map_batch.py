@@ -215,7 +215,7 @@ def test_lanes_give_the_scalar_drivers_numbers_bit_for_bit(name):
         st = {**leaf.DEFAULT_SETTINGS, **st}
         scalar = batch.regimes(*args, st, "omega_norm", levels, sc.regime.window)
         lanes = batch.regimes(*args, st, "omega_norm", levels, sc.regime.window,
-                              (leaf.rhs_lanes, leaf.row_lanes))
+                              (leaf.rhs_lanes, leaf.row_lanes), lanes_from=1)
         assert np.array_equal(lanes["code"], scalar["code"])
         assert np.array_equal(lanes["t_fail"], scalar["t_fail"], equal_nan=True)
         ok = scalar["code"] == 0

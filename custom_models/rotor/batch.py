@@ -5,15 +5,19 @@ Every point runs the shared integrator core of `integrators.dense` on the formul
 right-hand side and guard — the same compiled calls `simulate` makes — on the same output grid;
 nothing per point returns to Python. With DOP853 (the map's cheap and accurate levels) the
 points run 8 at a time on the SIMD lanes (`integrators.lanes`, the formulation's `rhs_lanes` and
-`row_lanes`), each lane bit for bit the scalar driver: about twice the points a second.
+`row_lanes`), each lane bit for bit the scalar driver: about twice the points a second (a
+batch of `LANES_FROM` points or more).
+
 Each formulation writes its own four short wrappers over its inline cores (`rhs_into`,
 `rhs_lanes`, `kinematics`, `row_lanes`), alike in both files: numba takes no function as a
 compile-time argument, and wrappers made by a factory are closures, which missed numba's disk
-cache in every new process (measured: a second process compiled and saved a second entry). From each run's rows it keeps what the map's decision
-needs: the integrator's code, the regime (the scene's speed levels on |ω|) and the energy
-numbers of the adapter's divergence rule (largest drift of the energy balance from its first
-value, largest |value| of each energy channel), so that the caller applies that rule as
-`simulate` does. The per-row channels are `physics.rotor.channels` in scalar form.
+cache in every new process (measured: a second process compiled and saved a second entry).
+
+From each run's rows it keeps what the map's decision needs: the integrator's code, the regime
+(the scene's speed levels on |ω|) and the energy numbers of the adapter's divergence rule
+(largest drift of the energy balance from its first value, largest |value| of each energy
+channel), so that the caller applies that rule as `simulate` does. The per-row channels are
+`physics.rotor.channels` in scalar form.
 """
 import numba as nb
 import numpy as np
@@ -151,13 +155,20 @@ def _kernel(f, guard, kin, Y0, P, t_out, levels, window, dt, rtol, atol, h_max, 
         _reduce(Y, P[i], t_out, kin, levels[i, 0], t_window, acc[i])
 
 
+# a batch this small runs scalar: the lanes save ≲ 0.3 ms a point, and their first compile on a
+# machine costs 15–19 s (numba caches it after) — the campaign's maps, 45-point coarse grids in
+# ~11-point chunks, would pay it for nothing; a 10,000-point map's chunks are thousands
+LANES_FROM = 64
+
+
 def regimes(rhs_into, guard, kinematics, initial_state, params_list, t_out, settings,
-            channel, levels, window, lanes=None):
+            channel, levels, window, lanes=None, lanes_from=LANES_FROM):
     """Run every point of `params_list` on the grid `t_out` in one compiled call; the regime
     is read off `channel` (only |ω|, "omega_norm": else None). `levels`: (n, 2) per point
     (reach, stay above), `window`: the fraction of the run after which |ω| must stay above.
     `lanes`: the formulation's (rhs_lanes, row_lanes), with which DOP853 runs LANES points at
-    once (`integrators.lanes`: bit for bit the scalar driver's numbers, ~2× the points a second).
+    once (`integrators.lanes`: bit for bit the scalar driver's numbers, ~2× the points a second)
+    for a batch of at least `lanes_from` points.
     Returns {"code", "t_fail", "regime", "finite", "drift", "max_abs": {channel: (n,)}}
     (code ≠ 0: the run failed)."""
     if channel != "omega_norm":
@@ -177,7 +188,7 @@ def regimes(rhs_into, guard, kinematics, initial_state, params_list, t_out, sett
     rtol = float(s["rtol"])
     atol, h_max = float(s["atol"] or rtol * 1e-2), float(s["h_max"] or 0.0)
     t_window = float(window) * t_out[-1]
-    if lanes and s["integrator"] == "dop853":
+    if lanes and s["integrator"] == "dop853" and n >= lanes_from:
         rhs_lanes, row_lanes = lanes
         P_rows = np.hstack([P, levels, np.full((n, 1), t_window)])     # N_PACK: reach, stay, t₀
         integrate_dop853_lanes(

@@ -42,26 +42,26 @@ _I0, _I0INV, _RC0, _G = I0.start, I0INV.start, RC0.start, G.start
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy")
-def _derivatives(y, yo, p, o, st):
+def _derivatives(y, yo, p, po, st):
     """The right-hand side as an 8-tuple; entry k of the state and of the parameters is
-    y[yo + k·st], p[o + k·st]: st = 1 for one point, LANES for a lane of the lanes' workspace."""
+    y[yo + k·st], p[po + k·st]: st = 1 for one point, LANES for a lane of the lanes' workspace."""
     w, x, qy, z = y[yo], y[yo + st], y[yo + 2 * st], y[yo + 3 * st]
     W0, W1, W2 = y[yo + 4 * st], y[yo + 5 * st], y[yo + 6 * st]
     R = quat_matrix_t(w, x, qy, z)
     # fixed-frame moment: spring −kγ (γ of the body axis R·e_z), gravity r_c × m g, drive M e_z
     gx, gy = transverse_t(R[2], R[5], R[8])
-    rc = mat_vec_t(R, p[o + _RC0 * st], p[o + (_RC0 + 1) * st], p[o + (_RC0 + 2) * st])
-    cg = cross_t(rc[0], rc[1], rc[2], p[o + _G * st], p[o + (_G + 1) * st],
-                 p[o + (_G + 2) * st])
-    k, m, torque = p[o + K_ * st], p[o + M_ * st], p[o + TORQUE * st]
+    rc = mat_vec_t(R, p[po + _RC0 * st], p[po + (_RC0 + 1) * st], p[po + (_RC0 + 2) * st])
+    cg = cross_t(rc[0], rc[1], rc[2], p[po + _G * st], p[po + (_G + 1) * st],
+                 p[po + (_G + 2) * st])
+    k, m, torque = p[po + K_ * st], p[po + M_ * st], p[po + TORQUE * st]
     mb = mat_tvec_t(R, -k * gx + m * cg[0], -k * gy + m * cg[1], m * cg[2] + torque)
     # Euler's equations in body axes: Ω' = I₀⁻¹ (Rᵀ M − Ω × I₀Ω)
-    I0_, I1, I2, I3, I4, I5, I6, I7, I8 = nine(p, o + _I0 * st, st)
+    I0_, I1, I2, I3, I4, I5, I6, I7, I8 = nine(p, po + _I0 * st, st)
     IW = (I0_ * W0 + I1 * W1 + I2 * W2, I3 * W0 + I4 * W1 + I5 * W2,
           I6 * W0 + I7 * W1 + I8 * W2)
     gyro = cross_t(W0, W1, W2, IW[0], IW[1], IW[2])
     b0, b1, b2 = mb[0] - gyro[0], mb[1] - gyro[1], mb[2] - gyro[2]
-    J0, J1, J2, J3, J4, J5, J6, J7, J8 = nine(p, o + _I0INV * st, st)
+    J0, J1, J2, J3, J4, J5, J6, J7, J8 = nine(p, po + _I0INV * st, st)
     # q' = ½ q ⊗ (0, Ω) with the unnormalised q
     return (0.5 * (-x * W0 - qy * W1 - z * W2), 0.5 * (w * W0 + qy * W2 - z * W1),
             0.5 * (w * W1 + z * W0 - x * W2), 0.5 * (w * W2 + x * W1 - qy * W0),

@@ -46,7 +46,6 @@ LANES = 8
 RHS_LANES = nt.FunctionType(nt.void(_VEC, _VEC))
 # row(Z): one output row (in y) into the accumulators of each lane whose mask is 1
 ROW_LANES = nt.FunctionType(nt.void(_VEC))
-_I64 = nt.int64[::1]
 
 
 @nb.njit(cache=True, inline="always")
@@ -118,7 +117,7 @@ def _error_norms(K, h, scale, E, E3, ny, w5, w3, e53, err):
     for lane in range(L):
         e53[0, lane] = 0.0
         e53[1, lane] = 0.0
-    for j in range(ny):             # lanes innermost (vectorises), each lane's sum in j order
+    for j in range(ny):             # lanes innermost; each lane sums in j order, as the scalar
         for lane in range(L):
             e53[0, lane] += (w5[j * L + lane] / scale[j * L + lane]) ** 2
     if E3.shape[0] > 0:
@@ -203,9 +202,9 @@ def integrate_dop853_lanes(f, guard, row, Y0, P, t_out, rtol, atol, h_max, max_s
     z_p, z_acc = 2 * ny * L, (2 * ny + n_p) * L
     Tr, Jr, M = Z[z_acc + n_a * L:], Z[z_acc + (n_a + 1) * L:], Z[z_acc + (n_a + 2) * L:]
     e53 = np.zeros((2, L))
-    lane_f = np.zeros((10, L))          # per lane: times, row index, mask, x, step, error
-    T, x = lane_f[0], lane_f[4]
-    t, h, h_try, t_new, err = lane_f[5], lane_f[6], lane_f[7], lane_f[8], lane_f[9]
+    lane_f = np.zeros((7, L))           # per lane: stage time, row's x, t, step, trial, error
+    T, x = lane_f[0], lane_f[1]
+    t, h, h_try, t_new, err = lane_f[2], lane_f[3], lane_f[4], lane_f[5], lane_f[6]
     lane_i = np.zeros((3, L), np.int64)
     steps, rejected, i_out = lane_i[0], lane_i[1], lane_i[2]
     pt = np.full(L, -1, np.int64)
@@ -249,6 +248,9 @@ def integrate_dop853_lanes(f, guard, row, Y0, P, t_out, rtol, atol, h_max, max_s
         for lane in range(L):
             accepted[lane] = False
             if pt[lane] < 0:
+                continue
+            if i_out[lane] >= n_out:        # a one-row grid: nothing to step (as the scalar)
+                _finish(lane, pt, FAIL_OK, np.nan, Z, z_acc, code, t_fail, acc)
                 continue
             if steps[lane] + rejected[lane] >= max_steps:
                 _finish(lane, pt, FAIL_MAX_STEPS, t[lane], Z, z_acc, code, t_fail, acc)

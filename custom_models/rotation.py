@@ -10,11 +10,11 @@ import numba as nb
 import numpy as np
 
 _SMALL = 1e-4   # below this |θ| the coefficient series are exact to round-off
-# the scalar/tuple helpers of the right-hand sides: a zero divisor gives inf/NaN (numpy's error
-# model), not a raised ZeroDivisionError — numba's division check keeps a loop over SIMD lanes
-# that calls them from vectorising (`integrators.lanes`), and an exception raised behind a
-# first-class function pointer is only printed, never seen by the driver, which does see NaN
-tuple_math = nb.njit(cache=True, error_model="numpy", inline="always")
+# the scalar/tuple helpers of the right-hand sides, inlined at numba's level: left to LLVM's
+# inliner they came too late for the loop vectoriser of `integrators.lanes`. Inlined, they take
+# their caller's error model: numpy's in the lane loops (a zero divisor gives inf/NaN, no
+# division check to keep the loop scalar), python's in the scalar right-hand sides as before
+tuple_math = nb.njit(cache=True, inline="always")
 
 
 @nb.njit(cache=True)

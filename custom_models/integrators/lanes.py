@@ -18,8 +18,9 @@ For a failed point the accumulators cover the rows before the failure only.
 What it took to vectorise (each measured on the compiled code's instructions): one workspace
 array, not one array per quantity (below); the model's helpers inlined at numba's level
 (`inline="always"`: left to LLVM's inliner, they were inlined too late for the loop
-vectoriser) and compiled in numpy's error model (numba's division check raises, and a loop
-with a raise does not vectorise); rows indexed in place (a row view per term costs a
+vectoriser); the lane loops compiled in numpy's error model, which inlined code takes from its
+caller (numba's division check raises, and a loop with a raise does not vectorise); rows
+indexed in place (a row view per term costs a
 reference-count call pair). Loops whose body is short are unrolled instead and stay scalar
 (the row reduce's selects).
 """

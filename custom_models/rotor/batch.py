@@ -61,7 +61,7 @@ _I0, _RC0, _G = I0.start, RC0.start, G.start
 _I64 = nt.int64[::1]
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always")
 def _channels(o, oo, ost, p, po, pst):
     """(|ω|, kinetic, potential) of one row (R, ω, work) as physics.rotor.channels; its entry k
     at o[oo + k·ost], the parameters' at p[po + k·pst] (strides 1, or LANES in a lane block)."""

@@ -61,7 +61,7 @@ def rotations(Y):
     return out
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always")
 def _axes(g0, g1, g2, phi):
     """L = L(γ)·L(φ e_z) and Z⁻¹(γ) as 9-tuples, and L(γ) itself."""
     Lg, Zi = rotation_zhilin_inverse_t(g0, g1, g2)
@@ -72,7 +72,7 @@ def _axes(g0, g1, g2, phi):
     return L, Zi, Lg
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always")
 def _omega(L, K0, K1, K2, p, po, st):
     """ω = L I₀⁻¹ Lᵀ K, I₀⁻¹'s entry k at p[po + (I0INV + k)·st]."""
     u = mat_tvec_t(L, K0, K1, K2)                                   # body-frame momentum
@@ -82,7 +82,7 @@ def _omega(L, K0, K1, K2, p, po, st):
                      J[6] * u[0] + J[7] * u[1] + J[8] * u[2])
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always")
 def _derivatives(y, yo, p, po, st):
     """The equations above as an 8-tuple (3×3 matrices as 9-tuples: no allocation); entry k of
     the state and of the parameters is y[yo + k·st], p[po + k·st]: st = 1 for one point,
@@ -134,7 +134,7 @@ def guard(t, y, p):
     return rotor.FAIL_TILT if th > rotor.TILT_LIMIT else 0
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always")
 def _motion(y, o, p, po, st):
     """One row of `motion` as a 13-tuple (rotation row-major, fixed-frame ω, work); L and ω as
     `rhs_into` forms them."""

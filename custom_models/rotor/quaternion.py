@@ -41,7 +41,7 @@ from .model import (  # noqa: F401  (re-exported: the leaf's settings)
 _I0, _I0INV, _RC0, _G = I0.start, I0INV.start, RC0.start, G.start
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always")
 def _derivatives(y, yo, p, po, st):
     """The right-hand side as an 8-tuple; entry k of the state and of the parameters is
     y[yo + k·st], p[po + k·st]: st = 1 for one point, LANES for a lane of the lanes' workspace."""
@@ -99,7 +99,7 @@ def guard(t, y, p):
     return rotor.tilt_guard_z(1.0 - 2.0 * (x * x + qy * qy) / (w * w + x * x + qy * qy + z * z))
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always")
 def _motion(y, o, st):
     """One row of `motion` as a 13-tuple (rotation row-major, fixed-frame ω, work), entry k of
     the state at y[o + k·st]."""

@@ -41,8 +41,24 @@ def test_every_allowance_is_measured_and_within_10x(row):
         f"measured {row['measured']:.2e} ({row['cases']}) with no documented reason")
 
 
-def _close(new, old):
-    """Equal to 1e-6 of the deviation, or both at round-off (≤ 1e-13 of scale) within 10×."""
+# What "the same as the table" means across machines. The stored deviations are round-off
+# sensitive: measured between an Intel AVX-512 machine (where the table was written) and an AMD
+# AVX2 one, the cheap cases' deviations moved by at most 0.016 of the pair's own error estimate
+# (press-cycle, lagrange-exact–exudyn crank_accel) and, for frequencies (no estimate), by at
+# most 3.1e-10 relative (rotating-beam, exudyn–mujoco: the engines' finite-difference
+# linearisation). A stale table — one solver's parameter off by 1 % — moves them by orders of
+# magnitude more than either bound.
+OF_ESTIMATE = 0.1
+FREQUENCY = 2e-9
+
+
+def _close(new, old, estimate=None, frequency=False):
+    """Equal to a tenth of the pair's error estimate, to 2e-9 for a relative frequency
+    difference, else to 1e-6 of the deviation or both at round-off (≤ 1e-13) within 10×."""
+    if estimate is not None:
+        return abs(new - old) <= OF_ESTIMATE * estimate
+    if frequency and abs(new - old) <= FREQUENCY:
+        return True
     if abs(new - old) <= 1e-6 * max(abs(old), 1e-300):
         return True
     return max(new, old) <= 1e-13 and new <= 10 * old + 1e-300 and old <= 10 * new + 1e-300
@@ -62,8 +78,10 @@ def test_stored_measurements_are_what_the_solvers_give_today(scene):
     assert {key(r) for r in rows} == set(stored)
     for r in rows:
         s = stored[key(r)]
+        estimate = s["error_estimate"] and s["error_estimate"] / s["scale"]
         for k in ("max_abs", "left"):
-            assert _close(r[k] / r["scale"], s[k] / s["scale"]), (r["a"], r["b"], r["channel"],
-                                                                  k, r[k], s[k])
+            assert _close(r[k] / r["scale"], s[k] / s["scale"], estimate,
+                          r["channel"] == "frequency"), (r["a"], r["b"], r["channel"], k, r[k],
+                                                         s[k])
         assert (r["error_estimate"] is None) == (s["error_estimate"] is None)
         assert np.isclose(r["scale"], s["scale"], rtol=1e-6)

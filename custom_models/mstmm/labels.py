@@ -8,8 +8,10 @@ Modes whose blades carry less motion than hub and fuselage are 'fuselage'. Share
 `mstmm` and `fem` (a labelling rule, not physics). An exactly repeated root (e.g. the two
 reactionless torsion modes, twist pattern (1, 0, 1, 0) and (0, 1, 0, 1)) has no preferred
 basis: each solver returns some pair spanning it, and the rotor-pattern word of those two
-labels may differ between solvers (measured: 19.868 Hz 'torsion differential' in mstmm,
-'torsion collective' in fem); frequencies and the spanned space agree."""
+labels may differ between solvers and between machines, by round-off (measured: 19.868 Hz
+'torsion differential' in mstmm, 'torsion collective' in fem on an Intel AVX-512 machine;
+'torsion collective' in both on an AMD AVX2 one); frequencies and the spanned space agree,
+and the comparison lists such modes as unpaired rather than dropping them."""
 import numpy as np
 
 FAMILY = ("axial", "lag", "flap", "torsion")

@@ -35,12 +35,28 @@ def _trajectories(camp_dir):
             for p in sorted(Path(camp_dir).rglob("*.npz")) if "jobs" not in p.parts}
 
 
+def _children():
+    import psutil
+    return {p.pid for p in psutil.Process().children(recursive=True) if p.is_running()
+            and p.status() != psutil.STATUS_ZOMBIE}
+
+
+def _wait_until(predicate, timeout=10.0):
+    t0 = time.perf_counter()
+    while not predicate():
+        if time.perf_counter() - t0 > timeout:
+            return False
+        time.sleep(0.05)
+    return True
+
+
 def test_dask_local_cluster_gives_the_process_pools_results(tmp_path):
     import distributed  # noqa: F401  (the test extra installs it: missing must fail, not skip)
     camp = _write(tmp_path, [{**SPIN, "solvers": ["euler-vector"],
                               "sweep": {"torque": [1.5, 3.0]}}])
     runs = {}
     for executor in ("local", "dask"):
+        before = _children()                   # the local pool's parked workers among them
         out = tmp_path / executor
         rc, so, se = xval("campaign", camp, "--executor", executor, "--workers", "2",
                           "--out", str(out), "--json")
@@ -48,6 +64,9 @@ def test_dask_local_cluster_gives_the_process_pools_results(tmp_path):
         s = json.loads(so)
         assert s["n_jobs"] == 2 and s["n_run"] == 2 and s["n_crashed"] == 0
         runs[executor] = _trajectories(out / "campaign" / "c")
+    # the campaign's LocalCluster ended with it: its worker processes are gone (a Client
+    # closes only a cluster it made: one passed in kept running in this process)
+    assert _wait_until(lambda: not (_children() - before)), _children() - before
     assert sorted(runs["local"]) == sorted(runs["dask"]) and len(runs["local"]) == 2
     for name, a in runs["local"].items():
         b = runs["dask"][name]
@@ -70,8 +89,9 @@ def test_two_local_clusters_at_once_warn_nothing():
             assert [ex.submit(sum, [i, 1]).result() for i, (ex, _) in
                     enumerate(clusters)] == [1, 2]
         finally:
-            for _, client in clusters:
-                client.close()
+            for _, owned in clusters:
+                for x in owned:
+                    x.close()
 
 
 def _start(camp, out):

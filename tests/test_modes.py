@@ -177,20 +177,22 @@ def test_unpaired_modes_are_listed_with_why(tmp_path, monkeypatch):
     is round-off (custom_models/mstmm/labels.py): the blade torsion pair at 19.868 Hz came out
     'torsion differential' in mstmm and 'torsion collective' in fem on an Intel AVX-512 machine
     (4 of 40 modes per solver unpaired at 40 modes, with the pair at 57.27 Hz) and 'torsion
-    collective' in both on an AMD AVX2 one (all 18 paired). So mstmm's labels inside a repeated
-    root are given the first machine's word here, on every machine: a relabelling of the same
-    frequencies and spanned space, which the pairing must list, not drop."""
+    collective' in both on an AMD AVX2 one (all 18 paired). So the labels inside a repeated root
+    are given the first machine's words here, on every machine (mstmm 'differential', fem
+    'collective'): a relabelling of the same frequencies and spanned space, which the pairing
+    must list, not drop."""
     from compare import solvers
     from compare.workflows.modes import run_modes
     modes = solvers.modes
 
     def first_machines_basis(sc, s, params):
         m = modes(sc, s, params)
-        if m.solver == "mstmm":
-            f = m.frequencies_hz
-            m.labels = [lb.replace("collective", "differential")
-                        if any(j != i and abs(f[j] / f[i] - 1) < 1e-9 for j in range(len(f)))
-                        else lb for i, lb in enumerate(m.labels)]
+        was, word = (("collective", "differential") if m.solver == "mstmm" else
+                     ("differential", "collective"))
+        f = m.frequencies_hz
+        m.labels = [lb.replace(was, word)
+                    if any(j != i and abs(f[j] / f[i] - 1) < 1e-9 for j in range(len(f)))
+                    else lb for i, lb in enumerate(m.labels)]
         return m
     monkeypatch.setattr(solvers, "modes", first_machines_basis)
     r = run_modes("helicopter-clamped", ["mstmm", "fem"], {"n_modes": 18},

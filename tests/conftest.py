@@ -2,6 +2,7 @@ import json
 import os
 import sys
 import tempfile
+import time
 
 import pytest
 
@@ -48,6 +49,14 @@ def xval(*args, cwd=None):
             f.seek(0)
             texts.append(f.read().decode("utf-8", "replace"))
     return rc, *texts
+
+
+def wait_for(cond, timeout=120.0, poll=0.1, what="timed out waiting"):
+    """Poll `cond()` until it is true; fail the test with `what` after `timeout` seconds."""
+    t0 = time.monotonic()
+    while not cond():
+        assert time.monotonic() - t0 < timeout, what
+        time.sleep(poll)
 
 
 # pytest-xdist (addopts `-n 2`): each module runs whole on one worker, so that its module-scoped

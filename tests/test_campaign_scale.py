@@ -15,7 +15,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from conftest import xval
+from conftest import wait_for, xval
 
 from compare.analysis.trajectory import Trajectory
 from compare.output.recording import load_scalar_series
@@ -41,15 +41,6 @@ def _children():
             and p.status() != psutil.STATUS_ZOMBIE}
 
 
-def _wait_until(predicate, timeout=10.0):
-    t0 = time.perf_counter()
-    while not predicate():
-        if time.perf_counter() - t0 > timeout:
-            return False
-        time.sleep(0.05)
-    return True
-
-
 def test_dask_local_cluster_gives_the_process_pools_results(tmp_path):
     import distributed  # noqa: F401  (the test extra installs it: missing must fail, not skip)
     camp = _write(tmp_path, [{**SPIN, "solvers": ["euler-vector"],
@@ -66,7 +57,8 @@ def test_dask_local_cluster_gives_the_process_pools_results(tmp_path):
         runs[executor] = _trajectories(out / "campaign" / "c")
     # the campaign's LocalCluster ended with it: its worker processes are gone (a Client
     # closes only a cluster it made: one passed in kept running in this process)
-    assert _wait_until(lambda: not (_children() - before)), _children() - before
+    wait_for(lambda: not (_children() - before), timeout=10, poll=0.05,
+             what="the Dask cluster's processes outlived the campaign")
     assert sorted(runs["local"]) == sorted(runs["dask"]) and len(runs["local"]) == 2
     for name, a in runs["local"].items():
         b = runs["dask"][name]

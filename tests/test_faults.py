@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import xval
+from conftest import wait_for, xval
 
 from compare.cli import main
 from compare.output import guard
@@ -58,13 +58,6 @@ def popen():
             p.communicate()
 
 
-def _wait_for(cond, timeout=120):
-    t0 = time.time()
-    while not cond():
-        assert time.time() - t0 < timeout, "timed out waiting"
-        time.sleep(0.1)
-
-
 def test_disk_full_during_run_one_line_no_partial_file_folder_marked(tmp_path, monkeypatch,
                                                                      capfd):
     real = np.savez
@@ -104,8 +97,8 @@ def test_second_campaign_on_the_same_folder_is_refused_naming_the_owner(tmp_path
     first = popen(["campaign", str(f), "--out", str(out), "--workers", "1"])
     lock = out / "campaign" / "slow" / ".lock"
     # its job store exists (a campaign folder to `xval diff`) once the first job has begun
-    _wait_for(lambda: (_owner(lock) and (lock.parent / "jobs").is_dir())
-              or first.poll() is not None)
+    wait_for(lambda: (_owner(lock) and (lock.parent / "jobs").is_dir())
+             or first.poll() is not None)
     os.killpg(first.pid, signal.SIGSTOP)      # alive and holding the lock while the others try
     try:
         assert first.poll() is None, first.communicate()
@@ -174,8 +167,8 @@ def test_ctrl_c_stops_the_workers_keeps_finished_jobs_and_says_how_to_resume(tmp
     store = out / "campaign" / "slow" / "jobs"
     p = popen(["campaign", str(f), "--out", str(out)])
     # every job started (a worker opens its log first) and one finished: the two slow ones run
-    _wait_for(lambda: (len(list(store.glob("*.npz"))) >= 1 and len(list(store.glob("*.log"))) == n)
-              or p.poll() is not None)
+    wait_for(lambda: (len(list(store.glob("*.npz"))) >= 1 and len(list(store.glob("*.log"))) == n)
+             or p.poll() is not None)
     assert p.poll() is None
     workers = _children_of(p.pid)
     assert workers

@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import xval
+from conftest import wait_for, xval
 from test_faults import SLOW
 
 CAMPAIGN = SLOW % 4         # four ~3-s jobs: long enough to be killed mid-run
@@ -36,13 +36,6 @@ def _session(sid):
     return out
 
 
-def _wait_for(cond, timeout=120):
-    t0 = time.time()
-    while not cond():
-        assert time.time() - t0 < timeout, "timed out waiting"
-        time.sleep(0.1)
-
-
 @pytest.mark.slow            # 4 × (start, kill, rerun to the end): ~2 min each on 2 busy cores
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM], ids=["KILL", "TERM"])
 @pytest.mark.parametrize("what", ["campaign", "map"])
@@ -59,7 +52,7 @@ def test_a_killed_run_leaves_no_process_and_the_rerun_resumes(tmp_path, what, si
     p = subprocess.Popen([sys.executable, "-m", "compare", *args], stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:
-        _wait_for(lambda: list(store.glob(pattern)) or p.poll() is not None)
+        wait_for(lambda: list(store.glob(pattern)) or p.poll() is not None)
         assert p.poll() is None, p.communicate()[1]
         assert len(_session(p.pid)) >= 3          # main, workers, resource tracker
         os.kill(p.pid, sig)                       # the main process only, as `kill` does

@@ -9,6 +9,8 @@ written here in the equivalent Rodrigues form E + a θ× + b (θ×)², with seri
 import numba as nb
 import numpy as np
 
+from .trig import atan2, sincos
+
 _SMALL = 1e-4   # below this |θ| the coefficient series are exact to round-off
 # the scalar/tuple helpers of the right-hand sides, inlined at numba's level: left to LLVM's
 # inliner they came too late for the loop vectoriser of `integrators.lanes`. Inlined, they take
@@ -28,8 +30,9 @@ def _coefficients(t):
     t2 = t * t
     if t < _SMALL:
         return (1.0 - t2 / 6.0, 0.5 - t2 / 24.0, 1.0 / 6.0 - t2 / 120.0, 1.0 / 12.0 + t2 / 720.0)
-    a = np.sin(t) / t
-    b = (1.0 - np.cos(t)) / t2
+    sn, cs = sincos(t)
+    a = sn / t
+    b = (1.0 - cs) / t2
     return a, b, (1.0 - a) / t2, (1.0 - a / (2.0 * b)) / t2
 
 
@@ -74,7 +77,7 @@ def zhilin_inverse(theta):
 
 @nb.njit(cache=True)
 def rotation_z(phi):
-    c, s = np.cos(phi), np.sin(phi)
+    s, c = sincos(phi)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
@@ -205,7 +208,7 @@ def cross_t(a0, a1, a2, b0, b1, b2):
 def transverse_t(nx, ny, nz):
     """(γ_x, γ_y) of `transverse_vector` (γ_z = 0) for the unit axis n."""
     s = np.sqrt(nx * nx + ny * ny)
-    th = np.arctan2(s, nz)
+    th = atan2(s, nz)
     f = 1.0 + th * th / 6.0 if th < _SMALL else th / s
     return -ny * f, nx * f
 

@@ -34,6 +34,7 @@ from ..integrators.dense import (
 from ..integrators.explicit import _MAT, _VEC, GUARD
 from ..integrators.lanes import LANES, RHS_LANES, ROW_LANES, integrate_dop853_lanes, nine
 from ..rotation import mat_tvec_t, mat_vec_t
+from ..trig import atan2
 from .model import I0, I0INV, K_, M_, RC0, G, check_settings, pack_many
 
 # kinematics(Y, p, O): each row of O = rotation body → fixed (9, row-major), fixed-frame ω (3),
@@ -74,7 +75,7 @@ def _channels(o, oo, ost, p, po, pst):
                  + b[2] * (I[6] * b[0] + I[7] * b[1] + I[8] * b[2]))
     # √ rather than hypot: hypot is a libm call with its own branches, which kept the loop over
     # lanes from vectorising (≤ 1 ulp apart; physics.rotor.tilt keeps hypot)
-    tilt = np.arctan2(np.sqrt(R[2] * R[2] + R[5] * R[5]), R[8])
+    tilt = atan2(np.sqrt(R[2] * R[2] + R[5] * R[5]), R[8])
     rc = mat_vec_t(R, p[po + _RC0 * pst], p[po + (_RC0 + 1) * pst], p[po + (_RC0 + 2) * pst])
     pot = 0.5 * p[po + K_ * pst] * tilt * tilt - p[po + M_ * pst] * (
         rc[0] * p[po + _G * pst] + rc[1] * p[po + (_G + 1) * pst]

@@ -23,6 +23,7 @@ from ..rotation import (
     rotation_zhilin_inverse_t,
     transverse_vector,
 )
+from ..trig import sincos
 from . import batch
 from . import model as rotor
 from .model import (  # noqa: F401  (re-exported: the leaf's settings)
@@ -65,7 +66,7 @@ def rotations(Y):
 def _axes(g0, g1, g2, phi):
     """L = L(γ)·L(φ e_z) and Z⁻¹(γ) as 9-tuples, and L(γ) itself."""
     Lg, Zi = rotation_zhilin_inverse_t(g0, g1, g2)
-    c, s = np.cos(phi), np.sin(phi)
+    s, c = sincos(phi)
     L = (c * Lg[0] + s * Lg[1], c * Lg[1] - s * Lg[0], Lg[2],
          c * Lg[3] + s * Lg[4], c * Lg[4] - s * Lg[3], Lg[5],
          c * Lg[6] + s * Lg[7], c * Lg[7] - s * Lg[6], Lg[8])

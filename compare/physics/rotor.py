@@ -8,6 +8,9 @@ passes its own spring potential; everything else is shared.
 """
 from __future__ import annotations
 
+import functools
+from types import MappingProxyType
+
 import numpy as np
 
 
@@ -18,20 +21,31 @@ def constants(p: dict) -> dict:
     I_c: central inertia of the disk, I_o: inertia about the pivot O (Steiner), both body frame;
     I_t, I_p: transverse and polar inertia about O of the axisymmetric rotor (eccentricity 0);
     k_eff = k + m·l·g_z: gravity enters the tilt stiffness only through its axial component
-    (disk above O and g_z < 0 soften the spring)."""
-    m, R, l, e = p["m"], p["R"], p["l"], p["eccentricity"]
+    (disk above O and g_z < 0 soften the spring). The arrays are read-only: one map's points
+    share them (remembered per set of numbers: a map asks twice a point, and its grid repeats
+    the numbers along the axes that do not enter here)."""
     g = np.asarray(p["gravity"], float)
+    return _constants(float(p["m"]), float(p["R"]), float(p["l"]), float(p["eccentricity"]),
+                      float(p["k"]), float(g[0]), float(g[1]), float(g[2]))
+
+
+@functools.lru_cache(maxsize=4096)
+def _constants(m, R, l, e, k, gx, gy, gz):
+    g = np.array([gx, gy, gz])
     rc0 = np.array([0.0, e, l])
     I_c = np.diag([m * R**2 / 4, m * R**2 / 4, m * R**2 / 2])
     I_o = I_c + m * ((rc0 @ rc0) * np.eye(3) - np.outer(rc0, rc0))
+    for a in (g, rc0, I_c, I_o):
+        a.flags.writeable = False
     I_t = m * R**2 / 4 + m * l**2
     I_p = m * R**2 / 2
-    k_eff = p["k"] + m * l * g[2]
-    return {"rc0": rc0, "I_c": I_c, "I_o": I_o, "I_t": I_t, "I_p": I_p, "k_eff": k_eff,
-            "gravity": g,
-            "omega_tilt": np.sqrt(p["k"] / I_t),                 # the paper's 38.8 rad/s
-            "omega_tilt_eff": np.sqrt(max(k_eff, 0.0) / I_t),
-            "forward_critical": np.sqrt(max(k_eff, 0.0) / (I_t - I_p))}
+    k_eff = k + m * l * g[2]
+    return MappingProxyType({
+        "rc0": rc0, "I_c": I_c, "I_o": I_o, "I_t": I_t, "I_p": I_p, "k_eff": k_eff,
+        "gravity": g,
+        "omega_tilt": np.sqrt(k / I_t),                         # the paper's 38.8 rad/s
+        "omega_tilt_eff": np.sqrt(max(k_eff, 0.0) / I_t),
+        "forward_critical": np.sqrt(max(k_eff, 0.0) / (I_t - I_p))})
 
 
 def tilt(Rs: np.ndarray) -> np.ndarray:

@@ -357,6 +357,23 @@ class Scene:
             self.output_steps(values)              # the grid must fit before anything runs
         return values
 
+    def resolve_many(self, base, points):
+        """`resolve({**base, **point})` for every point, `base` resolved once: a map's chunk
+        resolves thousands of points that differ in one or two names (the full resolve was 24
+        µs a point, ~6 % of a cheap rotor map point)."""
+        values = self.resolve(base)
+        out = []
+        for point in points:
+            v = dict(values)
+            for name, text in point.items():
+                v[name] = self.param(name).parse(text)
+            if self.check:
+                self.check(v)
+            if self.is_time and ("t_end" in point or "output_dt" in point):
+                self.output_steps(v)
+            out.append(v)
+        return out
+
     def tolerances_for(self, params):
         """The allowances a run at `params` is judged by: the first allowance case that holds,
         else the scene's."""

@@ -132,10 +132,8 @@ def transverse_vector(n):
     """Euler vector γ ⊥ e_z of the transverse turn carrying e_z to the unit axis n.
 
     γ = θ (e_z × n)/|e_z × n| with θ = atan2(|e_z × n|, n_z); θ/sin θ by series near 0."""
-    s = np.sqrt(n[0] * n[0] + n[1] * n[1])
-    th = np.arctan2(s, n[2])
-    f = 1.0 + th * th / 6.0 if th < _SMALL else th / s
-    return np.array([-n[1] * f, n[0] * f, 0.0])
+    g0, g1 = transverse_t(n[0], n[1], n[2])
+    return np.array([g0, g1, 0.0])
 
 
 # --- Scalar (allocation-free) forms for right-hand sides called millions of times ------------

@@ -196,7 +196,7 @@ def integrate_dop853_lanes(f, guard, row, Y0, P, t_out, rtol, atol, h_max, max_s
     n_out, n_st = t_out.shape[0], B.shape[0]
     n_k = n_st + 1
     if D.shape[0] != N_F - 3:
-        raise ValueError("integrate_dop853_lanes: DOP853's interpolant has N_F rows")
+        raise ValueError("integrate_dop853_lanes: DOP853's interpolant (7 rows: D has 4)")
     t0, t_end = t_out[0], t_out[n_out - 1]
     if h_max <= 0.0:
         h_max = np.inf

@@ -317,3 +317,22 @@ def test_a_points_store_key_is_the_digest_of_its_whole_task():
     assert runner._keys(tasks) == [
         maps._digest({"scene": sc.name, "base": runner.base, "solver": s, "settings": st,
                       "point": pt, "what": None, "salt": "s1"}) for s, st, pt in tasks]
+
+
+def test_a_chunk_resolves_its_points_as_resolve_does():
+    """`Scene.resolve_many` (a map chunk's points against one resolved base) gives what
+    `resolve({**base, **point})` gives, and refuses what it refuses."""
+    from compare.errors import BadInput
+    sc = get_scene("rotor-spinup")
+    base = {"t_end": 2, "eccentricity": 0.01}
+    points = [{"torque": 1.5}, {"torque": "2.5", "eccentricity": 0.0}, {"t_end": 4},
+              {"gravity": "0,0,-1"}]
+    for got, point in zip(sc.resolve_many(base, points), points):
+        want = sc.resolve({**base, **point})
+        assert got.keys() == want.keys()
+        assert all(np.array_equal(got[k], want[k]) for k in want), point
+    for bad in ({"torque": -1e9}, {"t_end": 0.015}, {"spin": 1.0}):
+        with pytest.raises(BadInput):
+            sc.resolve({**base, **bad})
+        with pytest.raises(BadInput):
+            sc.resolve_many(base, [{"torque": 1.0}, bad])

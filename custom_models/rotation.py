@@ -9,14 +9,9 @@ written here in the equivalent Rodrigues form E + a θ× + b (θ×)², with seri
 import numba as nb
 import numpy as np
 
-from .trig import atan2, sincos
+from .trig import atan2, sincos, tuple_math
 
 _SMALL = 1e-4   # below this |θ| the coefficient series are exact to round-off
-# the scalar/tuple helpers of the right-hand sides, inlined at numba's level: left to LLVM's
-# inliner they came too late for the loop vectoriser of `integrators.lanes`. Inlined, they take
-# their caller's error model: numpy's in the lane loops (a zero divisor gives inf/NaN, no
-# division check to keep the loop scalar), python's in the scalar right-hand sides as before
-tuple_math = nb.njit(cache=True, inline="always")
 
 
 @nb.njit(cache=True)

@@ -16,7 +16,11 @@ tests/test_trig.py holds them to libm within 2 ulp over the ranges the models us
 import numba as nb
 import numpy as np
 
-vector_math = nb.njit(cache=True, inline="always")     # as rotation.tuple_math: see there
+# the scalar/tuple helpers of the right-hand sides, inlined at numba's level: left to LLVM's
+# inliner they came too late for the loop vectoriser of `integrators.lanes`. Inlined, they take
+# their caller's error model: numpy's in the lane loops (a zero divisor gives inf/NaN, no
+# division check to keep the loop scalar), python's in the scalar right-hand sides as before
+tuple_math = nb.njit(cache=True, inline="always")
 
 _PIO2, _PIO4 = np.pi / 2, np.pi / 4
 # π/4 in three parts for the argument reduction (Cody and Waite): y·_DP1 and y·_DP2 are exact
@@ -26,7 +30,7 @@ _DP1, _DP2, _DP3 = 7.85398125648498535156e-1, 3.77489470793079817668e-8, \
 LOSS = 1.073741824e9       # |x| beyond which the reduction loses the result: NaN, not noise
 
 
-@vector_math
+@tuple_math
 def _sin_poly(z, zz):
     return z + z * (zz * (((((1.58962301576546568060e-10 * zz - 2.50507477628578072866e-8) * zz
                                + 2.75573136213857245213e-6) * zz
@@ -35,7 +39,7 @@ def _sin_poly(z, zz):
                             - 1.66666666666666307295e-1))
 
 
-@vector_math
+@tuple_math
 def _cos_poly(zz):
     return 1.0 - 0.5 * zz + zz * zz * (((((-1.13585365213876817300e-11 * zz
                                             + 2.08757008419747316778e-9) * zz
@@ -45,7 +49,7 @@ def _cos_poly(zz):
                                         + 4.16666666666665929218e-2)
 
 
-@vector_math
+@tuple_math
 def sincos(x):
     """(sin x, cos x), |x| < LOSS (beyond it, and for a non-finite x: NaN)."""
     ax = abs(x)
@@ -65,7 +69,7 @@ def sincos(x):
     return (np.nan if nan else s), (np.nan if nan else c)
 
 
-@vector_math
+@tuple_math
 def _atan01(t):
     """atan t for 0 ≤ t ≤ 1 (Cephes' two lower ranges)."""
     big = t > 0.66
@@ -81,7 +85,7 @@ def _atan01(t):
     return (_PIO4 + r) if big else r
 
 
-@vector_math
+@tuple_math
 def atan2(y, x):
     """The angle of (x, y) in [−π, π], as np.arctan2 for finite arguments (signed zeros
     included)."""

@@ -101,3 +101,18 @@ def test_solve_with_first_class_values_matches_the_plain_drivers():
     assert code == 0 and np.array_equal(Y, Y0)
     assert stats["rhs_evals"] == 4 * 1000 + 1 and stats["integrate_s"] > 0
     assert np.max(np.abs(Y[:, 0] - np.cos(W * t_out))) < 1e-10
+
+
+def test_the_tableaus_are_scipys():
+    """custom_models.integrators.tableaus gives scipy's numbers without importing
+    scipy.integrate (RK23 and RK45 written out, DOP853 read from scipy's coefficient file):
+    every array equal to scipy.integrate's public class attribute, bit for bit. Seeded: one
+    digit of RK45's P changed, DOP853's extra stages taken from row N_STAGES — each fails."""
+    import scipy.integrate as si
+
+    from custom_models.integrators import tableaus
+    for name, fields in (("RK23", "A B C E P"), ("RK45", "A B C E P"),
+                         ("DOP853", "A B C E3 E5 D A_EXTRA C_EXTRA")):
+        for f in fields.split():
+            ours, theirs = getattr(getattr(tableaus, name), f), getattr(getattr(si, name), f)
+            assert ours.shape == theirs.shape and np.array_equal(ours, theirs), (name, f)

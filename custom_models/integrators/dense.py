@@ -28,9 +28,6 @@ import numba as nb
 import numpy as np
 from numba import types as nt
 from numba.experimental.function_type import _get_wrapper_address
-from scipy.integrate import DOP853 as _DOP853
-from scipy.integrate import RK23 as _RK23
-from scipy.integrate import RK45 as _RK45
 
 from .explicit import (
     _MAT,
@@ -46,6 +43,9 @@ from .explicit import (
     _weighted_rows,
     initial_step,
 )
+from .tableaus import DOP853 as _DOP853
+from .tableaus import RK23 as _RK23
+from .tableaus import RK45 as _RK45
 
 RHS_INTO = nt.FunctionType(nt.void(nt.float64, _VEC, _VEC, _VEC))    # f(t, y, p, dy)
 

@@ -10,9 +10,10 @@ until every model had moved to `dense`.)
 import numba as nb
 import numpy as np
 from numba import types as nt
-from scipy.integrate import DOP853 as _DOP853
-from scipy.integrate import RK23 as _RK23
-from scipy.integrate import RK45 as _RK45
+
+from .tableaus import DOP853 as _DOP853
+from .tableaus import RK23 as _RK23
+from .tableaus import RK45 as _RK45
 
 FAIL_OK, FAIL_NONFINITE, FAIL_STEP_UNDERFLOW, FAIL_MAX_STEPS = 0, 1, 2, 3
 FAIL_REASONS = {FAIL_NONFINITE: "non-finite state",

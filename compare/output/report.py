@@ -78,7 +78,8 @@ def fixed_margins(fig, left=0.75, right=0.2, top=0.55, bottom=0.55, wgap=0.85, h
                         wspace=wgap / aw, hspace=hgap / ah)
 
 
-# DejaVu Sans (matplotlib's default): digits, '.' and '−' at most 0.84 em, most 0.64 em
+# DejaVu Sans (matplotlib's default): a digit 0.64 em wide, '−' 0.84 em ('.' narrower, counted
+# as a digit)
 _EM_DIGIT, _EM_MINUS = 0.64, 0.84
 
 
@@ -91,7 +92,8 @@ def _ylabels_room(ax):
     em = max((len(t) * _EM_DIGIT + t.count("\N{MINUS SIGN}") * (_EM_MINUS - _EM_DIGIT)
               for t in labels), default=0.0)
     size = ax.yaxis.get_ticklabels()[0].get_fontsize() if labels else 0.0
-    return em * size / 72 + (ax.yaxis.label.get_fontsize() + 16) / 72    # label, pads, ticks
+    # the widest label, then the axis label's line and ~16 pt of tick marks and pads
+    return (em * size + ax.yaxis.label.get_fontsize() + 16) / 72
 
 
 def save_figure(fig, path):

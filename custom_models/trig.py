@@ -19,7 +19,7 @@ import numpy as np
 # the scalar/tuple helpers of the right-hand sides, inlined at numba's level: left to LLVM's
 # inliner they came too late for the loop vectoriser of `integrators.lanes`. Inlined, they take
 # their caller's error model: numpy's in the lane loops (a zero divisor gives inf/NaN, no
-# division check to keep the loop scalar), python's in the scalar right-hand sides as before
+# division check to keep the loop scalar), python's in the scalar right-hand sides
 tuple_math = nb.njit(cache=True, inline="always")
 
 _PIO2, _PIO4 = np.pi / 2, np.pi / 4

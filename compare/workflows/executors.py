@@ -5,12 +5,14 @@ hands each outcome back as it finishes (what a store already holds under a call'
 the caller's to skip: a campaign's jobs, a map's points). Campaigns,
 maps and `bench --points` all go through these two.
 
-The pool's workers die with the process that started them: each sets the kernel's parent-death
-signal (Linux `prctl(PR_SET_PDEATHSIG, SIGKILL)`) and watches its parent from a thread (any
-POSIX system; a worker busy inside a compiled kernel sees it when the kernel returns), so a
-`kill -9` of `xval campaign` / `xval map` leaves no worker behind, and the resource tracker,
-whose pipe the workers held, ends with them. `terminated_as_interrupt()` turns SIGTERM into
-the Ctrl-C path (finished jobs kept, one line saying how to resume, the lock released).
+A local pool's workers are forked from a forkserver that imported their modules once (Linux;
+elsewhere spawned), and die with the process that started the pool: each sets the kernel's
+parent-death signal (Linux `prctl(PR_SET_PDEATHSIG, SIGKILL)`) and watches that process from a
+thread (any POSIX system; a worker busy inside a compiled kernel sees it when the kernel
+returns), so a `kill -9` of `xval campaign` / `xval map` leaves no worker behind, and the
+forkserver and the resource tracker, whose pipes the workers held, end with them.
+`terminated_as_interrupt()` turns SIGTERM into the Ctrl-C path (finished jobs kept, one line
+saying how to resume, the lock released).
 """
 import ast
 import ctypes
@@ -46,24 +48,69 @@ def connect(scheduler, timeout_s=10):
                        ) from None
 
 
-def _worker_init(parent):
+def _worker_init(parent, env):
     """In each pool worker: ignore SIGINT (Ctrl-C reaches the whole process group; the main
-    process stops the workers and keeps what is stored) and die with `parent` (the kernel's
-    signal where there is one, and a thread that polls `getppid`)."""
+    process stops the workers and keeps what is stored), take the environment `parent` has now
+    (a forked worker starts from the forkserver's), and die with `parent`: the kernel's signal
+    where there is one, armed against the process that started this one (`parent` itself, or
+    the forkserver, which lives while its workers do), and a thread that watches both."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    os.environ.clear()
+    os.environ.update(env)
+    host = os.getppid()
     if sys.platform.startswith("linux"):
         try:
             ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
         except (OSError, AttributeError):
             pass
-    if os.getppid() != parent:         # the parent died before the signal was armed
+
+    def alive():
+        return os.getppid() == host and not _ended(parent)
+
+    if not alive():                    # the parent died before the signal was armed
         os._exit(1)
 
     def watch():
-        while os.getppid() == parent:
+        while alive():
             time.sleep(WATCH_S)
         os._exit(1)
     threading.Thread(target=watch, daemon=True, name="xval-parent-watch").start()
+
+
+_PROC = os.path.isdir("/proc/self")
+
+
+def _ended(pid):
+    """`pid` has ended, or is a zombie: a killed command stays unreaped while its caller still
+    reads the pipes our workers hold open, and a forked worker, not its child, gets no
+    parent-death signal from it."""
+    if _PROC:
+        try:
+            with open(f"/proc/{pid}/stat", "rb") as f:
+                return f.read().rsplit(b")", 1)[1].split()[0] in (b"Z", b"X")
+        except OSError:
+            return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except PermissionError:
+        pass
+    return False
+
+
+def _context():
+    """How a local pool starts its workers. Linux: forked from a forkserver that imported the
+    workers' modules once (`pool_preload`): a worker is ready after 0.01 s of CPU, where a
+    spawned one started a fresh interpreter and imported them again, 1.6–1.9 s (35 spawned
+    workers were ~15 % of a default test run's CPU). The forkserver is a clean,
+    single-threaded process: nothing of this one (engine threads, rerun's) is forked.
+    Elsewhere: spawn."""
+    if not sys.platform.startswith("linux"):
+        return multiprocessing.get_context("spawn")
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(["compare.workflows.pool_preload"])
+    return ctx
 
 
 def make_executor(kind, scheduler, workers):
@@ -87,16 +134,16 @@ def make_executor(kind, scheduler, workers):
                                scheduler_kwargs={"dashboard_address": ":0"})
         client = Client(cluster)
         return client.get_executor(), (client, cluster)
-    # spawn: engines start threads; a forked child would inherit a half-initialised state.
-    # The children inherit one BLAS thread each (compare/__init__.py)
+    # never a fork of this process: engines start threads, and a forked child would inherit a
+    # half-initialised state. The children run one BLAS thread each (compare/__init__.py)
     return _take_warm(workers) or ProcessPoolExecutor(
-        max_workers=workers or 2, mp_context=multiprocessing.get_context("spawn"),
-        initializer=_worker_init, initargs=(os.getpid(),)), ()
+        max_workers=workers or 2, mp_context=_context(), initializer=_worker_init,
+        initargs=(os.getpid(), dict(os.environ))), ()
 
 
 # The local pool a study ended with, kept for the next study of this process (a campaign's
-# maps, the next call of a notebook or a test session): a spawned worker's imports and kernel
-# loads cost ~3 s of CPU each, which every study paid again. Kept only while what a spawned
+# maps, the next call of a notebook or a test session): a new worker's kernel loads (and,
+# spawned, its imports: ~3 s of CPU) were paid again by every study. Kept only while what a
 # worker starts from — worker count, working directory, sys.path, the environment — is the
 # same; the workers end with this process (atexit, as any pool) or when that changes.
 _warm: dict = {}

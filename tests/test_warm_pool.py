@@ -46,7 +46,6 @@ def test_a_study_that_raised_keeps_no_pool():
 
 def _worker_view():
     """What a worker starts its first call with (module-level: a worker imports it by name)."""
-    import sys
     return ("compare.workflows.campaign" in sys.modules, os.environ.get("XVAL_TEST_MARK"),
             os.getcwd(), os.getppid())
 

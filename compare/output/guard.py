@@ -63,7 +63,22 @@ def _now():
     return datetime.datetime.now().astimezone().isoformat(timespec="seconds")
 
 
-def _alive(pid):
+_PROC = os.path.isdir("/proc/self")
+
+
+def alive(pid):
+    """Process `pid` exists and is not a zombie. A zombie has ended: a killed command stays
+    unreaped while its caller still reads the pipes its pool's workers hold open."""
+    if pid > 0 and _PROC:
+        try:
+            with open(f"/proc/{pid}/stat", "rb") as f:
+                state = f.read().rsplit(b")", 1)[1].split()[0]
+        except FileNotFoundError:
+            return False
+        except OSError:
+            pass                      # unreadable: ask the kernel below
+        else:
+            return state not in (b"Z", b"X")
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -82,7 +97,7 @@ def lock_owner(folder):
         return None
     except (OSError, ValueError):
         return {"pid": None, "host": "?", "since": "?"}   # being written: treat as held
-    if owner.get("host") == socket.gethostname() and not _alive(int(owner.get("pid", 0))):
+    if owner.get("host") == socket.gethostname() and not alive(int(owner.get("pid", 0))):
         return None
     return owner
 
@@ -97,7 +112,7 @@ def _remove_stale(path, log):
         return                                 # another process moved it first
     try:
         owner = json.loads(aside.read_text())
-        stale = owner.get("host") == socket.gethostname() and not _alive(int(owner["pid"]))
+        stale = owner.get("host") == socket.gethostname() and not alive(int(owner["pid"]))
     except (OSError, ValueError, KeyError, TypeError):
         stale = False
     if not stale:                              # a live lock: put it back, then refuse

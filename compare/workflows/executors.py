@@ -28,6 +28,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 
 from ..errors import BadInput
+from ..output.guard import alive
 
 PR_SET_PDEATHSIG = 1
 WATCH_S = 1.0              # how often a worker looks for its parent
@@ -64,39 +65,17 @@ def _worker_init(parent, env):
         except (OSError, AttributeError):
             pass
 
-    def alive():
-        return os.getppid() == host and not _ended(parent)
+    def parent_alive():                # a forked worker, not its child, gets no signal from it
+        return os.getppid() == host and alive(parent)
 
-    if not alive():                    # the parent died before the signal was armed
+    if not parent_alive():             # the parent died before the signal was armed
         os._exit(1)
 
     def watch():
-        while alive():
+        while parent_alive():
             time.sleep(WATCH_S)
         os._exit(1)
     threading.Thread(target=watch, daemon=True, name="xval-parent-watch").start()
-
-
-_PROC = os.path.isdir("/proc/self")
-
-
-def _ended(pid):
-    """`pid` has ended, or is a zombie: a killed command stays unreaped while its caller still
-    reads the pipes our workers hold open, and a forked worker, not its child, gets no
-    parent-death signal from it."""
-    if _PROC:
-        try:
-            with open(f"/proc/{pid}/stat", "rb") as f:
-                return f.read().rsplit(b")", 1)[1].split()[0] in (b"Z", b"X")
-        except OSError:
-            return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return True
-    except PermissionError:
-        pass
-    return False
 
 
 def _context():

@@ -109,9 +109,8 @@ KERNEL_GROUPS = (("custom_models.rotor.euler_vector",),
 
 def compile_kernels_once():
     """Two xdist workers that meet the same uncached kernel both compile it (a fresh clone: 36
-    of the workers' 173 CPU-s of compiling, measured), and so does each worker's pool
-    forkserver, which imports every leaf: compile the import-time kernels first, in one process
-    per group, both cores busy. A warm cache loads them in ~1.5 s."""
+    of the workers' 173 CPU-s of compiling, measured): compile the import-time kernels first,
+    in one process per group, both cores busy. A warm cache loads them in ~1.5 s."""
     import subprocess
     procs = [subprocess.Popen([sys.executable, "-c", "import " + ", ".join(g)])
              for g in KERNEL_GROUPS]

@@ -8,7 +8,6 @@ import time
 
 import pytest
 
-from compare.scenes import SCENES
 from compare.workflows import executors
 from compare.workflows.executors import execute_many, worker_pool
 
@@ -45,31 +44,32 @@ def test_a_study_that_raised_keeps_no_pool():
     assert executors._pool_key(1) not in executors._warm
 
 
-def _worker_view(leaves):
+def _worker_view():
     """What a worker starts its first call with (module-level: a worker imports it by name):
-    which of the job runners and the solvers' `leaves` it holds before importing anything."""
-    missing = [m for m in ("compare.workflows.campaign", *leaves) if m not in sys.modules]
-    return missing, os.environ.get("XVAL_TEST_MARK"), os.getcwd(), os.getppid()
+    the job runners imported, numba already compiled for (its target context set up)."""
+    preload = sys.modules.get("compare.workflows.pool_preload")
+    ready = preload is not None and bool(preload.numba_ready.signatures)
+    return ("compare.workflows.campaign" in sys.modules and ready,
+            os.environ.get("XVAL_TEST_MARK"), os.getcwd(), os.getppid())
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="forkserver: Linux only")
 def test_a_forked_worker_starts_with_the_modules_and_this_processs_environment(tmp_path,
                                                                              monkeypatch):
-    """Workers fork from a forkserver that imported their modules once, every solver's leaf
-    with its compiled kernels among them (0.01 s of CPU a worker against 1.6–1.9 s spawned, and
-    1.1–1.5 s more for the leaves). What the forkserver cannot know — an environment variable
-    and a working directory set after it started — reaches them all the same; and the worker
+    """Workers fork from a forkserver that imported their modules once and set numba up (0.01 s
+    of CPU a worker against 1.6–1.9 s spawned, and ~0.5 s more for numba's set-up). What the
+    forkserver cannot know — an environment variable and a working directory set after it
+    started — reaches them all the same; and the worker
     is the forkserver's child, not this process's, so it must watch both to die with us."""
     with worker_pool("local", None, 1) as ex:      # the forkserver is running after this
         list(execute_many({0: (os.getpid, ())}, ex))
     monkeypatch.setenv("XVAL_TEST_MARK", "set after the forkserver started")
     monkeypatch.chdir(tmp_path)
     with worker_pool("local", None, 1) as ex:
-        leaves = sorted({m for sc in SCENES.values() for m in sc.leaves.values()})
-        (out,) = list(execute_many({0: (_worker_view, (leaves,))}, ex))
+        (out,) = list(execute_many({0: (_worker_view, ())}, ex))
     assert out.error is None, out.error
-    missing, mark, cwd, ppid = out.value
-    assert not missing, f"the worker must import these itself: {missing}"
+    preloaded, mark, cwd, ppid = out.value
+    assert preloaded, "the worker imported its modules or set numba up itself"
     assert mark == "set after the forkserver started"
     assert os.path.samefile(cwd, tmp_path)
     assert ppid != os.getpid()                     # forked by the forkserver

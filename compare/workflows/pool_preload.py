@@ -1,8 +1,10 @@
 """What every local pool worker needs, imported once by the forkserver the workers are forked
 from (`executors._context`): the job runners, the engines, matplotlib on its file backend, and
-every built-in solver's leaf — a compiled leaf's import loads its kernels from numba's cache
-(or compiles them), and numba's first load in a process sets up its target context: 0.6–0.8 s
-of CPU in each worker otherwise (measured: a forked worker importing the two rotor leaves).
+numba with its target context set up — numba's first compile or cache load in a process does
+that, ~0.5 s of CPU in each worker otherwise (measured: a forked worker importing the two rotor
+leaves, 0.6–0.8 s → 0.14–0.17 s). The solvers' leaves themselves are not imported here: on an
+empty numba cache their import compiles (~37 CPU-s for all), which here would run on one core
+before any worker starts, where the workers compile what their jobs need side by side.
 Not rerun: its import starts threads, which a fork would not copy."""
 import matplotlib
 
@@ -11,14 +13,14 @@ matplotlib.use("Agg")                  # workers write files; pyplot then never 
 import exudyn  # noqa: E402,F401
 import matplotlib.pyplot  # noqa: E402,F401
 import mujoco  # noqa: E402,F401
+import numba  # noqa: E402
 
-from ..leafinfo import leaf_info  # noqa: E402
-from ..scenes import SCENES  # noqa: E402
 from . import campaign, maps  # noqa: E402,F401
 
-for _scene in SCENES.values():
-    for _module in _scene.leaves.values():
-        try:
-            leaf_info(_module)
-        except Exception:  # noqa: BLE001 - a plug-in's broken leaf: its own jobs report it
-            pass
+
+@numba.njit
+def numba_ready(x):
+    return x
+
+
+numba_ready(0)

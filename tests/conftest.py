@@ -100,31 +100,10 @@ def rotor_default_run(tmp_path_factory):
     return json.loads(so), out
 
 
-# Leaves whose import compiles kernels (numba's cache empty, one process each, measured): the
-# Euler-vector rotor 16 CPU-s (the dense drivers, the map batch kernel), the press 16 (the
-# linear-acceleration and event drivers), the MSTMM blade 5; every other leaf < 0.4.
-KERNEL_GROUPS = (("custom_models.rotor.euler_vector",),
-                 ("custom_models.press.partial", "custom_models.mstmm.blade"))
-
-
-def compile_kernels_once():
-    """Two xdist workers that meet the same uncached kernel both compile it (a fresh clone: 36
-    of the workers' 173 CPU-s of compiling, measured): compile the import-time kernels first,
-    in one process per group, both cores busy. A warm cache loads them in ~1.5 s."""
-    import subprocess
-    procs = [subprocess.Popen([sys.executable, "-c", "import " + ", ".join(g)])
-             for g in KERNEL_GROUPS]
-    for p in procs:
-        p.wait()
-
-
 def pytest_configure(config):
     # here, not in pyproject.toml: an ini filter naming numba's class imports numba, so numpy,
     # before this file sets one BLAS thread
     config.addinivalue_line("filterwarnings", "ignore::numba.NumbaPerformanceWarning")
-    if (config.getoption("numprocesses", None) and not hasattr(config, "workerinput")
-            and not config.option.collectonly):
-        compile_kernels_once()                 # in the controller, before its workers start
 
 
 def pytest_addoption(parser):

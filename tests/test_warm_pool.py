@@ -59,8 +59,8 @@ def test_a_forked_worker_starts_with_the_modules_and_this_processs_environment(t
     """Workers fork from a forkserver that imported their modules once and set numba up (0.01 s
     of CPU a worker against 1.6–1.9 s spawned, and ~0.5 s more for numba's set-up). What the
     forkserver cannot know — an environment variable and a working directory set after it
-    started — reaches them all the same; and the worker
-    is the forkserver's child, not this process's, so it must watch both to die with us."""
+    started — reaches them all the same; and the worker is the forkserver's child, not this
+    process's, so it must watch both to die with us."""
     with worker_pool("local", None, 1) as ex:      # the forkserver is running after this
         list(execute_many({0: (os.getpid, ())}, ex))
     monkeypatch.setenv("XVAL_TEST_MARK", "set after the forkserver started")

@@ -219,35 +219,43 @@ def eigen(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False
 BLADE_SHARE = 0.3   # a mode whose blades hold this share of |p|² is named after the blades
 
 
-def classify(v: np.ndarray, names: list):
-    """(family, kind, sense) of one mode from its multi-blade coordinates: the blade family and
-    multi-blade kind with the largest share of |p|² when the blades hold at least BLADE_SHARE
-    of it (a lag collective coupled with shaft torsion is a lag mode), else the aircraft part
-    that holds most; sense of a cyclic mode: 'progressive' when b_c + i b_s dominates
-    b_c − i b_s, else 'regressive'."""
-    share: dict = {}
-    cyc: dict = {}
-    blades = 0.0
+def classify(V: np.ndarray, names: list) -> list:
+    """(family, kind, sense) of each mode (column of V) from its multi-blade coordinates: the
+    blade family and multi-blade kind with the largest share of |p|² when the blades hold at
+    least BLADE_SHARE of it (a lag collective coupled with shaft torsion is a lag mode), else
+    the aircraft part that holds most; sense of a cyclic mode: 'progressive' when b_c + i b_s
+    dominates b_c − i b_s, else 'regressive'. All modes at once, over the coordinates grouped
+    once: 0.004 s against 0.13 s for a loop over each mode's coordinates (MuJoCo's hovering
+    aircraft at N = 20: 331 modes, 336 coordinates), which was ~12 % of the engines' helicopter
+    tests. Every sum runs in coordinate order (cumsum, not numpy's pairwise sum) and the first
+    group wins a tie, as such a loop does: the names are the loop's (test_helicopter_engines)."""
+    groups: dict = {}                                    # (family, kind) -> coordinate rows
+    cyc: dict = {}                                       # (family, h) -> [b_c row, b_s row]
     for i, (part, fam, h) in enumerate(names):
-        a2 = abs(v[i]) ** 2
         if part.startswith("blade"):
             kind = ("collective", "cyclic", "cyclic", "differential")[int(part[-1])]
-            share[fam, kind] = share.get((fam, kind), 0.0) + a2
-            blades += a2
+            groups.setdefault((fam, kind), []).append(i)
             if kind == "cyclic":
-                cyc.setdefault((fam, h), [0j, 0j])[int(part[-1]) - 1] = v[i]
+                cyc.setdefault((fam, h), [-1, -1])[int(part[-1]) - 1] = i
         else:
-            share[part, ""] = share.get((part, ""), 0.0) + a2
-    blade_keys = [k for k in share if k[1]]
-    if blades >= BLADE_SHARE * sum(share.values()):
-        fam, kind = max(blade_keys, key=share.get)
-    else:
-        fam, kind = max((k for k in share if not k[1]), key=share.get)
-    if kind != "cyclic":
-        return fam, kind, ""
-    prog = sum(abs(c + 1j * s) ** 2 for c, s in cyc.values())
-    regr = sum(abs(c - 1j * s) ** 2 for c, s in cyc.values())
-    return fam, kind, "regressive" if regr >= prog else "progressive"
+            groups.setdefault((part, ""), []).append(i)
+    a2 = np.abs(V) ** 2
+    keys = list(groups)
+    share = np.array([np.cumsum(a2[groups[k]], axis=0)[-1] for k in keys])
+    blade_rows = sorted(i for k in keys if k[1] for i in groups[k])
+    blades = np.cumsum(a2[blade_rows], axis=0)[-1] if blade_rows else np.zeros(V.shape[1])
+    total = np.cumsum(share, axis=0)[-1]
+    is_blade = np.array([bool(k[1]) for k in keys])
+    on_blades = blades >= BLADE_SHARE * total
+    pick = np.where(on_blades, np.argmax(np.where(is_blade[:, None], share, -np.inf), axis=0),
+                    np.argmax(np.where(is_blade[:, None], -np.inf, share), axis=0))
+    zero = np.zeros(V.shape[1], complex)
+    pairs = [[V[j] if j >= 0 else zero for j in cs] for cs in cyc.values()]
+    prog = np.cumsum([np.abs(c + 1j * sn) ** 2 for c, sn in pairs], axis=0)[-1] if pairs else 0
+    regr = np.cumsum([np.abs(c - 1j * sn) ** 2 for c, sn in pairs], axis=0)[-1] if pairs else 0
+    sense = np.where(regr >= prog, "regressive", "progressive")
+    return [(*keys[g], str(sense[i]) if keys[g][1] == "cyclic" else "")
+            for i, g in enumerate(pick)]
 
 
 def _frequencies(linearised, params, s, free):
@@ -269,8 +277,7 @@ def _frequencies(linearised, params, s, free):
         ext[rows] = (4 * f[rows] - f2[cols]) / 3
         change[rows] = ext[rows] - f[rows]
         f = ext
-    return (f, change, [classify(V[:, i], names) for i in range(len(f))], secs, len(names),
-            every)
+    return (f, change, classify(V[:, :len(f)], names), secs, len(names), every)
 
 
 def _on_blades(f, kinds, speed_hz):

@@ -296,3 +296,43 @@ def test_tension_torsion_reaches_the_engines_aircraft():
         return r.frequencies_hz[r.labels.index("torsion 1")]
     assert abs(fe / own("on") - 1) < ALLOW
     assert own("on") / own("off") - 1 > 0.04
+
+
+def _classify_one(v, names):
+    """The mode naming written as a plain loop over one mode's coordinates (the reference for
+    hc.classify, which names all modes at once): shares of |p|² per blade family and kind and
+    per aircraft part, the blades' total against BLADE_SHARE, and the cyclic sense."""
+    share, cyc, blades = {}, {}, 0.0
+    for i, (part, fam, h) in enumerate(names):
+        a2 = abs(v[i]) ** 2
+        if part.startswith("blade"):
+            kind = ("collective", "cyclic", "cyclic", "differential")[int(part[-1])]
+            share[fam, kind] = share.get((fam, kind), 0.0) + a2
+            blades += a2
+            if kind == "cyclic":
+                cyc.setdefault((fam, h), [0j, 0j])[int(part[-1]) - 1] = v[i]
+        else:
+            share[part, ""] = share.get((part, ""), 0.0) + a2
+    on_blades = blades >= hc.BLADE_SHARE * sum(share.values())
+    fam, kind = max((k for k in share if bool(k[1]) == on_blades), key=share.get)
+    if kind != "cyclic":
+        return fam, kind, ""
+    prog = sum(abs(c + 1j * s) ** 2 for c, s in cyc.values())
+    regr = sum(abs(c - 1j * s) ** 2 for c, s in cyc.values())
+    return fam, kind, "regressive" if regr >= prog else "progressive"
+
+
+@pytest.mark.parametrize("speed", [0.0, None], ids=["at-rest", "spinning"])
+@pytest.mark.parametrize("free", [False, True], ids=["clamped", "hover"])
+def test_all_modes_named_at_once_as_one_by_one(free, speed):
+    """hc.classify names every mode of an engine's aircraft in one pass; each name equals the
+    plain per-mode loop's, at rest (degenerate cyclic pairs: the sense is decided by a tie) and
+    at the scene's speed."""
+    p = dict(HP if free else P)
+    if speed is not None:
+        p["speed"] = speed
+    lam, V, names, _, _ = hc.eigen(heli.linearised, p, 8, 0.0, free)
+    names_all = hc.classify(V, names)
+    assert len(names_all) == V.shape[1] > 50
+    assert names_all == [_classify_one(V[:, i], names) for i in range(V.shape[1])]
+    assert {k for _, k, _ in names_all} >= {"collective", "cyclic", "differential"}

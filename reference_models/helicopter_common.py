@@ -219,6 +219,12 @@ def eigen(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False
 BLADE_SHARE = 0.3   # a mode whose blades hold this share of |p|² is named after the blades
 
 
+def _in_order_sum(rows):
+    """Sum over the first axis one row after another, as a Python loop adds (numpy's own sum
+    is pairwise: other roundings, which could tip a tie between two shares)."""
+    return np.cumsum(rows, axis=0)[-1]
+
+
 def classify(V: np.ndarray, names: list) -> list:
     """(family, kind, sense) of each mode (column of V) from its multi-blade coordinates: the
     blade family and multi-blade kind with the largest share of |p|² when the blades hold at
@@ -227,8 +233,8 @@ def classify(V: np.ndarray, names: list) -> list:
     dominates b_c − i b_s, else 'regressive'. All modes at once, over the coordinates grouped
     once: 0.004 s against 0.13 s for a loop over each mode's coordinates (MuJoCo's hovering
     aircraft at N = 20: 331 modes, 336 coordinates), which was ~12 % of the engines' helicopter
-    tests. Every sum runs in coordinate order (cumsum, not numpy's pairwise sum) and the first
-    group wins a tie, as such a loop does: the names are the loop's (test_helicopter_engines)."""
+    tests. Every sum runs in coordinate order (`_in_order_sum`) and the first group wins a
+    tie, as such a loop does: the names are the loop's (test_helicopter_engines)."""
     groups: dict = {}                                    # (family, kind) -> coordinate rows
     cyc: dict = {}                                       # (family, h) -> [b_c row, b_s row]
     for i, (part, fam, h) in enumerate(names):
@@ -241,18 +247,18 @@ def classify(V: np.ndarray, names: list) -> list:
             groups.setdefault((part, ""), []).append(i)
     a2 = np.abs(V) ** 2
     keys = list(groups)
-    share = np.array([np.cumsum(a2[groups[k]], axis=0)[-1] for k in keys])
+    share = np.array([_in_order_sum(a2[groups[k]]) for k in keys])
     blade_rows = sorted(i for k in keys if k[1] for i in groups[k])
-    blades = np.cumsum(a2[blade_rows], axis=0)[-1] if blade_rows else np.zeros(V.shape[1])
-    total = np.cumsum(share, axis=0)[-1]
+    blades = _in_order_sum(a2[blade_rows]) if blade_rows else np.zeros(V.shape[1])
+    total = _in_order_sum(share)
     is_blade = np.array([bool(k[1]) for k in keys])
     on_blades = blades >= BLADE_SHARE * total
     pick = np.where(on_blades, np.argmax(np.where(is_blade[:, None], share, -np.inf), axis=0),
                     np.argmax(np.where(is_blade[:, None], -np.inf, share), axis=0))
     zero = np.zeros(V.shape[1], complex)
     pairs = [[V[j] if j >= 0 else zero for j in cs] for cs in cyc.values()]
-    prog = np.cumsum([np.abs(c + 1j * sn) ** 2 for c, sn in pairs], axis=0)[-1] if pairs else 0
-    regr = np.cumsum([np.abs(c - 1j * sn) ** 2 for c, sn in pairs], axis=0)[-1] if pairs else 0
+    prog = _in_order_sum([np.abs(c + 1j * sn) ** 2 for c, sn in pairs]) if pairs else 0
+    regr = _in_order_sum([np.abs(c - 1j * sn) ** 2 for c, sn in pairs]) if pairs else 0
     sense = np.where(regr >= prog, "regressive", "progressive")
     return [(*keys[g], str(sense[i]) if keys[g][1] == "cyclic" else "")
             for i, g in enumerate(pick)]

@@ -100,10 +100,43 @@ def rotor_default_run(tmp_path_factory):
     return json.loads(so), out
 
 
+# The modules whose import compiles kernels typed ahead (explicit signatures), each after the
+# ones it imports. On an empty numba cache both xdist workers collected every test module at once
+# and compiled these side by side, each of them twice: ~48 CPU-s in both workers, the first 55 s
+# of a cold run (numba's compile events, every process). Each worker imports them first, one at
+# a time under a file lock, in its own order: the other worker loads what one compiled.
+EAGER_KERNELS = {
+    "gw0": ("custom_models.integrators.dense", "custom_models.rotor.batch",
+            "custom_models.integrators.linear_acceleration", "custom_models.integrators.events",
+            "custom_models.mstmm.elements", "custom_models.press.kinematics"),
+    "gw1": ("custom_models.integrators.linear_acceleration", "custom_models.mstmm.elements",
+            "custom_models.press.kinematics", "custom_models.integrators.dense",
+            "custom_models.integrators.events", "custom_models.rotor.batch")}
+
+
+def import_eager_kernels(worker):
+    try:
+        import fcntl
+    except ImportError:                                  # not POSIX: imported as collected
+        return
+    import hashlib
+    import importlib
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[1]
+    locks = Path(tempfile.gettempdir()) / ("xval-compile-"
+                                           + hashlib.sha1(str(root).encode()).hexdigest()[:12])
+    locks.mkdir(exist_ok=True)
+    for name in EAGER_KERNELS.get(worker, ()):
+        with open(locks / f"{name}.lock", "w") as f:
+            fcntl.flock(f, fcntl.LOCK_EX)           # released when the file closes
+            importlib.import_module(name)
+
+
 def pytest_configure(config):
     # here, not in pyproject.toml: an ini filter naming numba's class imports numba, so numpy,
     # before this file sets one BLAS thread
     config.addinivalue_line("filterwarnings", "ignore::numba.NumbaPerformanceWarning")
+    import_eager_kernels(os.environ.get("PYTEST_XDIST_WORKER"))
 
 
 def pytest_addoption(parser):

@@ -1,15 +1,17 @@
+import importlib
 import json
 import os
 import sys
 import tempfile
 import time
+from pathlib import Path
 
 import pytest
 
 import compare  # noqa: F401  before numpy: one BLAS thread, as `xval` runs (compare/__init__.py)
 
-os.environ.setdefault("MPLCONFIGDIR", os.path.join(os.path.dirname(__file__), "..", "logs",
-                                                   ".mplconfig"))
+LOGS = Path(__file__).resolve().parents[1] / "logs"
+os.environ.setdefault("MPLCONFIGDIR", str(LOGS / ".mplconfig"))
 
 
 def xval(*args, cwd=None):
@@ -119,13 +121,8 @@ def import_eager_kernels(worker):
         import fcntl
     except ImportError:                                  # not POSIX: imported as collected
         return
-    import hashlib
-    import importlib
-    from pathlib import Path
-    root = Path(__file__).resolve().parents[1]
-    locks = Path(tempfile.gettempdir()) / ("xval-compile-"
-                                           + hashlib.sha1(str(root).encode()).hexdigest()[:12])
-    locks.mkdir(exist_ok=True)
+    locks = LOGS / ".compile-locks"
+    locks.mkdir(parents=True, exist_ok=True)
     for name in EAGER_KERNELS.get(worker, ()):
         with open(locks / f"{name}.lock", "w") as f:
             fcntl.flock(f, fcntl.LOCK_EX)           # released when the file closes

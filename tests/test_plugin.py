@@ -30,13 +30,55 @@ def xval(plugin_path, *args, cwd):
                           capture_output=True, text=True)
 
 
-def test_the_plugin_scene_is_listed_and_runs_with_all_three_solvers(plugin_path, tmp_path):
-    r = xval(plugin_path, "list", cwd=tmp_path)
-    assert "double-pendulum" in r.stdout and "plug-in: xval-double-pendulum" in r.stdout
-    r = xval(plugin_path, "run", "double-pendulum", "--json", "--no-record", "--out",
-             str(tmp_path), cwd=tmp_path)
+# The module's command lines, run one after another in ONE fresh process with the plug-in on
+# its path (`tests.conftest.xval`: `compare.cli.main` with its exit status and output caught),
+# each as a user types it. A process per command spent ~2.5 s starting and importing each
+# time: seven of them were ~15 of this module's ~50 CPU-s. `python -m compare` itself, the
+# entry point a user runs, is checked with `list`.
+OSC = 1e-3                                       # the small-oscillation amplitude (rad)
+COMMANDS = {
+    "run": ["run", "double-pendulum", "--json", "--no-record", "--out", "run"],
+    "osc": ["run", "double-pendulum", "--set", f"theta1_0={OSC}", "--set",
+            f"theta2_0={np.sqrt(2) * OSC}", "--set", "t_end=6", "--set", "output_dt=0.001",
+            "--json", "--no-record", "--out", "osc"],
+    "bench": ["bench", "double-pendulum", "--repeats", "1", "--set", "t_end=1", "--out",
+              "bench"],
+    "extremes": ["extremes", "double-pendulum", "--strict", "--json", "--out", "extremes"],
+    "map": ["map", "double-pendulum", "--x", "theta1_0=1:3", "--set", "theta2_0=0", "--solver",
+            "dp-lagrange", "--resolution", "1e-2", "--coarse", "9", "--json", "--no-record",
+            "--out", "map"],
+    "campaign": ["campaign", "dp.toml", "--json", "--out", "campaign"],
+    # the second run reuses every job (digest of the plug-in)
+    "campaign again": ["campaign", "dp.toml", "--json", "--out", "campaign"]}
+BATCH = ("import json, sys\n"
+         "from tests.conftest import xval\n"
+         "out = {k: xval(*a) for k, a in json.loads(sys.argv[1]).items()}\n"
+         "sys.stdout.write(json.dumps(out))\n")
+
+
+@pytest.fixture(scope="module")
+def commands(plugin_path, tmp_path_factory):
+    """(exit status, stdout, stderr) of each of COMMANDS, keyed as there, and their folder."""
+    folder = tmp_path_factory.mktemp("commands")
+    (folder / "dp.toml").write_text(
+        'name = "dp"\n[[cases]]\nscene = "double-pendulum"\nset = { t_end = 1 }\n')
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join((str(plugin_path), str(ROOT)))}
+    r = subprocess.run([sys.executable, "-c", BATCH, json.dumps(COMMANDS)], cwd=folder, env=env,
+                       capture_output=True, text=True)
     assert r.returncode == 0, r.stderr[-2000:]
-    obj = json.loads(r.stdout)
+    return json.loads(r.stdout), folder
+
+
+def test_the_plugin_scene_is_listed_by_the_entry_point(plugin_path, tmp_path):
+    r = xval(plugin_path, "list", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "double-pendulum" in r.stdout and "plug-in: xval-double-pendulum" in r.stdout
+
+
+def test_the_plugin_scene_runs_with_all_three_solvers(commands):
+    rc, stdout, stderr = commands[0]["run"]
+    assert rc == 0, stderr[-2000:]
+    obj = json.loads(stdout)
     assert {x["solver"]: x["status"] for x in obj["runs"]} == {
         "dp-lagrange": "ok", "exudyn": "ok", "mujoco": "ok"}
     assert obj["comparisons"] and all(c["verdict"] == "agree" for c in obj["comparisons"])
@@ -46,18 +88,17 @@ def test_the_plugin_scene_is_listed_and_runs_with_all_three_solvers(plugin_path,
         assert abs(x["final"]["energy_balance"]) < 1e-10 * scale, x["solver"]
 
 
-def test_small_oscillations_match_the_closed_form(plugin_path, tmp_path):
+def test_small_oscillations_match_the_closed_form(commands):
     """Started in the slow normal mode (θ2 = √2 θ1 for equal masses and rods), every solver
     swings at ω = √((g/l)(2 − √2)); the period from the zero crossings of θ1 (five in 6 s:
     the period 2.62 s)."""
-    a = 1e-3
-    r = xval(plugin_path, "run", "double-pendulum", "--set", f"theta1_0={a}", "--set",
-             f"theta2_0={np.sqrt(2) * a}", "--set", "t_end=6", "--set", "output_dt=0.001",
-             "--json", "--no-record", "--out", str(tmp_path), cwd=tmp_path)
-    assert r.returncode == 0, r.stderr[-2000:]
+    rc, stdout, stderr = commands[0]["osc"]
+    assert rc == 0, stderr[-2000:]
     w_exact = np.sqrt(G / L * (2 - np.sqrt(2)))
-    for run in json.loads(r.stdout)["runs"]:
-        with np.load(run["trajectory"]) as z:
+    runs = json.loads(stdout)["runs"]
+    assert {run["solver"] for run in runs} == {"dp-lagrange", "exudyn", "mujoco"}
+    for run in runs:
+        with np.load(commands[1] / run["trajectory"]) as z:
             t, th = z["t"], z["theta1"]
         i = np.nonzero(np.sign(th[:-1]) != np.sign(th[1:]))[0]
         tz = t[i] - th[i] * (t[i + 1] - t[i]) / (th[i + 1] - th[i])    # linear interpolation
@@ -67,27 +108,22 @@ def test_small_oscillations_match_the_closed_form(plugin_path, tmp_path):
         assert abs(2 * np.pi / period - w_exact) / w_exact < 1e-6, run["solver"]
 
 
-def test_bench_extremes_and_campaign_work_on_the_plugin(plugin_path, tmp_path):
-    r = xval(plugin_path, "bench", "double-pendulum", "--repeats", "1", "--set", "t_end=1",
-             "--out", str(tmp_path), cwd=tmp_path)
-    assert r.returncode == 0, r.stderr[-2000:]
-    assert "fastest" in r.stdout
-    r = xval(plugin_path, "extremes", "double-pendulum", "--strict", "--json", "--out",
-             str(tmp_path), cwd=tmp_path)
-    assert r.returncode == 0, r.stderr[-2000:]
-    assert json.loads(r.stdout)["n_failed"] == 0
-    r = xval(plugin_path, "map", "double-pendulum", "--x", "theta1_0=1:3", "--set",
-             "theta2_0=0", "--solver", "dp-lagrange", "--resolution", "1e-2", "--coarse", "9",
-             "--json", "--no-record", "--out", str(tmp_path), cwd=tmp_path)
-    assert r.returncode == 0, r.stderr[-2000:]
-    cs = json.loads(r.stdout)["boundaries"]["dp-lagrange"]
+def test_bench_extremes_and_campaign_work_on_the_plugin(commands):
+    out = commands[0]
+    rc, stdout, stderr = out["bench"]
+    assert rc == 0, stderr[-2000:]
+    assert "fastest" in stdout
+    rc, stdout, stderr = out["extremes"]
+    assert rc == 0, stderr[-2000:]
+    assert json.loads(stdout)["n_failed"] == 0
+    rc, stdout, stderr = out["map"]
+    assert rc == 0, stderr[-2000:]
+    cs = json.loads(stdout)["boundaries"]["dp-lagrange"]
     assert cs and all(np.ptp(c["bracket"]) <= 0.02 + 1e-12 for c in cs)
-    f = tmp_path / "dp.toml"
-    f.write_text('name = "dp"\n[[cases]]\nscene = "double-pendulum"\nset = { t_end = 1 }\n')
-    for _ in range(2):                  # the second run reuses every job (digest of the plug-in)
-        r = xval(plugin_path, "campaign", str(f), "--json", "--out", str(tmp_path), cwd=tmp_path)
-        assert r.returncode == 0, r.stderr[-2000:]
-    s = json.loads(r.stdout)
+    for key in ("campaign", "campaign again"):
+        rc, stdout, stderr = out[key]
+        assert rc == 0, stderr[-2000:]
+    s = json.loads(stdout)
     assert s["n_jobs"] == 3 and s["n_reused"] == 3
 
 

@@ -32,9 +32,9 @@ def xval(plugin_path, *args, cwd):
 
 # The module's command lines, run one after another in ONE fresh process with the plug-in on
 # its path (`tests.conftest.xval`: `compare.cli.main` with its exit status and output caught),
-# each as a user types it. A process per command spent ~2.5 s starting and importing each
-# time: seven of them were ~15 of this module's ~50 CPU-s. `python -m compare` itself, the
-# entry point a user runs, is checked with `list`.
+# each as a user types it. A process per command started and imported everything seven times:
+# the module took 48.5 CPU-s, 30.4 so. `python -m compare` itself, the entry point a user
+# runs, is checked with `list`.
 OSC = 1e-3                                       # the small-oscillation amplitude (rad)
 COMMANDS = {
     "run": ["run", "double-pendulum", "--json", "--no-record", "--out", "run"],

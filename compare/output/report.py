@@ -199,7 +199,7 @@ def deviation_figure(result):
         lo, hi = ax.get_ylim()
         if ax.get_yscale() == "log" and hi > 1e3 * lo:
             # over more than three decades the minor ticks carry no label and were ~40 % of
-            # this figure's drawing (rotor-spinup, 1 s: 0.40 → 0.23 CPU-s): majors only
+            # this figure's drawing (rotor-spinup, 1 s: 0.40 → 0.21–0.23 CPU-s): majors only
             ax.yaxis.set_minor_locator(NullLocator())
         ax.grid(alpha=0.3, which="both")
         if ax.lines:

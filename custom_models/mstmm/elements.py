@@ -346,28 +346,38 @@ def shaft_tip_det(EIx, EIy, m, L, omega, spin, plane):
     return P[r, 0] * P[r + 1, 1] - P[r, 1] * P[r + 1, 0]
 
 
+@nb.njit(cache=True)
 def spinning_shaft(omega, spin, EI, m, EA, GJ, I_p, x_a, x_b):
     """12x12 complex transfer of the spinning shaft (local x = spin axis) from x_a to x_b,
     u ∝ e^{iωt}, rotating frame, physical gyroscopic coupling:
-        EI v'''' + m(v̈ − 2Ωẇ − Ω²v) = 0,   EI w'''' + m(ẅ + 2Ωv̇ − Ω²w) = 0,
+        EI v + m(v̈ − 2Ωẇ − Ω²v) = 0,   EI w + m(ẅ + 2Ωv̇ − Ω²w) = 0,
     v along local y (lag-like signs), w along local z (flap-like signs); extension and torsion
     about the spin axis as a non-rotating bar."""
-    a, c = m * (omega**2 + spin**2), 2.0 * m * spin * omega
-    K = np.array([[a, 1j * c], [-1j * c, a]]) / EI
+    a, c = m * (omega * omega + spin * spin), 2.0 * m * spin * omega
+    K = np.empty((2, 2), np.complex128)
+    K[0, 0], K[0, 1], K[1, 0], K[1, 1] = a / EI, 1j * c / EI, -1j * c / EI, a / EI
     s = x_b - x_a
     beta = (abs(a + c) / EI) ** 0.25
     n = max(1, int(np.ceil(abs(s) * beta / 1.5)))
     E = np.linalg.matrix_power(coupled_fourth_order_transfer(K, s / n), n)
-    Cv = resultant_map(EI, 0.0, False)
-    Cw = resultant_map(EI, 0.0, True)
-    C = np.zeros((8, 8))
-    C[:4, :4], C[4:, 4:] = Cv, Cw
-    B = C @ E @ np.linalg.inv(C)                 # (v-state, w-state)
+    # C E C⁻¹ to the (v, w)-state; with no tension the resultant maps are diagonal, so this
+    # scales E's rows by C's diagonal and its columns by the inverse's (the roundings of the
+    # matrix products: each of their sums has one non-zero term)
+    Cv, Cw = resultant_map(EI, 0.0, False), resultant_map(EI, 0.0, True)
+    d = np.empty(8)
+    for i in range(4):
+        d[i], d[4 + i] = Cv[i, i], Cw[i, i]
+    idx = np.concatenate((LAG, FLAP))
     U = np.zeros((12, 12), dtype=np.complex128)
-    idx = np.concatenate([LAG, FLAP])
-    U[np.ix_(idx, idx)] = B
-    U[np.ix_(TORSION, TORSION)] = second_order_transfer(GJ, I_p * omega**2 / GJ, s)
-    U[np.ix_(AXIAL, AXIAL)] = second_order_transfer(EA, m * omega**2 / EA, s)
+    for i in range(8):
+        for j in range(8):
+            U[idx[i], idx[j]] = d[i] * E[i, j] * (1.0 / d[j])
+    Tq = second_order_transfer(GJ, I_p * omega * omega / GJ, s)
+    Ax = second_order_transfer(EA, m * omega * omega / EA, s)
+    for i in range(2):
+        for j in range(2):
+            U[TORSION[i], TORSION[j]] = Tq[i, j]
+            U[AXIAL[i], AXIAL[j]] = Ax[i, j]
     return U
 
 

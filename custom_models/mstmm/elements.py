@@ -350,7 +350,7 @@ def shaft_tip_det(EIx, EIy, m, L, omega, spin, plane):
 def spinning_shaft(omega, spin, EI, m, EA, GJ, I_p, x_a, x_b):
     """12x12 complex transfer of the spinning shaft (local x = spin axis) from x_a to x_b,
     u ∝ e^{iωt}, rotating frame, physical gyroscopic coupling:
-        EI v + m(v̈ − 2Ωẇ − Ω²v) = 0,   EI w + m(ẅ + 2Ωv̇ − Ω²w) = 0,
+        EI v'''' + m(v̈ − 2Ωẇ − Ω²v) = 0,   EI w'''' + m(ẅ + 2Ωv̇ − Ω²w) = 0,
     v along local y (lag-like signs), w along local z (flap-like signs); extension and torsion
     about the spin axis as a non-rotating bar."""
     a, c = m * (omega * omega + spin * spin), 2.0 * m * spin * omega

@@ -239,9 +239,9 @@ def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
     were checked before (`settings_for`); anything a leaf raises now is recorded as `error`.
     `estimate_error`: the run's own numerical error per channel (`Trajectory.errors`), which the
     verdicts weigh: factor·|Δ| against a tighter rerun, plus what that rerun cannot see
-    (`_unseen_error`). `warm_up=False` skips the separate compile call (a batch of points warms
-    up once; the tighter rerun never needs one). `t_out`: the output grid where the caller has
-    built it (a Plan)."""
+    (`_unseen_error`), plus each discretisation knob's own (`_knob_errors`). `warm_up=False`
+    skips the separate compile call (a batch of points warms up once; the tighter rerun never
+    needs one). `t_out`: the output grid where the caller has built it (a Plan)."""
     tr = _simulate(scene, solver, params, settings, timeout_s, warm_up, t_out)
     if estimate_error and tr.status == "ok":
         if settings.get("dt") == "auto" and isinstance(tr.settings.get("dt"), (int, float)):
@@ -261,7 +261,28 @@ def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
                 tr.errors = {c: seen[c] + unseen[c] for c in scene.channels}
             else:
                 tr.stats["error_estimate_by"] = f"{how}: {ref.status} ({ref.reason})"
+        if tr.errors or tight is None:   # the step's own estimate held, or there is none
+            _knob_errors(scene, solver, params, settings, tr, timeout_s)
     return tr
+
+
+def _knob_errors(scene, solver, params, settings, tr, timeout_s):
+    """Add each discretisation knob's error (`LeafInfo.knob_reruns`: the knob halved alone,
+    factor 2^p/(2^p − 1) on the change) to the run's estimate — a knob the estimate does not
+    vary would hide its error (lagrange-partial's 0.1° central differences: 14–1500 × the
+    step's error on the press)."""
+    for knob, tight in solver.info(scene).knob_reruns(settings):
+        ref = _simulate(scene, solver, params, tight, timeout_s, False, tr.t)
+        tr.stats["error_estimate_s"] = tr.stats.get("error_estimate_s", 0.0) + ref.wall_s
+        by = f"{knob.name} {knob.value(tight):g}"
+        if ref.status != "ok":
+            tr.stats["error_estimate_by"] += f", {by}: {ref.status} ({ref.reason})"
+            tr.errors = {}               # an estimate blind to a knob is no estimate
+            return
+        tr.stats["error_estimate_by"] += f", {by}"
+        tr.errors = {c: tr.errors.get(c, 0.0)
+                     + knob.error_factor * np.abs(tr.channels[c] - ref.channels[c])
+                     for c in scene.channels}
 
 
 def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):

@@ -48,39 +48,15 @@ CHANNELS = phys.CHANNELS     # each built once, by compare.physics.press.channel
 # the issue's acceptance numbers, as absolute bounds
 # Modelling allowances (relative to scale), each ≤ 10 × the deviation left once both solvers'
 # own error estimates are subtracted (`python -m tests.allowances press press-cycle`, defaults;
-# tests/allowances.json, checked by tests/test_allowances.py). lagrange-exact and the engines:
-# none left but crank_accel/crank_rate with MuJoCo (allowance 1e-9, the estimates' own
-# inaccuracy; max|Δ| ≥ 3e-8 of scale, all inside the estimates). lagrange-partial, the paper's
-# finite-difference "partial systems" at its 0.1° virtual step (an O(Δ²) model error, README),
-# left against exact / Exudyn / MuJoCo: press crank_angle 5.8e-7 / 1.2e-7 / 3.8e-7, crank_rate
-# 1.2e-6 / 5.5e-7 / 7.1e-7, crank_accel 3.2e-6 / 1.7e-6 / 3.8e-5 (MuJoCo's own), rocker_angle
-# 1.6e-6 / 1.5e-6 / 1.3e-6, slider_x 2.5e-7 / 0 (max|Δ| 2.5e-7) / 9.9e-8; press-cycle
-# crank_angle 1.2e-6 / 8.0e-7 / 7.8e-7, crank_rate 2.1e-6 / 1.3e-6 / 1.7e-6, crank_accel
-# 3.2e-6 / 1.6e-6 / 3.8e-5, rocker_angle 9.6e-7 / 8.8e-7 / 8.1e-7, slider_x 1.2e-6 / 8.1e-7 /
-# 9.8e-7. MuJoCo's loop closed by a soft equality constraint (solref), left against exact /
-# Exudyn: crank_accel 4.1e-5 / 4.1e-5 (both scenes), crank_rate 1.5e-7 / 0 (max|Δ| 5.9e-7).
+# tests/allowances.json, checked by tests/test_allowances.py). lagrange-partial's 0.1° central
+# differences are a numerical error, not a model difference: its error estimate halves the
+# virtual steps (the leaf's KNOBS), so it has no allowance of its own. MuJoCo closes the loop by
+# a soft equality constraint (solref): left against exact / Exudyn crank_accel 4.1e-5 (both
+# scenes), crank_rate 1.5e-7 / 0 (max|Δ| 5.9e-7); the rest 1e-9, the estimates' own inaccuracy.
 _MUJOCO = {"crank_accel": 2e-4, "crank_rate": 5e-7}
-
-
-def _tolerances(partial):
-    return {**{c: 1e-9 for c in ("crank_angle", "crank_rate", "crank_accel", "rocker_angle",
-                                 "slider_x")},
-            "by_solver": {"lagrange-partial": partial, "mujoco": _MUJOCO},
-            "by_pair": {"lagrange-partial|mujoco": {"crank_accel": 2e-4}},
-            # lagrange-partial's own model error (its 0.1° finite differences: crank_rate 2.1e-6
-            # of scale against lagrange-exact) is the solver's, not the pair's; against MuJoCo
-            # the engine's error bar (its convergence ratio, 1/(1 − r) ≈ 2.3× the halving
-            # change) now holds most of it, leaving 1.4e-7
-            "wider": {"lagrange-partial|mujoco": {
-                "crank_rate": "lagrange-partial's finite-difference model error, 2.1e-6 of "
-                              "scale against lagrange-exact, partly inside MuJoCo's error bar "
-                              "here"}}}
-
-
-PRESS_TOLERANCES = _tolerances({"crank_angle": 1e-6, "crank_rate": 3e-6, "crank_accel": 1e-5,
-                                "rocker_angle": 5e-6, "slider_x": 5e-7})
-CYCLE_TOLERANCES = _tolerances({"crank_angle": 3e-6, "crank_rate": 5e-6, "crank_accel": 1e-5,
-                                "rocker_angle": 3e-6, "slider_x": 3e-6})
+TOLERANCES = {**{c: 1e-9 for c in ("crank_angle", "crank_rate", "crank_accel", "rocker_angle",
+                                   "slider_x")},
+              "by_solver": {"mujoco": _MUJOCO}}
 
 
 def _check(p):
@@ -230,7 +206,7 @@ PRESS = TimeScene(
     leaves=PRESS_LEAVES,
     params=_MECHANISM + (positive("t_end", 0.05, "s", "horizon (paper: 0.05 s)", hi=1e3),
                          positive("output_dt", 0.00125, "s", "output grid (paper: 40 steps)")),
-    channels=CHANNELS, tolerances=PRESS_TOLERANCES, key_channel="crank_rate", check=_check,
+    channels=CHANNELS, tolerances=TOLERANCES, key_channel="crank_rate", check=_check,
     reference_solvers=("lagrange-exact", "mujoco"),
     draw_3d=draw_press, view_channels=("crank_rate", "rocker_angle", "slider_x"),
     extremes=PRESS_EXTREMES,
@@ -252,7 +228,7 @@ PRESS_CYCLE = TimeScene(
         Param("release_after", 0.045, "s", "the lock opens at this time", lo=0.0, hi=1e3),
         positive("t_end", 0.06, "s", "horizon", hi=1e3),
         positive("output_dt", 0.00125, "s", "output grid")),
-    channels=CHANNELS, tolerances=CYCLE_TOLERANCES,
+    channels=CHANNELS, tolerances=TOLERANCES,
     key_channel="crank_rate", check=_check, findings=lambda p, trs: cycle_findings(p, trs),
     draw_3d=draw_press, view_channels=("crank_rate", "rocker_angle", "slider_x"),
     extremes=(

@@ -43,8 +43,9 @@ def sample(scene: Scene, n: int, seed: int = 0, spread: float = 0.05,
 
 def far_tighter(info: LeafInfo, settings: dict) -> dict | None:
     """The reference settings: a tolerance 1000× tighter (not below 1e-14), else 1/16 of the
-    step; None where the solver has neither knob."""
-    s = dict(settings)
+    step, and every other discretisation knob 1/16 of its value; None where the solver has
+    neither a step nor a tolerance."""
+    s = info.refined(dict(settings), FAR)
     if s.get("integrator") in info.adaptive and \
             isinstance(s.get("rtol"), (int, float)):
         s["rtol"] = max(s["rtol"] * FAR_RTOL, 1e-14)

@@ -776,6 +776,7 @@ def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=N
                          else level_crossings(lines[s.name], level))
         if what is None and found[s.name]:
             tight, _, _ = solvers.tighter_settings(s.info(sc), settings[s.name])
+            tight = tight and s.info(sc).refined(tight)     # every knob tighter, not dt alone
             crossing_errors(runner, s.name, settings[s.name], tight, lines[s.name],
                             found[s.name], xa, width, y_name)
     wall = time.perf_counter() - t0

@@ -117,12 +117,11 @@ class Adaptive:
 
 @dataclass(frozen=True)
 class Knob:
-    """A discretisation knob besides the step or tolerance (a leaf's `KNOBS`: setting names,
-    each an error that shrinks as value^p, p ≥ 1): halving it is its own tighter run, and its
-    error is 2^p/(2^p − 1) ≤ 2 times |y − y_half|, as for `Fixed` (a central difference,
-    p = 2, gives 4/3: factor 2 leaves the bound a third above the error, not at it)."""
+    """A discretisation knob besides the step or tolerance (a leaf's `KNOBS`: setting name ->
+    the order p its error shrinks with, value^p): halving it is its own tighter run, doubling
+    it the coarse member that measures how fast the changes shrink (`solvers._knob_errors`)."""
     name: str
-    error_factor = 2.0
+    order: float
 
     def value(self, settings: dict) -> float | None:
         v = settings.get(self.name)
@@ -298,4 +297,4 @@ def _build(leaf: ModuleType) -> LeafInfo:
                     own_check=hasattr(leaf, "check_settings"),
                     batch_regimes=hasattr(leaf, "regimes"),
                     unbalance_response=getattr(leaf, "unbalance_response", None),
-                    knobs=tuple(Knob(n) for n in getattr(leaf, "KNOBS", ())))
+                    knobs=tuple(Knob(n, p) for n, p in getattr(leaf, "KNOBS", {}).items()))

@@ -17,7 +17,7 @@ DEFAULT_SETTINGS = {**press.COMMON_SETTINGS, "integrator": "linacc", "dt": 1e-5,
 INTEGRATORS = press.INTEGRATORS
 ADAPTIVE = press.ADAPTIVE          # error-controlled (press only, not press-cycle)
 # the virtual steps' central differences: an O(Δ²) error the time step's halving cannot see
-KNOBS = ("dphi_deg", "dpsi_deg")
+KNOBS = {"dphi_deg": 2, "dpsi_deg": 2}
 CHANNELS = press.CHANNELS
 
 

@@ -133,7 +133,9 @@ def allowance_table(table=None):
     estimates cover it all, max|Δ| (the allowance then only widens a window ≥ max|Δ| already).
     `covers`: the allowance (+ estimates) covers every measured case (the verdict agrees);
     `wider`: the scene file's documented reason for a wider one ({pair: reason} or
-    {pair: {channel: reason}})."""
+    {pair: {channel: reason}}). An allowance that is a function of the parameters is evaluated
+    at each case's; the row shows it at the most demanding case (at the defaults where no
+    case judges it)."""
     from compare.analysis.metrics import (
         allowance,
         allowance_si,
@@ -141,38 +143,46 @@ def allowance_table(table=None):
         frequency_allowance,
     )
     from compare.scenes import ORIGIN, SCENES
+    from compare.scenes.base import evaluate_allowances
     table = table if table is not None else json.loads(TABLE.read_text())
     out = []
     for sc in (s for n, s in SCENES.items() if n not in ORIGIN):
-        regimes = [("default", sc.tolerances)] + [(c.name, c.tolerances)
-                                                  for c in sc.allowance_cases]
+        regimes = [("default", None)] + [(c.name, c) for c in sc.allowance_cases]
         cases = table.get(sc.name, {})
-        judged = {name: sc.tolerances_for(sc.resolve({k: str(v) for k, v in c["set"].items()}))
-                  for name, c in cases.items()}
-        for regime, tol in regimes:
-            mine = [n for n, t in judged.items() if t is tol]
+        at = {name: sc.resolve({k: str(v) for k, v in c["set"].items()})
+              for name, c in cases.items()}
+        defaults = sc.resolve({})
+        for regime, regime_case in regimes:
+            raw = sc.tolerances if regime_case is None else regime_case.tolerances
+            mine = [n for n, p in at.items() if sc.allowance_case_for(p) is regime_case]
+            judged = {n: sc.tolerances_for(at[n]) for n in mine}
             for a, b in _pairs(sc):
-                wider = tol.get("wider", {})
+                wider = raw.get("wider", {})
                 pair_reason = wider.get(f"{a}|{b}") or wider.get(f"{b}|{a}")
                 for ch in channels(sc):
                     # a reason for the whole pair, or {channel: reason}
                     reason = (pair_reason.get(ch) if isinstance(pair_reason, dict)
                               else pair_reason)
-                    allow = (frequency_allowance(tol, a, b) if ch == "frequency"
-                             else damping_allowance(tol, a, b) if ch == "damping"
-                             else allowance(tol, a, b, ch))
+
+                    def allowance_in(tol, ch=ch, a=a, b=b):
+                        return (frequency_allowance(tol, a, b) if ch == "frequency"
+                                else damping_allowance(tol, a, b) if ch == "damping"
+                                else allowance(tol, a, b, ch))
+                    allow = allowance_in(evaluate_allowances(raw, defaults))
                     ratio, measured, covers, where = None, None, True, []
                     for n in mine:
                         r = _row_of(cases[n], a, b, ch)
                         if r is None:
                             continue
-                        si = allowance_si(allow, r["scale"])
+                        here = allowance_in(judged[n])
+                        si = allowance_si(here, r["scale"])
                         m = r["left"] if r["left"] > 0 else r["max_abs"]
                         covers &= r["max_abs"] <= si + (r["error_estimate"] or 0.0)
                         q = si / m if m > 0 else np.inf
                         if ratio is None or q < ratio:
-                            absolute = isinstance(allow, tuple) and allow[0] == "abs"
+                            absolute = isinstance(here, tuple) and here[0] == "abs"
                             ratio, measured = q, m if absolute else m / r["scale"]
+                            allow = here
                         where.append(n)
                     out.append({"scene": sc.name, "regime": regime, "pair": f"{a}|{b}",
                                 "kind": kind(a, b), "channel": ch, "allowance": allow,

@@ -16,7 +16,8 @@ class SceneInfo:
         sc = self.scene
         return {"scene": sc.name, "title": sc.title, "kind": sc.kind,
                 "sources": papers_in(sc.source) or [sc.source],
-                "channels": list(sc.channels), "tolerances": sc.tolerances,
+                "channels": list(sc.channels),
+                "tolerances": sc.tolerances_for(sc.resolve({})),   # at the defaults
                 "params": [{"name": p.name, "default": p.default, "unit": p.unit,
                             "range": p.describe_range(), "doc": p.doc} for p in sc.params]}
 

@@ -162,6 +162,16 @@ class PublishedTiming:
     cases: tuple = ({},)
 
 
+def evaluate_allowances(tolerances, params):
+    """`tolerances` with every callable entry f(params) (an allowance derived from the
+    modelling difference it names) replaced by its value at `params`."""
+    if callable(tolerances):
+        return tolerances(params)
+    if isinstance(tolerances, dict):
+        return {k: evaluate_allowances(v, params) for k, v in tolerances.items()}
+    return tolerances
+
+
 @dataclass(frozen=True)
 class AllowanceCase:
     """The allowances of a regime of the scene's parameters that its default allowances were
@@ -251,7 +261,9 @@ class Scene:
     # (tests/test_allowances.py). "by_pair" {"a|b": {channel: allowance}} gives a pair its
     # own (engine–engine: both engines share one model), "by_solver" {solver: {…}} every pair
     # with that solver; modes scenes: "frequency", "frequency_by_pair", "frequency_by_solver"
-    # (compare.analysis.metrics.allowance / frequency_allowance)
+    # (compare.analysis.metrics.allowance / frequency_allowance). Any entry may be a function
+    # of the resolved parameters, f(params) -> allowance, derived from the modelling difference
+    # it names; `tolerances_for(params)` evaluates them (read allowances only through it)
     tolerances: dict = field(default_factory=dict)
     # regimes with allowances of their own (AllowanceCase, first match wins; `tolerances_for`)
     allowance_cases: tuple = ()
@@ -374,11 +386,17 @@ class Scene:
             out.append(v)
         return out
 
+    def allowance_case_for(self, params):
+        """The first allowance case that holds at `params` (None: the scene's own)."""
+        return next((c for c in self.allowance_cases if c.when(params)), None)
+
     def tolerances_for(self, params):
         """The allowances a run at `params` is judged by: the first allowance case that holds,
-        else the scene's."""
-        return next((c.tolerances for c in self.allowance_cases if c.when(params)),
-                    self.tolerances)
+        else the scene's, with every entry that is a function of the parameters evaluated at
+        `params`."""
+        case = self.allowance_case_for(params)
+        return evaluate_allowances(self.tolerances if case is None else case.tolerances,
+                                   params)
 
     def verdicts(self, params, runs):
         """Every pair of `runs` (Trajectories, or Modes for a frequency scene) compared and

@@ -258,7 +258,7 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
     what = f"(largest relative error over the {len(ref.frequencies_hz)} modes)"
     best_err = {s.name: min((r["rel_error"] for r in rows if r["solver"] == s.name
                              and r["rel_error"] is not None), default=None) for s in chosen}
-    allowance = sc.tolerances.get("frequency_by_solver") or {}
+    allowance = sc.tolerances_for(params).get("frequency_by_solver") or {}
     why = {s: (f"best {e:.1e}" if e is not None else "no rung ok")
            + (f"; its model differs by up to the scene's allowance {allowance[s]:g}"
               if s in allowance else "") for s, e in best_err.items()}

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from compare.physics import mstmm
+from compare.physics import eigen, mstmm
 from compare.physics.whirl import whirl_labels
 
 N_STATIONS = 10     # mode shapes sampled at x_k = k·L/10, k = 1..10 (every speed alike)
@@ -109,21 +109,36 @@ def joint_table(chain: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return fam, hinge, k
 
 
-def quadratic_modes(M: np.ndarray, K: np.ndarray, D: np.ndarray):
-    """Eigenvalues s and eigenvectors (coordinates only) of M q̈ + D q̇ + K q = 0: the
-    oscillatory ones (Im s > 0) ascending in Im s, and the count of eigenvalues with
-    Re s > 0 beyond round-off (divergence or flutter: an unstable linearisation)."""
+def state_matrix(M: np.ndarray, K: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """A of ẋ = A x, x = (q, q̇), for M q̈ + D q̇ + K q = 0."""
     n = M.shape[0]
     MinvK, MinvD = np.split(np.linalg.solve(M, np.hstack([K, D])), 2, axis=1)
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-MinvK, -MinvD]])
+    return np.block([[np.zeros((n, n)), np.eye(n)], [-MinvK, -MinvD]])
+
+
+def quadratic_modes(M: np.ndarray, K: np.ndarray, D: np.ndarray, varied=None,
+                    first: int = 0):
+    """Eigenvalues s and eigenvectors (coordinates only) of M q̈ + D q̇ + K q = 0: the
+    oscillatory ones (Im s > 0) ascending in Im s, the count of eigenvalues with
+    Re s > 0 beyond round-off (divergence or flutter: an unstable linearisation), and, given
+    `varied` (M, K, D linearised at another finite-difference step), the error bound of ζ of
+    the `first` roots: eigen round-off (compare.physics.eigen) plus the first-order change
+    `varied` makes (None without `varied`)."""
+    n = M.shape[0]
+    A = state_matrix(M, K, D)
     s, V = np.linalg.eig(A)          # standard form: ~20x faster than the QZ of (A, B)
     fin = np.isfinite(s)
     scale = np.max(np.abs(s[fin]))
     n_unstable = int(np.sum(s[fin].real > 1e-7 * scale))
-    keep = fin & (s.imag > 1e-9 * scale)
-    s, V = s[keep], V[:n, keep]
-    order = np.argsort(s.imag)
-    return s[order], V[:, order], n_unstable
+    keep = np.nonzero(fin & (s.imag > 1e-9 * scale))[0]
+    keep = keep[np.argsort(s[keep].imag)]
+    z_err = None
+    if varied is not None:
+        W, mine = eigen.left_rows(V), keep[:first]
+        d_re, d_abs = eigen.change(state_matrix(*varied) - A, s, V, W, mine)
+        z_err = (eigen.zeta_error(eigen.round_off(A, s, V, W, mine), s[mine])
+                 + eigen.zeta_error(d_abs, s[mine], d_re))
+    return s[keep], V[:n, keep], n_unstable, z_err
 
 
 def stations(L: float) -> np.ndarray:
@@ -156,10 +171,11 @@ def family_labels(families: list) -> list:
     return out
 
 
-def blade_modes(chain: dict, M, K, D, n_modes: int) -> dict:
+def blade_modes(chain: dict, M, K, D, n_modes: int, varied=None) -> dict:
     """Frequencies (Hz), labels by the family holding most of the hinge-spring energy, shapes
-    [flap z, lag y, (chord/2)·twist] at the stations (Re then Im), damping −Re s/|s|."""
-    s, V, n_unstable = quadratic_modes(M, K, D)
+    [flap z, lag y, (chord/2)·twist] at the stations (Re then Im), damping −Re s/|s| and its
+    error bound (`quadratic_modes`)."""
+    s, V, n_unstable, z_err = quadratic_modes(M, K, D, varied, n_modes)
     fam, hinge, k = joint_table(chain)
     families, shapes = [], []
     arm = _arms(chain)
@@ -176,7 +192,8 @@ def blade_modes(chain: dict, M, K, D, n_modes: int) -> dict:
     s, shapes = s[:n_modes], np.array(shapes[:n_modes])
     return {"frequencies_hz": s.imag / (2 * np.pi),
             "labels": family_labels(families)[:n_modes], "shapes": shapes,
-            "damping": -s.real / np.abs(s), "n_unstable": n_unstable}
+            "damping": -s.real / np.abs(s), "damping_error": z_err,
+            "n_unstable": n_unstable}
 
 
 def whirl_sense(u: np.ndarray, v: np.ndarray) -> float:
@@ -186,7 +203,7 @@ def whirl_sense(u: np.ndarray, v: np.ndarray) -> float:
     return float(np.sum(np.imag(u * np.conj(v))))
 
 
-def shaft_modes(chain: dict, M, K, D, n_modes: int) -> dict:
+def shaft_modes(chain: dict, M, K, D, n_modes: int, varied=None) -> dict:
     """Whirl modes of the spinning shaft, frequencies in the co-rotating frame (as Table 2).
 
     Labels: the whirl seen from the ground turns at ω_inertial = sense·ω + Ω (sense of the
@@ -196,8 +213,8 @@ def shaft_modes(chain: dict, M, K, D, n_modes: int) -> dict:
     mstmm and fem number them, so every solver pairs mode by mode. For the isotropic shaft the
     forward whirl is the lower branch |λ² − Ω*| (its inertial frequency is λ²ω₀ turning with
     the spin) and the backward the upper λ² + Ω*. Shapes: [u, v] at the stations (Re then
-    Im)."""
-    s, V, n_unstable = quadratic_modes(M, K, D)
+    Im); damping −Re s/|s| and its error bound (`quadratic_modes`)."""
+    s, V, n_unstable, z_err = quadratic_modes(M, K, D, varied, n_modes)
     fam, hinge, k = joint_table(chain)
     arm = _arms(chain)
     spin = chain["spin"]
@@ -212,7 +229,8 @@ def shaft_modes(chain: dict, M, K, D, n_modes: int) -> dict:
     s = s[:n_modes]
     return {"frequencies_hz": s.imag / (2 * np.pi), "labels": labels[:n_modes],
             "sense": np.array(sense[:n_modes]), "shapes": np.array(shapes[:n_modes]),
-            "damping": -s.real / np.abs(s), "n_unstable": n_unstable}
+            "damping": -s.real / np.abs(s), "damping_error": z_err,
+            "n_unstable": n_unstable}
 
 
 def signed_hz(model: dict) -> np.ndarray:
@@ -248,6 +266,22 @@ def checked_segments(settings: dict) -> int:
 
 
 SPREAD_NOTE = 5e-3   # Richardson spread above this: the chain is too coarse at this speed
+FD_VARY = 10.0       # the engines' finite-difference step × this: the linearisation's own error
+
+
+def damping_change(coarse: dict, fine: dict) -> np.ndarray:
+    """|ζ_fine − ζ_coarse| per mode of `fine`, matched by label as `richardson` matches them
+    (0 where the coarse model lacks the label): the discretisation's share of ζ's error."""
+    z_c = {}
+    for lab, z in zip(coarse["labels"], coarse["damping"]):
+        z_c.setdefault(lab, []).append(z)
+    out, used = [], {}
+    for lab, z in zip(fine["labels"], fine["damping"]):
+        j = used.get(lab, 0)
+        used[lab] = j + 1
+        cands = z_c.get(lab, [])
+        out.append(abs(z - cands[j]) if j < len(cands) else 0.0)
+    return np.array(out)
 
 
 def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) -> dict:
@@ -257,13 +291,19 @@ def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) 
     With extrapolation, the N/4 chain gives a second extrapolate; their largest relative
     difference (`richardson_spread_rel`) bounds the error of the first from above where the
     chain is in its 1/N² regime (measured: spread 6e-4 for a true error 5.4e-5 at 40 rad/s).
-    A spread above SPREAD_NOTE adds a note to raise n_segments."""
+    A spread above SPREAD_NOTE adds a note to raise n_segments.
+
+    ζ's error (extra "damping_error", per mode): the eigen round-off floor, the change when the
+    engine's finite-difference step is varied (× FD_VARY: `linearise(chain, fd_scales)` gives
+    one (M, K, D) per factor), and with extrapolation the change from N/2 to N."""
     want = n_modes + 6              # margin so the coarser models have every label of the fine
     models = []
     for k in ((n, n // 2, n // 4) if extrapolate else (n,)):
         chain = make_chain(max(k, 2))
-        models.append(post(chain, *linearise(chain), want))
+        mats = linearise(chain, (1.0, FD_VARY) if k == n else (1.0,))
+        models.append(post(chain, *mats[0], want, varied=mats[1] if k == n else None))
     fine = models[0]
+    z_error = fine["damping_error"] + (damping_change(models[1], fine) if extrapolate else 0.0)
     extra, notes = {}, []
     if extrapolate:
         f_all = richardson(models[1], fine, want)
@@ -293,7 +333,7 @@ def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) 
                      "not a stable equilibrium here)")
     return {"frequencies_hz": np.asarray(f, float), "labels": [fine["labels"][i] for i in idx],
             "damping": np.asarray(fine["damping"])[idx], "shapes": fine["shapes"][idx],
-            "notes": notes, "extra": extra}
+            "notes": notes, "extra": {**extra, "damping_error": z_error[idx]}}
 
 
 def shaft_result(params: dict, s: dict, linearised, package, method: str):

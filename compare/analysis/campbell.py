@@ -390,16 +390,19 @@ def _veerings(d: Diagram, results: list[Modes]) -> list[Event]:
     return out
 
 
-def growing_onsets(values, zeta_lines: dict, floor: float = 0.0) -> list[dict]:
+def growing_onsets(values, zeta_lines: dict, floor: float = 0.0,
+                   error_lines: dict | None = None) -> list[dict]:
     """Where each line's root starts to grow: its ζ (tracked like the frequencies) goes below
-    −`floor` (the scene's ζ allowance: round-off is not growth). Per line whose root grows
+    −(`floor` + its error estimate on `error_lines`, tracked alike): the scene's ζ allowance
+    and the solver's own error bar, round-off is not growth. Per line whose root grows
     somewhere: the speed where ζ crosses zero (linear between the samples that bracket it;
     the sweep's start where it grows from there), the bracket, and the least ζ on the sweep."""
     v = np.asarray(values, float)
     out = []
     for key, z in zeta_lines.items():
         z = np.asarray(z, float)
-        grows = np.isfinite(z) & (z < -floor)
+        e = np.nan_to_num(np.asarray((error_lines or {}).get(key, 0.0), float))
+        grows = np.isfinite(z) & (z < -(floor + e))
         if not grows.any():
             continue
         i = int(np.argmax(grows))

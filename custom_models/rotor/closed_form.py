@@ -9,6 +9,7 @@ growth rate. The formulas live in compare.physics.rotor, shared with the scene's
 import numpy as np
 
 from compare.contract import LeafModes
+from compare.physics import eigen
 from compare.physics import rotor as physics
 from compare.physics.rotor import whirl_closed_form, whirl_damped
 
@@ -44,10 +45,14 @@ def modes(params: dict, settings: dict) -> LeafModes:
         notes.append("approximate: the closed form takes only the axial gravity component")
     # a quadratic's roots: a few roundings (exact only where `exact`)
     err = {"frequency_error_hz": 8 * np.finfo(float).eps * w / (2 * np.pi)} if not notes else {}
+    # ζ's round-off: the roots as eigenvalues of their monic quadratic's companion matrix
+    companion = np.array([[lam[0] + lam[1], -lam[0] * lam[1]], [1.0, 0.0]])
+    z_err = eigen.root_zeta_errors(companion, lam)
     return LeafModes(frequencies_hz=w / (2 * np.pi), labels=[f"{d} whirl" for d in whirl],
                      damping=-lam.real / np.abs(lam), whirl=whirl,
                      settings={"exact": not notes}, notes=notes,
-                     extra={**err, "max_re_per_s": float(np.max(lam.real))})
+                     extra={**err, "damping_error": z_err,
+                            "max_re_per_s": float(np.max(lam.real))})
 
 
 def unbalance_response(params: dict, spins) -> tuple[np.ndarray, np.ndarray]:

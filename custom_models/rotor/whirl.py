@@ -12,6 +12,7 @@ real parts σ of λ = σ ± iw give ζ = −σ/|λ| and the growth rate.
 import numpy as np
 
 from compare.contract import LeafModes, merge_settings
+from compare.physics import eigen
 
 from . import model as rotor
 from .euler_vector import kinematics, rhs
@@ -44,9 +45,10 @@ def _reduced_jacobian(p, K0, h, c_ext=0.0, c_int=0.0):
     return J
 
 
-def whirl_roots(params, spin, h=1e-6):
-    """The (backward, forward) whirl eigenvalues λ = σ + iw (w > 0, rad/s) at spin Ω. For an
-    eccentric rotor at Ω ≠ 0 steady spin is no equilibrium: the linearisation is approximate."""
+def whirl_roots(params, spin, h=1e-6, with_floor=False):
+    """The (backward, forward) whirl eigenvalues λ = σ + iw (w > 0, rad/s) at spin Ω; with
+    `with_floor` also their round-off bounds |δλ| (compare.physics.eigen). For an eccentric
+    rotor at Ω ≠ 0 steady spin is no equilibrium: the linearisation is approximate."""
     p = rotor.pack(dict(params, torque=0.0))
     I0 = p[rotor.I0].reshape(3, 3)
     J = _reduced_jacobian(p, I0 @ np.array([0.0, 0.0, spin]), h,
@@ -55,15 +57,19 @@ def whirl_roots(params, spin, h=1e-6):
     pos = [i for i in range(5) if lam[i].imag > 1e-8 * max(1.0, abs(lam).max())]
     if len(pos) != 2:
         raise RuntimeError(f"expected two whirl pairs, got eigenvalues {lam}")
-    lam = lam[pos]
     # rotation sense of the tilt vector Re(v e^{λt}): positive = counter-clockwise about +z
     sense = np.array([-np.imag(np.conj(V[3, i]) * V[4, i]) for i in pos])
     if spin == 0:
-        return tuple(lam[np.argsort(lam.imag)])
-    fwd = np.sign(sense) == np.sign(spin)
-    if fwd.sum() != 1:
-        raise RuntimeError("could not tell forward from backward whirl")
-    return complex(lam[~fwd][0]), complex(lam[fwd][0])
+        pos = [pos[i] for i in np.argsort(lam[pos].imag)]
+    else:
+        fwd = np.sign(sense) == np.sign(spin)
+        if fwd.sum() != 1:
+            raise RuntimeError("could not tell forward from backward whirl")
+        pos = [pos[int(np.argmin(fwd))], pos[int(np.argmax(fwd))]]
+    roots = tuple(complex(lam[i]) for i in pos)
+    if not with_floor:
+        return roots
+    return roots, eigen.round_off(J, lam, V, eigen.left_rows(V), pos)
 
 
 def whirl(params, spin, h=1e-6):
@@ -77,9 +83,14 @@ def whirl_sweep(params, spins):
     return pairs[:, 0], pairs[:, 1]
 
 
+def _zeta(lam):
+    return -lam.real / np.abs(lam)
+
+
 def modes(params, settings):
     s = merge_settings(settings, MODES_SETTINGS, ())
-    lam = np.array(whirl_roots(params, params["spin"], s["fd_step"]))
+    lam, floor = whirl_roots(params, params["spin"], s["fd_step"], with_floor=True)
+    lam = np.array(lam)
     lam2 = np.array(whirl_roots(params, params["spin"], 2 * s["fd_step"]))
     # the central differences' change from step 2h to h (4/3 of it: their O(h²) truncation;
     # their round-off differs between the two steps and shows in it too) plus the eigen
@@ -90,11 +101,13 @@ def modes(params, settings):
     whirl_dirs = np.array(["backward", "forward"])[order]
     notes = (["approximate: steady spin is no equilibrium of an eccentric rotor"]
              if params["spin"] != 0 and params["eccentricity"] != 0 else [])
-    lam, err = lam[order], err[order]
+    # ζ's error: the same change of step (4/3 of it) plus the eigen round-off floor
+    z_err = 4 / 3 * np.abs(_zeta(lam) - _zeta(lam2)) + eigen.zeta_error(floor, lam)
+    lam, err, z_err = lam[order], err[order], z_err[order]
     return LeafModes(frequencies_hz=lam.imag / (2 * np.pi),
                      labels=[f"{d} whirl" for d in whirl_dirs], whirl=list(whirl_dirs),
                      damping=-lam.real / np.abs(lam), settings=s, notes=notes,
-                     extra={"frequency_error_hz": err,
+                     extra={"frequency_error_hz": err, "damping_error": z_err,
                             "max_re_per_s": float(np.max(lam.real))})
 
 

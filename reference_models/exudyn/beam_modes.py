@@ -56,8 +56,10 @@ SHAFT_MODES_SETTINGS = {"n_segments": 40, "extrapolate": True}
 _AXES = (exu.JointType.RevoluteX, exu.JointType.RevoluteY, exu.JointType.RevoluteZ)
 
 
-def _linearised(chain: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """M, K, D of the chain about steady spin, hub coordinate removed."""
+def _linearised(chain: dict, fd_scales=(1.0,)) -> list:
+    """M, K, D of the chain about steady spin, hub coordinate removed, one (M, K, D) per factor
+    in `fd_scales` on Exudyn's finite-difference step (D = −∂f/∂q̇ is numerical: another
+    step's change is the linearisation's error)."""
     a = chain["axis"]
     e_a = np.eye(3)[a]
     js = chain["joints"]
@@ -91,8 +93,13 @@ def _linearised(chain: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         jointPControlVector=P, jointDControlVector=[0.0] * nq,
         jointPositionOffsetVector=[0.0] * nq, jointVelocityOffsetVector=[0.0] * nq))
     mbs.Assemble()
-    M, K, D = (np.asarray(x, float)[1:, 1:] for x in mbs.ComputeLinearizedSystem()[:3])
-    return M, K, D
+    out = []
+    for scale in fd_scales:
+        ss = exu.SimulationSettings()
+        ss.staticSolver.newton.numericalDifferentiation.relativeEpsilon *= scale
+        out.append(tuple(np.asarray(x, float)[1:, 1:]
+                         for x in mbs.ComputeLinearizedSystem(ss)[:3]))
+    return out
 
 
 _package = bc.package

@@ -70,6 +70,7 @@ from exudyn.itemInterface import (
 )
 
 from compare.contract import LeafModes, LeafResult, merge_settings
+from compare.physics import eigen
 from compare.physics import rotor as physics
 
 _SOLVERS = {
@@ -746,21 +747,30 @@ def regimes(params_list, t_out, settings, channel, levels, window):
 # ----------------------------------------------------------------------------------------------
 # whirl frequencies
 
-def _linearised(model, spin):
-    """M, K, D of the tree at tilt 0 spinning at `spin` (rad/s) about e_z."""
+FD_VARY = 10.0      # Exudyn's finite-difference step × this: the linearisation's own error
+
+
+def _linearised(model, spin, fd_scale=1.0):
+    """M, K, D of the tree at tilt 0 spinning at `spin` (rad/s) about e_z; `fd_scale` ×
+    Exudyn's finite-difference step."""
     mbs = model["mbs"]
     mbs.systemData.SetODE2Coordinates([0.0, 0.0, 0.0], exu.ConfigurationType.Initial)
     mbs.systemData.SetODE2Coordinates_t([0.0, 0.0, float(spin)], exu.ConfigurationType.Initial)
-    out = mbs.ComputeLinearizedSystem()
+    ss = exu.SimulationSettings()
+    ss.staticSolver.newton.numericalDifferentiation.relativeEpsilon *= fd_scale
+    out = mbs.ComputeLinearizedSystem(ss)
     return [np.asarray(x, float) for x in out[:3]]
+
+
+def _state_matrix(M, K, D):
+    n = M.shape[0]
+    Minv = np.linalg.inv(M)
+    return np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ D]])
 
 
 def _whirl_pair(M, K, D, spin):
     """Two whirl frequencies (rad/s) and their labels from the quadratic eigenproblem."""
-    n = M.shape[0]
-    Minv = np.linalg.inv(M)
-    Acal = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ D]])
-    lam, V = np.linalg.eig(Acal)
+    lam, V = np.linalg.eig(_state_matrix(M, K, D))
     w = lam.imag
     sel = np.where(w > 1e-6 * max(1.0, np.max(np.abs(lam))))[0]
     pairs = []
@@ -794,10 +804,14 @@ def modes(params, settings=None):
     M, K, D = _linearised(model, spin)
     w, labels, re = _whirl_pair(M, K, D, spin)
     re = np.asarray(re, float)
+    # ζ's error: eigen round-off plus the change when the FD step is varied, mode by mode
+    z_err = eigen.root_zeta_errors(_state_matrix(M, K, D), re + 1j * np.asarray(w),
+                                   _state_matrix(*_linearised(model, spin, FD_VARY)))
     return LeafModes(frequencies_hz=np.array(w) / (2 * math.pi), labels=labels,
                      damping=-re / np.hypot(re, w),           # ζ = −Re λ / |λ|
                      whirl=[lb.split()[0] for lb in labels],
-                     extra={"max_re_per_s": float(np.max(re))},
+                     extra={"max_re_per_s": float(np.max(re)),
+                            "damping_error": z_err},
                      settings={"method": "exudyn ComputeLinearizedSystem + dense quadratic "
                                          "eigenproblem", "drive_torque": 0.0},
                      notes=_approximate_note(params))

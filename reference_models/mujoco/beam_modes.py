@@ -65,19 +65,24 @@ def _model(chain: dict) -> mujoco.MjModel:
     return spec.compile()
 
 
-def _linearised(chain: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """M (= I), K = −∂q̈/∂q and D = −∂q̈/∂q̇ about steady spin, hub coordinate removed."""
+def _linearised(chain: dict, fd_scales=(1.0,)) -> list:
+    """M (= I), K = −∂q̈/∂q and D = −∂q̈/∂q̇ about steady spin, hub coordinate removed, one
+    (M, K, D) per factor in `fd_scales` on the finite-difference step (another step's change
+    is the linearisation's error)."""
     m = _model(chain)
     d = mujoco.MjData(m)
     d.qvel[0] = chain["spin"]
     mujoco.mj_forward(m, d)
     nv = m.nv
-    A = np.zeros((2 * nv, 2 * nv))
-    mujoco.mjd_transitionFD(m, d, _FD_EPS, True, A, None, None, None)
     h = m.opt.timestep
-    Aq = A[nv:, :nv] / h
-    Av = (A[nv:, nv:] - np.eye(nv)) / h
-    return np.eye(nv - 1), -Aq[1:, 1:], -Av[1:, 1:]
+    out = []
+    for scale in fd_scales:
+        A = np.zeros((2 * nv, 2 * nv))
+        mujoco.mjd_transitionFD(m, d, _FD_EPS * scale, True, A, None, None, None)
+        Aq = A[nv:, :nv] / h
+        Av = (A[nv:, nv:] - np.eye(nv)) / h
+        out.append((np.eye(nv - 1), -Aq[1:, 1:], -Av[1:, 1:]))
+    return out
 
 
 def _package(out: dict, settings: dict, note: str, extra: dict) -> LeafModes:

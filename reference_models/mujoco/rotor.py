@@ -53,6 +53,7 @@ import mujoco.rollout
 import numpy as np
 
 from compare.contract import LeafModes, LeafResult, merge_settings
+from compare.physics import eigen
 from compare.physics import rotor as physics
 
 DEFAULT_SETTINGS = {
@@ -683,6 +684,7 @@ def _rolled_together(m, group, t_out, s):
 # ----------------------------------------------------------------------------------------------
 _FD_H = 1e-3        # Euler step used for transitionFD; the extraction below is h-independent
 _FD_EPS = 1e-6
+FD_VARY = 10.0      # the FD step × this: the linearisation's own error
 
 
 def _whirl_setup(params, settings):
@@ -738,24 +740,24 @@ def _whirl_at(m, d, spin):
         signed_body = mu if sense_b > 0 else -mu
         if abs(sense_b) < 1e-9 * (abs(v[0]) ** 2 + abs(v[1]) ** 2):
             signed_body = mu    # linear (non-circular) mode: no sense
-        out.append((signed_body + spin, lj.real, sense_b))
+        out.append((signed_body + spin, lj.real, sense_b, lj))
     return out
 
 
 def _classify(pairs, spin):
-    """Pick the two whirl modes; return (backward, forward) as (freq_rad_s, Re λ)."""
+    """Pick the two whirl modes; return (backward, forward) as (freq_rad_s, Re λ, λ of A)."""
     if len(pairs) < 2:
         raise RuntimeError(f"expected two whirl modes, found {len(pairs)}")
     pairs = pairs[:2]
     if abs(spin) < 1e-12:
-        a, b = sorted((abs(p[0]), p[1]) for p in pairs)
+        a, b = sorted(((abs(p[0]), p[1], p[3]) for p in pairs), key=lambda t: t[:2])
         return a, b
     fw = [p for p in pairs if np.sign(p[0]) == np.sign(spin)]
     bw = [p for p in pairs if np.sign(p[0]) != np.sign(spin)]
     if len(fw) != 1 or len(bw) != 1:   # fall back to the closed-form ordering: backward lower
-        a, b = sorted((abs(p[0]), p[1]) for p in pairs)
+        a, b = sorted(((abs(p[0]), p[1], p[3]) for p in pairs), key=lambda t: t[:2])
         return a, b
-    return (abs(bw[0][0]), bw[0][1]), (abs(fw[0][0]), fw[0][1])
+    return (abs(bw[0][0]), bw[0][1], bw[0][3]), (abs(fw[0][0]), fw[0][1], fw[0][3])
 
 
 def modes(params: dict, settings: dict) -> dict:
@@ -770,8 +772,12 @@ def modes(params: dict, settings: dict) -> dict:
     s, m, d = _whirl_setup(params, settings)
     with _Callback(s["callback"]) as cbk:
         pairs = _whirl_at(m, d, spin)
+        (wb, sb, lam_b), (wf, sf, lam_f) = _classify(pairs, spin)
+        # ζ's error: eigen round-off plus the change when the FD step is varied, mode by mode
+        z_err = eigen.root_zeta_errors(_continuous_A(m, d, spin), [lam_b, lam_f],
+                                       _continuous_A(m, d, spin, FD_VARY * _FD_EPS),
+                                       reported=[sb + 1j * wb, sf + 1j * wf])
         kind = cbk.kind
-    (wb, sb), (wf, sf) = _classify(pairs, spin)
     used = {"integrator": "euler", "dt": _FD_H, "fd_eps": _FD_EPS, "spring": s["spring"],
             "callback": kind, "linearisation": "mjd_transitionFD, ball joint, inertial frame"}
     notes = (["approximate: steady spin is no equilibrium of an eccentric rotor"]
@@ -779,7 +785,9 @@ def modes(params: dict, settings: dict) -> dict:
     return LeafModes(frequencies_hz=np.array([wb, wf]) / (2 * math.pi),
                        labels=["backward whirl", "forward whirl"], whirl=["backward", "forward"],
                        damping=-np.array([sb, sf]) / np.hypot([sb, sf], [wb, wf]),
-                       settings=used, notes=notes, extra={"max_re_per_s": float(max(sb, sf))})
+                       settings=used, notes=notes,
+                       extra={"max_re_per_s": float(max(sb, sf)),
+                              "damping_error": z_err})
 
 
 def whirl_sweep(params: dict, spins, settings: dict | None = None):
@@ -790,7 +798,7 @@ def whirl_sweep(params: dict, spins, settings: dict | None = None):
     fw = np.empty(spins.size)
     with _Callback(s["callback"]):
         for i, om in enumerate(spins):
-            (b, _), (f, _) = _classify(_whirl_at(m, d, float(om)), float(om))
+            (b, *_), (f, *_) = _classify(_whirl_at(m, d, float(om)), float(om))
             bw[i], fw[i] = b, f
     return bw, fw
 

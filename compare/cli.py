@@ -1,6 +1,7 @@
 """`xval`: the command-line contract (see the README and the specs' contract.md).
 
-Exit status: 0 every requested run finished, 1 a verdict is `disagree` and --strict was given,
+Exit status: 0 every requested run finished, 1 a verdict is `disagree` or `inconclusive` and
+--strict was given,
 2 bad input (one line on stderr, nothing run, nothing written), 3 a solver crashed.
 """
 import argparse
@@ -20,8 +21,8 @@ class _Parser(argparse.ArgumentParser):
         raise BadInput(message)
 
 
-STRICT = ("exit 1 on any disagree, incomplete (a solver failed or gave no answer), "
-          "unconfirmed or FAILED verdict")
+STRICT = ("exit 1 on any disagree, inconclusive (one solver's error bar too wide to tell), "
+          "incomplete (a solver failed or gave no answer), unconfirmed or FAILED verdict")
 
 
 def strict_exit(args, problems: list[str]) -> int:
@@ -122,8 +123,8 @@ def build_parser():
     p = _Parser(prog="xval", description="Cross-validate multibody dynamics solvers: the same "
                 "scene through our implementations of published methods, Exudyn and MuJoCo, "
                 "compared in numbers, plots and rerun recordings.",
-                epilog="Exit status: 0 finished, 1 a verdict is disagree under --strict, 2 bad "
-                       "input (one line, nothing run), 3 a solver crashed.")
+                epilog="Exit status: 0 finished, 1 a verdict is disagree or inconclusive under "
+                       "--strict, 2 bad input (one line, nothing run), 3 a solver crashed.")
     p.add_argument("--version", action="version", version=f"xval {version()}",
                    help="print the installed version and exit")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser,
@@ -441,10 +442,12 @@ def _finish(args, obj, results, comparisons):
 
 def verdict_problems(results, comparisons) -> list[str]:
     """What --strict refuses in a run or modes result: a solver without an answer, a
-    disagreement, and a result with nothing compared."""
+    disagreement, an agreement one solver's error bar is too wide to make (inconclusive), and
+    a result with nothing compared."""
+    from .analysis.metrics import REFUSED
     out = [f"{r.solver} {r.status} (incomplete)" for r in results if r.status != "ok"]
-    out += [f"{c.a} vs {c.b} {c.channel}: disagree" for c in comparisons
-            if c.verdict == "disagree"]
+    out += [f"{c.a} vs {c.b} {c.channel}: {c.verdict}" for c in comparisons
+            if c.verdict in REFUSED]
     if not comparisons:
         out.append("nothing was compared (incomplete)")
     return out

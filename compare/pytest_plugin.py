@@ -4,7 +4,8 @@
   Python API once per test session for each distinct set of arguments (later calls get the
   cached result); the run's trajectories and result.json go to a session temporary folder.
 - `assert_agree(result, channels=...)` (also `xval.assert_agree`): fails with the verdict
-  table of the pairs that disagree — deviation, error estimates, allowance, what decided.
+  table of the pairs that do not agree (disagree, inconclusive, skipped) — deviation, error
+  estimates, allowance, what decided.
 - `assert_matches_baseline(result, baseline, create=False)`: fails with the `xval diff` table
   when the result moved beyond its error bars against a baseline from `xval baseline save`;
   fails (never skips) when the baseline is missing, unless `create=True` or the run has

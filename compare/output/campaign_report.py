@@ -30,8 +30,8 @@ def _changed(case):
 
 def _verdicts(obj):
     v = [c["verdict"] for c in obj.get("comparisons", [])]
-    return f"{v.count('agree')} agree, {v.count('disagree')} disagree" + (
-        f", {v.count('skipped')} skipped" if v.count("skipped") else "")
+    return f"{v.count('agree')} agree, {v.count('disagree')} disagree" + "".join(
+        f", {v.count(k)} {k}" for k in ("inconclusive", "skipped") if v.count(k))
 
 
 def _worst(obj):

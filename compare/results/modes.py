@@ -87,8 +87,9 @@ class ModesResult(Result):
     """`xval.modes(...)`, `xval modes`: per solver the `Modes` (`r["mstmm"].frequencies_hz`,
     `.labels`, `.status`, `.wall_s`), the mode-by-mode `comparisons`, the `critical_speeds`
     (solver -> {name: value}) and `campbell` (the diagram's JSON) where the scene sweeps,
-    `status` (agree / disagree / incomplete) and its one line `summary`, `unpaired_modes`,
-    `incomplete`; what else the study found (explanations, identification) in `extra`.
+    `status` (agree / inconclusive / disagree / incomplete) and its one line `summary`,
+    `unpaired_modes`, `incomplete`; what else the study found (explanations, identification)
+    in `extra`.
 
     A result made in memory holds what its report needs (`report`: the Markdown sections,
     `drawing`: the Campbell lines) and writes it with `save`; one read from files is saved by

@@ -15,8 +15,9 @@ from ..output.tables import (  # noqa: F401  (the results' tables)
 
 def disagreement_message(result, channels=None) -> str | None:
     """The verdict table of the comparisons on `channels` (default: all) that do not agree
-    (disagree, or skipped because a solver failed), or None when every one agrees. A solver
-    that failed, or a run with nothing compared, is never agreement: the message says so."""
+    (disagree, inconclusive, or skipped because a solver failed), or None when every one
+    agrees. A solver that failed, or a run with nothing compared, is never agreement: the
+    message says so."""
     chosen = [c for c in result.comparisons if channels is None or c.channel in channels]
     if channels is not None:
         compared = list(dict.fromkeys(c.channel for c in result.comparisons))

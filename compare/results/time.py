@@ -121,9 +121,8 @@ class TimeResult(Result):
     # --- views ---------------------------------------------------------------------------
 
     def title(self):
-        n_ok = sum(c.verdict == "agree" for c in self.comparisons)
-        return (f"{self.scene_name}: {len(self.runs)} solvers, {n_ok} of "
-                f"{len(self.comparisons)} comparisons agree")
+        return (f"{self.scene_name}: {len(self.runs)} solvers, "
+                + metrics.agree_text(c.verdict for c in self.comparisons))
 
     def tables(self):
         return [self._solver_table(), (tables.VERDICT_HEADER,

@@ -266,8 +266,14 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
                                                for p in per_point])
             for k, s in enumerate(usable)
             if all(p[k].damping is not None for p in per_point)}
+    # and ζ's error estimate along the same lines, where the solver gives one
+    zeta_error = {s.name: diagrams[s.name].lines_of(
+        [replace(p[k], frequencies_hz=p[k].extra["damping_error"]) for p in per_point])
+        for k, s in enumerate(usable) if s.name in zeta
+        and all(p[k].extra.get("damping_error") is not None for p in per_point)}
     floor = sc.tolerances_for(params).get("damping", 0.0)
-    onsets = {s: campbell.growing_onsets(grid, z, floor) for s, z in zeta.items()}
+    onsets = {s: campbell.growing_onsets(grid, z, floor, zeta_error.get(s))
+              for s, z in zeta.items()}
     none = lambda f: [None if not np.isfinite(x) else float(x) for x in f]   # noqa: E731
     obj = {"parameter": cb.parameter, "values": list(grid), "grid_points": len(values),
            "frame": cb.frame, "lines_hz": {s: {k: none(v) for k, v in ln.items()}
@@ -298,8 +304,8 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
            f"({e.lo:.4g}–{e.hi:.4g}; least gap {e.gap_hz:.3g} Hz)"
            for s, ev in events.items() for e in ev]
     md += [""] + critical_table(cb, entries)
-    md += ["", f"Growing roots on the sweep (ζ below −{floor:.1e}, the scene's ζ allowance; "
-           "onset where ζ crosses zero):", ""] + [
+    md += ["", f"Growing roots on the sweep (ζ below −({floor:.1e}, the scene's ζ allowance, + "
+           "the solver's own ζ error); onset where ζ crosses zero):", ""] + [
         f"- {s}: {o['line']} grows from {cb.parameter} ≈ {o['from']:.6g} "
         f"({o['lo']:.6g}–{o['hi']:.6g}; least ζ {o['least_zeta']:.3g})"
         for s, os_ in onsets.items() for o in os_] if any(onsets.values()) else []
@@ -307,8 +313,9 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
            f"{u['reason']}" for n, us in unconfirmed.items() for u in us]
     md += [f"- {m['solver']}: no critical speeds — {m['reason']}" for m in missing]
     md += ["", "![campbell](campbell.png)"]
-    growing = {s: {k: np.asarray(z, float) < -floor for k, z in zeta[s].items()}
-               for s, o in onsets.items() if o}
+    growing = {s: {k: np.asarray(z, float) < -(floor + np.nan_to_num(np.asarray(
+        zeta_error.get(s, {}).get(k, 0.0), float))) for k, z in zeta[s].items()}
+        for s, o in onsets.items() if o}
     return obj, crit, md, (grid, by_frame[frame], entries, events, frame, lines, growing)
 
 
@@ -454,10 +461,10 @@ def identified_against_eigenvalues(sc: Scene, row: dict, results: list[Modes]):
 
 def modes_status(comparisons, obj) -> tuple[str, str]:
     """The run's status and its one line: `incomplete` where a solver (or its Campbell sweep)
-    failed or nothing was compared, else `disagree` on any disagreement, else `agree`; the
+    failed or nothing was compared, else `disagree` on any disagreement, else `inconclusive` on
+    any agreement one solver's error bar is too wide to make, else `agree`; the
     unpaired modes and unconfirmed critical speeds counted alongside."""
-    n_ok = sum(c.verdict == "agree" for c in comparisons)
-    line = f"{n_ok} of {len(comparisons)} comparisons agree"
+    line = metrics.agree_text(c.verdict for c in comparisons)
     missing = [f"{m['solver']} " + (f"{m['status']} ({m['reason']})" if "status" in m
                                     else m["reason"]) for m in obj["incomplete"]]
     if missing:
@@ -478,6 +485,8 @@ def modes_status(comparisons, obj) -> tuple[str, str]:
            if r["status"] != "ok" or not r["agrees"]]
     if off:                            # a threshold not found, or off the closed form
         line += "; threshold off the closed form: " + ", ".join(off)
+    verdicts = {c.verdict for c in comparisons}
     status = ("incomplete" if missing or not comparisons else
-              "disagree" if off or any(c.verdict != "agree" for c in comparisons) else "agree")
+              "disagree" if off or verdicts - {"agree", "inconclusive"} else
+              "inconclusive" if "inconclusive" in verdicts else "agree")
     return status, line

@@ -81,10 +81,11 @@ class _Study:
 
     def flipped(self, solver, run) -> list:
         """The comparisons that agreed nominally and disagree with `run` in place of `solver`'s
-        (a run that failed flips everything it took part in: missing is never agree)."""
+        (a run that failed flips everything it took part in: missing is never agree; the
+        nominal error bars stay, so `inconclusive` would only be the scale moving, no flip)."""
         new = self.compare({**self.nominal, solver.name: run})
         return [(b, n) for b, n in zip(self.base, new)
-                if b.verdict == "agree" and n.verdict != "agree"
+                if b.verdict == "agree" and n.verdict not in ("agree", "inconclusive")
                 and solver.name in (b.a, b.b)]
 
 

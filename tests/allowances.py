@@ -82,20 +82,31 @@ def measure_time(scene, params, trajectories):
 
 
 def measure_modes(results, scene):
-    """Per pair: the largest relative frequency difference ("frequency") and, where the scene
-    has a ζ allowance and both give damping ratios, the largest |Δζ| ("damping"), over the
-    paired modes."""
+    """Per pair, over the paired modes: the largest relative frequency difference
+    ("frequency") and, where the scene has a ζ allowance and both give damping ratios, the
+    largest |Δζ| ("damping"); "left": the most any mode leaves beyond the pair's error
+    estimates on it (relative, where both give one), and "error_estimate" what max|Δ| may reach
+    with every mode inside its estimates plus that."""
     from compare.analysis.metrics import damping_comparisons, frequency_comparisons
+    one_model = {"frequency_one_model": scene.tolerances.get("frequency_one_model", ())}
     rows = {}
-    for channel, cs in (("frequency", frequency_comparisons(results, {"frequency": 0.0})),
+    for channel, cs in (("frequency", frequency_comparisons(
+                            results, {"frequency": 0.0, **one_model})),
                         ("damping", damping_comparisons(results, {"damping": 0.0})
                          if "damping" in channels(scene) else [])):
         for c in cs:
             r = rows.setdefault((c.a, c.b, channel), {
                 "a": c.a, "b": c.b, "channel": channel, "max_abs": 0.0, "scale": 1.0,
-                "error_estimate": None, "left": 0.0, "worst_mode": None})
+                "error_estimate": None, "left": 0.0, "worst_mode": None, "beyond": -np.inf})
+            beyond = c.max_rel - (c.error_estimate or 0.0) / c.scale
             if c.max_rel >= r["max_abs"]:
-                r.update(max_abs=c.max_rel, left=c.max_rel, worst_mode=c.channel)
+                r.update(max_abs=c.max_rel, worst_mode=c.channel)
+            r["beyond"] = max(r["beyond"], beyond)
+            r["estimated"] = r.get("estimated", True) and c.error_estimate is not None
+    for r in rows.values():
+        beyond, estimated = r.pop("beyond"), r.pop("estimated")
+        r["left"] = max(0.0, beyond)
+        r["error_estimate"] = r["max_abs"] - beyond if estimated else None
     return list(rows.values()), {r.solver: r.status for r in results}
 
 

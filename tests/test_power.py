@@ -78,22 +78,29 @@ def test_a_campaign_case_estimates_its_power_as_xval_power_confirms_it(tmp_path)
 def test_damping_ratio_verdicts_give_power_over_the_internal_damper():
     """With the dampers on, a change of c_int in one solver moves its ζ first: ε* is decided
     by a ζ comparison and lies in [1, REFINE] × bound/|dζ/dε| (the linear estimate exactly, or
-    the upper end of a bisection bracket REFINE wide) — dζ/dε from the closed-form roots
-    (compare.physics.rotor.whirl_damped), not from power.py. (A ζ channel once made the search
-    loop forever: it read ζ as a frequency.)"""
+    the upper end of a bisection bracket REFINE wide), the least over the modes — dζ/dε from
+    the closed-form leaf's roots, not from power.py; each mode's bound the unperturbed pair's
+    (allowance + both ζ error estimates). (A ζ channel once made the search loop forever: it
+    read ζ as a frequency.)"""
     import numpy as np
-
-    from compare.physics.rotor import whirl_damped
     over = {"c_ext": "0.5", "c_int": "2", "spin": "60"}
     sc = get_scene("rotor-whirl")
     p = sc.resolve(over)
-    zeta = lambda q: np.sort([-lam.real / abs(lam) for lam in whirl_damped(q, q["spin"])])  # noqa: E731
+    pair = ["closed-form", "exudyn"]
+    closed = solvers.get_solver("closed-form")
+    zeta = lambda q: dict(zip(*(lambda m: (m.labels, m.damping))(  # noqa: E731
+        solvers.modes(sc, closed, q))))
     h = 1e-6
-    dz = np.max(np.abs(zeta({**p, "c_int": p["c_int"] * (1 + h)}) - zeta(p))) / h
-    r = xval.power("rotor-whirl", parameters=["c_int"], solvers=["closed-form", "exudyn"],
-                   **over)
-    bound = sc.tolerances_for(p)["damping"]
+    z0, z1 = zeta(p), zeta({**p, "c_int": p["c_int"] * (1 + h)})
+    nominal = metrics.damping_comparisons(
+        [solvers.modes(sc, solvers.get_solver(s), p) for s in pair], sc.tolerances_for(p))
+    assert len(nominal) == 2
+    # scale 1: a ζ comparison's tolerance is its bound on |Δζ|
+    want = min(c.tolerance / (abs(z1[c.channel[:-2]] - z0[c.channel[:-2]]) / h)
+               for c in nominal)
+    r = xval.power("rotor-whirl", parameters=["c_int"], solvers=pair, **over)
     from compare.workflows.power import REFINE
     for x in r["power"]:
         assert x["channel"].endswith("ζ"), x
-        assert bound / dz * (1 - 1e-3) <= x["epsilon"] <= REFINE * bound / dz * (1 + 1e-3), x
+        assert want * (1 - 1e-3) <= x["epsilon"] <= REFINE * want * (1 + 1e-3), x
+    assert np.isfinite(want)

@@ -77,15 +77,29 @@ def zeta_error(dlam, lam, d_re=None) -> np.ndarray:
         / np.abs(lam)
 
 
+def _matched(A: np.ndarray, roots):
+    """A solved again: its roots, right vectors, left rows and the index of the eigenvalue
+    nearest each of `roots`."""
+    lam, V = np.linalg.eig(A)
+    return lam, V, left_rows(V), [int(np.argmin(np.abs(lam - r))) for r in np.atleast_1d(roots)]
+
+
+def root_errors(A: np.ndarray, roots, A_varied: np.ndarray | None = None) -> np.ndarray:
+    """Bounds on |δλ| of the given `roots` of a small A: round-off, plus the first-order change
+    to `A_varied` (the same linearisation at another finite-difference step) where given."""
+    lam, V, W, idx = _matched(A, roots)
+    out = round_off(A, lam, V, W, idx)
+    if A_varied is not None:
+        out = out + change(np.asarray(A_varied) - A, lam, V, W, idx)[1]
+    return out
+
+
 def root_zeta_errors(A: np.ndarray, roots, A_varied: np.ndarray | None = None,
                      reported=None) -> np.ndarray:
-    """Bounds on the ζ of the given `roots` of a small A (solved again here, each root matched
-    to its nearest eigenvalue): round-off, plus the first-order change to `A_varied` (the same
-    linearisation at another finite-difference step) where given. `reported`: the roots as the
-    leaf reports them where its ζ uses another frame's frequency (same Re λ)."""
-    lam, V = np.linalg.eig(A)
-    W = left_rows(V)
-    idx = [int(np.argmin(np.abs(lam - r))) for r in np.atleast_1d(roots)]
+    """Bounds on the ζ of the given `roots` of a small A, as `root_errors` (the change's real
+    part bounded apart). `reported`: the roots as the leaf reports them where its ζ uses
+    another frame's frequency (same Re λ)."""
+    lam, V, W, idx = _matched(A, roots)
     reported = np.atleast_1d(roots if reported is None else reported)
     out = zeta_error(round_off(A, lam, V, W, idx), reported)
     if A_varied is not None:

@@ -804,14 +804,17 @@ def modes(params, settings=None):
     M, K, D = _linearised(model, spin)
     w, labels, re = _whirl_pair(M, K, D, spin)
     re = np.asarray(re, float)
-    # ζ's error: eigen round-off plus the change when the FD step is varied, mode by mode
-    z_err = eigen.root_zeta_errors(_state_matrix(M, K, D), re + 1j * np.asarray(w),
-                                   _state_matrix(*_linearised(model, spin, FD_VARY)))
+    # ζ's and the frequencies' errors: eigen round-off plus the change when the FD step is
+    # varied, mode by mode
+    A, A_varied = _state_matrix(M, K, D), _state_matrix(*_linearised(model, spin, FD_VARY))
+    roots = re + 1j * np.asarray(w)
+    z_err = eigen.root_zeta_errors(A, roots, A_varied)
+    f_err = eigen.root_errors(A, roots, A_varied) / (2 * math.pi)
     return LeafModes(frequencies_hz=np.array(w) / (2 * math.pi), labels=labels,
                      damping=-re / np.hypot(re, w),           # ζ = −Re λ / |λ|
                      whirl=[lb.split()[0] for lb in labels],
                      extra={"max_re_per_s": float(np.max(re)),
-                            "damping_error": z_err},
+                            "damping_error": z_err, "frequency_error_hz": f_err},
                      settings={"method": "exudyn ComputeLinearizedSystem + dense quadratic "
                                          "eigenproblem", "drive_torque": 0.0},
                      notes=_approximate_note(params))

@@ -773,10 +773,13 @@ def modes(params: dict, settings: dict) -> dict:
     with _Callback(s["callback"]) as cbk:
         pairs = _whirl_at(m, d, spin)
         (wb, sb, lam_b), (wf, sf, lam_f) = _classify(pairs, spin)
-        # ζ's error: eigen round-off plus the change when the FD step is varied, mode by mode
-        z_err = eigen.root_zeta_errors(_continuous_A(m, d, spin), [lam_b, lam_f],
-                                       _continuous_A(m, d, spin, FD_VARY * _FD_EPS),
+        # ζ's and the frequencies' errors: eigen round-off plus the change when the FD step is
+        # varied, mode by mode. The body-frame root moves by |δλ|, and so does the inertial
+        # frequency |Im λ ± Ω|: backward whirl's (Ω + ω_b)/ω_b magnifies it, relative
+        A, A_varied = (_continuous_A(m, d, spin, e) for e in (_FD_EPS, FD_VARY * _FD_EPS))
+        z_err = eigen.root_zeta_errors(A, [lam_b, lam_f], A_varied,
                                        reported=[sb + 1j * wb, sf + 1j * wf])
+        f_err = eigen.root_errors(A, [lam_b, lam_f], A_varied) / (2 * math.pi)
         kind = cbk.kind
     used = {"integrator": "euler", "dt": _FD_H, "fd_eps": _FD_EPS, "spring": s["spring"],
             "callback": kind, "linearisation": "mjd_transitionFD, ball joint, inertial frame"}
@@ -787,7 +790,7 @@ def modes(params: dict, settings: dict) -> dict:
                        damping=-np.array([sb, sf]) / np.hypot([sb, sf], [wb, wf]),
                        settings=used, notes=notes,
                        extra={"max_re_per_s": float(max(sb, sf)),
-                              "damping_error": z_err})
+                              "damping_error": z_err, "frequency_error_hz": f_err})
 
 
 def whirl_sweep(params: dict, spins, settings: dict | None = None):

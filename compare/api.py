@@ -335,6 +335,31 @@ def show(scene: str) -> SceneInfo:
     return SceneInfo(get_scene(scene))
 
 
+# set by the pytest plugin's --xval-create-baselines: write a missing baseline
+CREATE_BASELINES = {"on": False}
+
+
+def assert_matches_baseline(result, baseline, create: bool = False):
+    """Fails (AssertionError) with the diff table when `result` (an `xval.run` result, in
+    memory or saved, or a run or campaign folder) moved beyond its own error bars against
+    `baseline` (a file written by `xval baseline save`, or a folder), as `xval diff BASELINE
+    RESULT` would. A missing baseline fails — a check with nothing to check against must not
+    pass — unless told to create it (`create=True` or `pytest --xval-create-baselines`): then
+    it is written from the result and the check fails once more, asking for it to be
+    reviewed."""
+    from .workflows.diff import check_baseline
+    __tracebackhide__ = True
+    if not Path(baseline).exists() and not (create or CREATE_BASELINES["on"]):
+        raise AssertionError(f"baseline {baseline} is missing: create it with "
+                             "assert_matches_baseline(..., create=True) or pytest "
+                             "--xval-create-baselines, review it and commit it")
+    table, written = check_baseline(result, baseline)
+    if written:
+        raise AssertionError(written)
+    if table:
+        raise AssertionError(f"moved against the baseline {baseline}:\n{table}")
+
+
 def assert_agree(result, channels=None):
     """Assert that every comparison of `result` (a run or modes result) on `channels`
     (default: all) agrees; the failure message is the verdict table of the pairs that do

@@ -3,49 +3,14 @@
 - fixture `xval_run`: `xval_run(SCENE, **parameters)` runs a scene through the
   Python API once per test session for each distinct set of arguments (later calls get the
   cached result); the run's trajectories and result.json go to a session temporary folder.
-- `assert_agree(result, channels=...)` (also `xval.assert_agree`): fails with the verdict
-  table of the pairs that do not agree (disagree, inconclusive, skipped) — deviation, error
-  estimates, allowance, what decided.
-- `assert_matches_baseline(result, baseline, create=False)`: fails with the `xval diff` table
-  when the result moved beyond its error bars against a baseline from `xval baseline save`;
-  fails (never skips) when the baseline is missing, unless `create=True` or the run has
-  `--xval-create-baselines`.
+- `--xval-create-baselines`: `xval.assert_matches_baseline` (compare/api.py) writes a missing
+  baseline (the test still fails once: review it and commit it).
 
-Imported by pytest at start-up in every project of the environment: it imports nothing heavy
-until a test uses it.
+The assertions (`xval.assert_agree`, `xval.assert_matches_baseline`) live in compare/api.py, so
+`import xval` needs no pytest. Imported by pytest at start-up in every project of the
+environment: it imports nothing heavy until a test uses it.
 """
 import pytest
-
-
-def assert_agree(result, channels=None):
-    from .api import assert_agree as check
-    __tracebackhide__ = True
-    check(result, channels)
-
-
-_CREATE = {"baselines": False}     # set by --xval-create-baselines
-
-
-def assert_matches_baseline(result, baseline, create: bool = False):
-    """Fails with the diff table when `result` (an `xval.run` result, in memory or saved, or a
-    run or campaign folder) moved beyond its own error bars against `baseline` (a file written
-    by `xval baseline save`, or a folder), as `xval diff BASELINE RESULT` would. A missing
-    baseline fails the test — a check with nothing to check against must not pass or skip —
-    unless told to create it (`create=True` or `pytest --xval-create-baselines`): then it is written
-    from the result and the test fails once more, asking for it to be reviewed."""
-    from pathlib import Path
-
-    from .workflows.diff import check_baseline
-    __tracebackhide__ = True
-    if not Path(baseline).exists() and not (create or _CREATE["baselines"]):
-        pytest.fail(f"baseline {baseline} is missing: create it with "
-                    "assert_matches_baseline(..., create=True) or pytest "
-                    "--xval-create-baselines, review it and commit it", pytrace=False)
-    table, written = check_baseline(result, baseline)
-    if written:
-        pytest.fail(written, pytrace=False)
-    if table:
-        pytest.fail(f"moved against the baseline {baseline}:\n{table}", pytrace=False)
 
 
 @pytest.fixture(scope="session")
@@ -73,4 +38,5 @@ def pytest_addoption(parser):
 
 
 def pytest_configure(config):
-    _CREATE["baselines"] = bool(config.getoption("--xval-create-baselines", False))
+    from .api import CREATE_BASELINES
+    CREATE_BASELINES["on"] = bool(config.getoption("--xval-create-baselines", False))

@@ -5,6 +5,7 @@ is a thin layer over them), implemented in `compare.api`. See docs/python-api.md
 """
 from compare.api import (
     assert_agree,
+    assert_matches_baseline,
     bench,
     campaign,
     diff,
@@ -19,7 +20,6 @@ from compare.api import (
     show,
 )
 from compare.errors import BadInput
-from compare.pytest_plugin import assert_matches_baseline
 from compare.results import (
     BenchResult,
     CampaignResult,

@@ -118,8 +118,10 @@ class Adaptive:
 @dataclass(frozen=True)
 class Knob:
     """A discretisation knob besides the step or tolerance (a leaf's `KNOBS`: setting name ->
-    the order p its error shrinks with, value^p): halving it is its own tighter run, doubling
-    it the coarse member that measures how fast the changes shrink (`solvers._knob_errors`)."""
+    the order p of its error, ∝ value^p: p > 0 a step that shrinks toward the limit, as a
+    finite-difference step; p < 0 a ratio that grows toward it, as MuJoCo's constraint time
+    constant over the step): tighter moves it by 2 toward the limit, cutting its error by
+    2^|p|; coarser the other way (`solvers._knob_errors`)."""
     name: str
     order: float
 
@@ -128,7 +130,8 @@ class Knob:
         return float(v) if _number(v) and v > 0 else None
 
     def tighter(self, settings: dict, halvings: int = 1) -> dict:
-        return {**settings, self.name: self.value(settings) / 2 ** halvings}
+        return {**settings, self.name: self.value(settings)
+                * 2.0 ** (-np.sign(self.order) * halvings)}
 
 
 @dataclass(frozen=True)

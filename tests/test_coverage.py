@@ -24,9 +24,10 @@ CONTAINED, SHARP = 0.95, 0.1
 # The engines: scene -> (fixed parameters, reference, points in the slow test). Press: Exudyn's
 # truth is lagrange-exact at 1/16 of its step (the same rigid model: allowance 1e-9), not
 # Exudyn's own finer runs, whose crank_accel grows noisier as the step shrinks (Newton
-# tolerance: 3.5e-4 → 1.9e-2 over four halvings); MuJoCo's own finer runs (1/16 of the step, and
-# its constraint time constant 16 × further from the step: the rigid model is their limit). Sail: an explicit step at the stability bound (3.4e-6 s)
-# makes the 1/16-step reference cost 16 runs: a 0.2-s horizon (the thread paying out, no
+# tolerance: 3.5e-4 → 1.9e-2 over four halvings); MuJoCo's own finer runs (1/16 of the step,
+# its constraint time constant 16 × further from the step: the rigid model is their limit).
+# Sail: an explicit step at the stability bound (3.4e-6 s) makes the 1/16-step reference cost
+# 16 runs: a 0.2-s horizon (the thread paying out, no
 # release), where the thread mode's phase is unresolved at every step tried (see
 # solvers._halving_error). Points: 100 each; sail measured at seed 3: Exudyn contained 0.998,
 # median true/estimate 0.30 (637 s), MuJoCo 1.000, 0.45 (1685 s; the two at once on 2 shared

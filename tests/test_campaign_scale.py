@@ -70,7 +70,7 @@ def test_dask_local_cluster_gives_the_process_pools_results(tmp_path):
 
 def test_two_local_clusters_at_once_warn_nothing():
     """A second LocalCluster while one runs (two campaigns, or two xdist workers): its
-    scheduler's HTTP routes used to ask for port 8787 and warn that it was taken."""
+    scheduler's HTTP routes must not ask for the taken port 8787 and warn."""
     from compare.workflows.executors import make_executor
     clusters = []
     with warnings.catch_warnings():

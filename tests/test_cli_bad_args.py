@@ -85,7 +85,7 @@ def test_version_is_the_one_in_pyproject():
 
 
 def test_level_without_an_observable_is_refused(tmp_path):
-    """--level of which observable? (rotor-spinup maps its regime: the level used to be
+    """--level of which observable? (rotor-spinup maps its regime: a level must not be
     dropped without a word)."""
     rc, so, se = xval("map", "rotor-spinup", "--x", "torque=1:5", "--level", "40",
                       "--out", str(tmp_path / "o"))

@@ -15,8 +15,8 @@ from compare.scenes.rotor import SPINUP
 
 def test_bad_step_for_one_solver_stops_everything_before_anything_runs(tmp_path, capsys):
     # rtol 2 is no tolerance for euler-vector (mujoco, fixed-step, ignores it); mujoco (listed
-    # first) must not run. (A fixed step that does not divide the output step is no longer bad
-    # input: the custom drivers interpolate the grid.)
+    # first) must not run. (A fixed step that does not divide the output step is good input:
+    # the custom drivers interpolate the grid.)
     rc = cli.main(["run", "rotor-spinup", "--solver", "mujoco", "--solver", "euler-vector",
                    "--rtol", "2", "--out", str(tmp_path)])
     err = capsys.readouterr().err.strip().splitlines()

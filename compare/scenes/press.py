@@ -33,8 +33,8 @@ _MECHANISM = (
           lo=0.0, hi=1e3),
     # An explicit choice, continuous in u: the crank carries u²·rotor_inertia. The paper (u = 1)
     # applies the motor characteristic to the crank without the rotor, hence default 0; the
-    # 4A80B4U3's own rotor is 0.0033 kg·m². (It used to join only when u ≠ 1 exactly, so
-    # u = 1 + 1e-12 added 9.7 % of J1 and every golden sized from that step was blind.)
+    # 4A80B4U3's own rotor is 0.0033 kg·m². Continuous, so that no golden is sized across a
+    # jump (joining only at u ≠ 1 would make u = 1 + 1e-12 add 9.7 % of J1).
     Param("rotor_inertia", 0.0, "kg·m²", "motor rotor inertia reflected to the crank as "
           "u²·rotor_inertia (0: the paper's model; the 4A80B4U3 rotor is 0.0033)",
           lo=0.0, hi=1e3),

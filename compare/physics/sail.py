@@ -233,3 +233,29 @@ def channels(params: dict, t, psi, omega, X, V, b_out, dissipated=None, spool_wo
     out["energy_balance"] = np.where(ok, TU + D - W - wrel, np.nan)
     return out, {"tip_angle_signed": signed, "kinetic_energy": kinetic,
                  "hub_angle": np.asarray(psi, float), "thread_shape": shape}
+
+
+def release_grid(params: dict, t_end: float, points: int = 4001) -> np.ndarray:
+    """A grid over [0, t_end] that holds every release time inside it (Ω of the lumped
+    formula has a kink at each)."""
+    _, _, _, t_rel = thread(params)
+    return np.union1d(np.linspace(0.0, t_end, points), t_rel[t_rel < t_end])
+
+
+def stored_thread_momentum(params: dict, t, omega) -> np.ndarray:
+    """ΔH(t) of the paper's model against a conservative one: the paper leaves the stored thread
+    out of the hub inertia, so the hub's spin changes never reach the 2 L_c² Σ_stored m_j that
+    the channel counts at L_c — ΔH(t) = 2 L_c² ∫₀ᵗ M_stored(t') dΩ(t') along the spin history
+    `omega` on `t` (stored mass constant between releases)."""
+    _, _, m, t_rel = thread(params)
+    t, omega = np.asarray(t, float), np.asarray(omega, float)
+    stored = np.array([m[t_rel > ti + 1e-12].sum() for ti in t[:-1]])
+    dH = 2 * params["L_c"] ** 2 * stored * np.diff(omega)
+    return np.concatenate(([0.0], np.cumsum(dH)))
+
+
+def root_lag(params: dict, omega: float) -> float:
+    """The thread's quasi-steady lag at the departure point [rad]: a node paid out at r·ω from Q
+    hangs where the centrifugal pull m Ω² L_c sinθ balances the Coriolis push 2 m Ω r ω cosθ,
+    tan θ = 2 r ω / (Ω L_c) (independent of its distance from Q)."""
+    return math.atan2(2 * params["r"] * params["omega_spool"], abs(omega) * params["L_c"])

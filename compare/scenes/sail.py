@@ -1,5 +1,7 @@
 """Thread unrolling from spools on a spinning hub: solar-sail blade deployment (seed 004;
 spec scene-sail.md)."""
+import functools
+
 import numpy as np
 
 from ..physics import sail as phys
@@ -145,6 +147,65 @@ def exudyn_momentum_allowance(params):
     return RELEASE_OFFSET_SAFETY * release_offset_momentum(params)
 
 
+
+# The paper's model (`thread-spool`) against a conservative one. It leaves the stored thread
+# out of the hub inertia, so each change dΩ of the spin misses the 2 L_c² M_stored dΩ that the
+# stored thread carries: ΔH(t) = 2 L_c² ∫ M_stored dΩ (phys.stored_thread_momentum); each later
+# release turns the node's r·ω along the trailing thread, 2 m_j L_c r ω sinθ more. The spin
+# then differs by ΔH/I(t), and the tip's lag, tan θ = 2 r ω/(Ω L_c) (phys.root_lag), by
+# sinθ cosθ ΔΩ/Ω. Evaluated on the lumped formula 18's Ω(t); measured at 6 sets
+# (docs/scenes/sail-deploy.md): spin and momentum to ≤ 10 %, the tip to a factor 2 (the change
+# of the despin rate's Euler force on the lag is not in it).
+PAPER_SAFETY = 2.0
+PAPER_TIP_SAFETY = 2.5
+
+
+def paper_release_deviation(params):
+    """Closed-form deviation of the paper's model from a conservative one by t_end:
+    (hub rate / |Ω₀|, angular momentum / H₀, tip angle [rad])."""
+    return _paper_release_deviation(tuple(params[k] for k in _PAPER_KEYS))
+
+
+_PAPER_KEYS = ("J_hub", "rho_L", "L", "L_c", "r", "Omega0", "omega_spool", "tip_mass", "n",
+               "t_end")
+
+
+@functools.lru_cache(maxsize=256)          # three allowances of one run share it
+def _paper_release_deviation(values):
+    params = dict(zip(_PAPER_KEYS, values))
+    t = phys.release_grid(params, params["t_end"])
+    omega = phys.formula18_discrete(params, t)
+    n, _, m, t_rel = phys.thread(params)
+    Lc, rw, sign = params["L_c"], params["r"] * params["omega_spool"], np.sign(params["Omega0"])
+    dH = phys.stored_thread_momentum(params, t, omega)
+    for j in range(1, n):                   # the velocity turn of each later release
+        if t_rel[j] < params["t_end"] - 1e-12:
+            lag = phys.root_lag(params, np.interp(t_rel[j], t, omega))
+            dH[t >= t_rel[j]] -= sign * 2 * m[j] * Lc * rw * np.sin(lag)
+    H0 = (params["J_hub"] + 2 * Lc**2 * m.sum()) * params["Omega0"]
+    d_omega = dH * omega / H0                       # ΔH / I(t), I = H0/Ω
+    lag = np.arctan2(2 * rw, np.abs(omega) * Lc)
+    tip = np.sin(lag) * np.cos(lag) * np.abs(d_omega / omega)
+    return (float(np.max(np.abs(d_omega))) / abs(params["Omega0"]),
+            float(np.max(np.abs(dH))) / abs(H0), float(np.max(tip)))
+
+
+def paper_hub_allowance(params):
+    return PAPER_SAFETY * paper_release_deviation(params)[0]
+
+
+def paper_momentum_allowance(params):
+    return PAPER_SAFETY * paper_release_deviation(params)[1]
+
+
+def paper_tip_allowance(params):
+    return ("abs", PAPER_TIP_SAFETY * paper_release_deviation(params)[2])
+
+
+PAPER_ALLOWANCES = {"hub_rate": paper_hub_allowance, "tip_angle": paper_tip_allowance,
+                    "angular_momentum": paper_momentum_allowance}
+
+
 SAIL = TimeScene(
     name="sail-deploy",
     title="Two-blade heliogyro: threads unrolling from spools on a spinning hub",
@@ -179,8 +240,7 @@ SAIL = TimeScene(
     # rad, angular momentum 3.0e-3; deployed length 3.9e-8 of scale (inside the estimates).
     tolerances={"hub_rate": 2e-4, "tip_angle": ("abs", 5e-5), "deployed_length": 1e-7,
                 "angular_momentum": 1e-10,
-                "by_solver": {"thread-spool": {"hub_rate": 5e-3, "tip_angle": ("abs", 1e-3),
-                                               "angular_momentum": 5e-3},
+                "by_solver": {"thread-spool": PAPER_ALLOWANCES,
                               "exudyn": {"angular_momentum": exudyn_momentum_allowance}},
                 "wider": {p: "not in the default table: the engines' whole deployment runs "
                           "in `xval campaign long` (earlier: hub_rate 8e-5 of scale, tip "
@@ -193,14 +253,13 @@ SAIL = TimeScene(
     # (relative; tip in rad, length in m): conservative–Exudyn hub 7.7e-8, tip 2.8e-6 rad,
     # length 1.0e-9 m, angular momentum 1.7e-11; conservative–MuJoCo 2.8e-8, 2.8e-6 rad,
     # 1.8e-10 m, 2.6e-14; Exudyn–MuJoCo 8.1e-8, 3.4e-10 rad, 1.0e-9 m, 1.7e-11; the paper's
-    # model against each: hub 1.7e-5, tip ≤ 2.5e-6 rad (1.2e-6 against conservative, inside
-    # its estimates), angular momentum 1.7e-5, length as the other solver's (1.2e-13 m against
-    # conservative, inside the estimates); the length's deviation is a fixed offset in metres
+    # model: its release law's closed form (PAPER_ALLOWANCES), length as the other solver's
+    # (1.2e-13 m against conservative, inside the estimates); the length's deviation is a
+    # fixed offset in metres
     allowance_cases=(AllowanceCase("t_end ≤ 2 s", lambda p: p["t_end"] <= 2.0, {
         "hub_rate": 3e-7, "tip_angle": ("abs", 1e-5), "deployed_length": ("abs", 3e-9),
         "angular_momentum": 5e-11,
-        "by_solver": {"thread-spool": {"hub_rate": 5e-5, "tip_angle": ("abs", 5e-6),
-                                       "angular_momentum": 5e-5},
+        "by_solver": {"thread-spool": PAPER_ALLOWANCES,
                       "exudyn": {"angular_momentum": exudyn_momentum_allowance}},
         "by_pair": {"thread-spool-conservative|mujoco": {"hub_rate": 1e-7,
                                                          "deployed_length": ("abs", 5e-10),

@@ -382,9 +382,7 @@ def cmd_extremes(args):
         emit_json(r.as_json())
     else:
         print(r)
-    from .workflows.extremes import problems
-    return strict_exit(args, [f"{x['case']} {x['solver']}: {x['outcome']}"
-                              for x in problems(r["results"])])
+    return strict_exit(args, r.problems())
 
 
 def cmd_list(args):
@@ -417,10 +415,12 @@ def cmd_run(args):
                     integrator=args.integrator, out=args.out, record=not args.no_record,
                     timeout=args.timeout, max_output_gib=args.max_output_gib,
                     max_steps=args.max_steps, params=parse_sets(args.set), log=_log)
-    return _finish(args, r.as_json(), r.trajectories, r.comparisons)
+    return _finish(args, r)
 
 
-def _finish(args, obj, results, comparisons):
+def _finish(args, result):
+    """Print a run or modes result; its exit status."""
+    obj = result.as_json()
     if args.json:
         emit_json(obj)
     else:
@@ -428,29 +428,16 @@ def _finish(args, obj, results, comparisons):
             print(f"{r['solver']:14s} {r['status']:8s} wall {r['wall_s']:.3g} s  "
                   + "  ".join(f"{k}={v:.6g}" for k, v in (r.get("final") or {}).items()
                               if v is not None))
-        for c in comparisons:
+        for c in result.comparisons:
             print(f"{c.a} vs {c.b} {c.channel}: max rel {c.max_rel:.2e} → {c.verdict}")
         if obj.get("summary"):             # a modes run: incomplete, unpaired, unconfirmed
             print(obj["summary"])
         for k in ("recording", "report"):
             if obj.get(k):
                 print(f"{k}: {obj[k]}")
-    if any(r.status == "error" for r in results):
+    if any(run.status == "error" for run in result.runs.values()):
         return 3
-    return strict_exit(args, verdict_problems(results, comparisons))
-
-
-def verdict_problems(results, comparisons) -> list[str]:
-    """What --strict refuses in a run or modes result: a solver without an answer, a
-    disagreement, an agreement one solver's error bar is too wide to make (inconclusive), and
-    a result with nothing compared."""
-    from .analysis.metrics import REFUSED
-    out = [f"{r.solver} {r.status} (incomplete)" for r in results if r.status != "ok"]
-    out += [f"{c.a} vs {c.b} {c.channel}: {c.verdict}" for c in comparisons
-            if c.verdict in REFUSED]
-    if not comparisons:
-        out.append("nothing was compared (incomplete)")
-    return out
+    return strict_exit(args, result.problems())
 
 
 def cmd_modes(args):
@@ -459,7 +446,7 @@ def cmd_modes(args):
     with stdout_to_stderr():
         r = api.modes(args.scene, args.solver, out=args.out, params=parse_sets(args.set),
                       log=_log, campbell_frame=args.campbell_frame)
-    rc = _finish(args, r.as_json(), list(r.runs.values()), r.comparisons)
+    rc = _finish(args, r)
     if not args.json:
         from .results.modes import threshold_lines
         for line in threshold_lines(r.extra.get("threshold")):
@@ -523,31 +510,7 @@ def cmd_campaign(args):
         return 3
     if summary.get("diff", {}).get("any_change"):
         return 1
-    return strict_exit(args, campaign_problems(summary))
-
-
-def campaign_problems(summary: dict) -> list[str]:
-    """Every case's solver failures and disagreements, and every map's (--strict)."""
-    out = []
-    for c in summary.get("cases", []):
-        if "error" in c:
-            out.append(f"{c['case']}: {c['error']}")
-        out += [f"{c['case']}: {p}" for p in verdict_problems(
-            [_Run(r) for r in c.get("runs", [])], [_Cmp(x) for x in c.get("comparisons", [])])
-            if c.get("runs") or "error" not in c]
-    for m in summary.get("maps", []):
-        out += [f"map {m.get('map')}: {p}" for p in map_problems(m)]
-    return out
-
-
-class _Run:                       # a stored run's JSON read like a result
-    def __init__(self, d):
-        self.solver, self.status = d["solver"], d["status"]
-
-
-class _Cmp:
-    def __init__(self, d):
-        self.a, self.b, self.channel, self.verdict = d["a"], d["b"], d["channel"], d["verdict"]
+    return strict_exit(args, r.problems())
 
 
 def cmd_bench(args):
@@ -603,14 +566,7 @@ def cmd_map(args):
         emit_json(r.data)
     else:
         print(r)
-    return strict_exit(args, map_problems(r.data))
-
-
-def map_problems(data: dict) -> list[str]:
-    """A map's verdicts --strict refuses: a pair whose boundaries disagree, that one solver
-    could not answer, or whose crossing vanished at the tighter setting."""
-    return [f"{v['a']} vs {v['b']}: {v['verdict']}" for v in data.get("verdicts", [])
-            if v["verdict"] in ("disagree", "incomplete", "unconfirmed")]
+    return strict_exit(args, r.problems())
 
 
 def cmd_power(args):
@@ -622,7 +578,7 @@ def cmd_power(args):
         emit_json(r.data)
     else:
         print(r)
-    return 0
+    return strict_exit(args, r.problems())
 
 
 COMMANDS = {"list": cmd_list, "show": cmd_show, "run": cmd_run, "modes": cmd_modes,

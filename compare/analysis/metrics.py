@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from .trajectory import Modes, Trajectory
+from .verdict import Verdict
 
 
 @dataclass(frozen=True)
@@ -23,11 +24,14 @@ class Comparison:
     max_rel: float          # max |Δ| / scale
     scale: float            # the channel's scale: max |value| over both runs
     tolerance: float        # (error_estimate + allowance) / scale: the bound that decided
-    verdict: str            # agree | inconclusive | disagree | skipped
+    verdict: Verdict        # agree | inconclusive | disagree | skipped (a string is read as one)
     decided_by: str         # the number that decided, in words
     deviation: float = np.nan        # max |Δ| (SI), = max_abs
     error_estimate: float | None = None   # max (err_a + err_b) over the run (SI), if estimated
     allowance: float = np.nan        # the scene's modelling allowance (SI)
+
+    def __post_init__(self):            # read back from JSON: the string becomes the type
+        object.__setattr__(self, "verdict", Verdict(self.verdict))
 
     @property
     def ratio(self) -> float:
@@ -37,15 +41,13 @@ class Comparison:
 
     @property
     def shown(self) -> str:
-        """The verdict as tables print it: `agree (marginal)` above MARGINAL of the bound."""
-        return "agree (marginal)" if self.verdict == "agree" and self.ratio > MARGINAL \
-            else self.verdict
+        """The verdict as tables print it: `agree (marginal)` above MARGINAL of the bound
+        (`Verdict.shown`)."""
+        return self.verdict.shown(self.ratio)
 
     def as_dict(self):
         return {**asdict(self), "ratio": float(self.ratio), "shown": self.shown}
 
-
-MARGINAL = 0.5     # an agreement using more than half its bound is reported as marginal
 
 # An agreement is only as sharp as the wider of the two solvers' own error bars: where that bar
 # exceeds both the allowance and this fraction of the channel's scale (of the frequency, for a
@@ -54,18 +56,6 @@ MARGINAL = 0.5     # an agreement using more than half its bound is reported as 
 # (spinning-shaft whirl 5, MuJoCo's bar; median 3e-7), 12x below; the rotor at --dt 0.05
 # (torque 3.2, 2 s) reaches 3.1 % on |ω| and 86 % on the tilt.
 INCONCLUSIVE_FRACTION = 1e-2
-
-# the verdicts `--strict` refuses besides a failed run (`assert_agree` refuses all but `agree`)
-REFUSED = ("disagree", "inconclusive")
-
-
-def agree_text(verdicts) -> str:
-    """"N of M comparisons agree", with the inconclusive ones counted apart (never as
-    agreement), as every summary line writes it."""
-    v = list(verdicts)
-    n = v.count("inconclusive")
-    return (f"{v.count('agree')} of {len(v)} comparisons agree"
-            + (f", {n} inconclusive" if n else ""))
 
 
 def too_wide(errors: dict, allow: float, scale: float, unit: str = "") -> str | None:
@@ -80,14 +70,14 @@ def too_wide(errors: dict, allow: float, scale: float, unit: str = "") -> str | 
 
 
 def judged(d: float, bound: float, errors: dict | None, allow: float, scale: float,
-           unit: str = "") -> tuple[str, str | None]:
+           unit: str = "") -> tuple[Verdict, str | None]:
     """(verdict, the inconclusive sentence or None): `disagree` beyond the bound, else
     `inconclusive` where one solver's error bar is too wide to tell (`too_wide`), else
     `agree`."""
     if not d <= bound:
-        return "disagree", None
+        return Verdict.DISAGREE, None
     wide = too_wide(errors, allow, scale, unit) if errors else None
-    return ("inconclusive" if wide else "agree"), wide
+    return (Verdict.INCONCLUSIVE if wide else Verdict.AGREE), wide
 
 
 def ratio_text(r: float) -> str:
@@ -107,7 +97,7 @@ def deviation(a: Trajectory, b: Trajectory, channel: str,
         why = ", ".join(f"{t.solver} {t.status}" for t in (a, b) if t.status != "ok")
         tol = allowance if not isinstance(allowance, tuple) else allowance[1]
         return Comparison(a.solver, b.solver, channel, np.nan, np.nan, np.nan, np.nan,
-                          tol, "skipped", f"not compared: {why}")
+                          tol, Verdict.SKIPPED, f"not compared: {why}")
     if len(a.t) != len(b.t) or np.max(np.abs(a.t - b.t)) > 1e-9 * max(a.t[-1], 1.0):
         raise ValueError("trajectories of one run must share the output grid")
     x, y = a.channels[channel], b.channels[channel]
@@ -125,7 +115,7 @@ def deviation(a: Trajectory, b: Trajectory, channel: str,
                                             b.solver: float(np.nanmax(eb))} if both else None,
                            allow, scale, f" {unit}" if unit else "")
     why = (f"max|Δ| = {max_abs:.2e} (at t = {a.t[np.argmax(d)]:.4g} s) "
-           f"{'>' if verdict == 'disagree' else '≤'} "
+           f"{'>' if verdict == Verdict.DISAGREE else '≤'} "
            + (f"error estimates {err:.1e} + allowance {allow:.1e}" if err is not None
               else f"allowance {allow:.1e} (no error estimate)")
            + f" (Δ/bound {ratio_text(max_abs / bound if bound > 0 else np.inf)})")
@@ -346,7 +336,8 @@ def frequency_comparisons(results: list[Modes], tolerances: dict) -> list[Compar
                 err = sum(own.values()) if own else None
                 bound = tol * scale + (err or 0.0)
                 v, wide = judged(d, bound, own, tol * scale, scale, " Hz")
-                why = (f"{fa:.8g} vs {fb:.8g} Hz: |Δ| {d:.2e} {'>' if v == 'disagree' else '≤'} "
+                why = (f"{fa:.8g} vs {fb:.8g} Hz: |Δ| {d:.2e} "
+                       f"{'>' if v == Verdict.DISAGREE else '≤'} "
                        + (f"error estimates {err:.1e} + allowance {tol * scale:.1e} Hz"
                           if err is not None else f"allowance {tol * scale:.1e} Hz ("
                           + ("one discrete model: its discretisation error cancels" if shared
@@ -379,7 +370,8 @@ def damping_comparisons(results: list[Modes], tolerances: dict) -> list[Comparis
                 err = sum(own.values()) if own else None
                 bound = tol + (err or 0.0)
                 v, wide = judged(d, bound, own, tol, 1.0)
-                why = (f"ζ {za:.8g} vs {zb:.8g}: |Δ| {d:.2e} {'>' if v == 'disagree' else '≤'} "
+                why = (f"ζ {za:.8g} vs {zb:.8g}: |Δ| {d:.2e} "
+                       f"{'>' if v == Verdict.DISAGREE else '≤'} "
                        + (f"error estimates {err:.1e} + allowance {tol:.1e}" if err is not None
                           else f"allowance {tol:.1e} (no error estimate)"))
                 out.append(Comparison(

@@ -7,6 +7,8 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.optimize import brentq, minimize_scalar
 
+from .verdict import Verdict
+
 
 def synchronous_fit(t, z, u, t0, t1):
     """(a, mean spin) over t0 ≤ t < t1: least squares of the complex samples z on u = e^{iφ},
@@ -43,7 +45,7 @@ def judge(a, ea, b, eb) -> dict:
             "amplitude_bar_rel": bar_amp / max(abs(a), abs(b)),
             "phase_diff_deg": float(np.degrees(d_phase)),
             "phase_bar_deg": float(np.degrees(bar_phase)),
-            "verdict": "agree" if ok else "disagree"}
+            "verdict": Verdict.AGREE if ok else Verdict.DISAGREE}
 
 
 def peak(speeds, a) -> dict | None:

@@ -5,6 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..analysis.verdict import Verdict
 from ..atomic import write_json, write_text
 from .citations import papers_in
 from .joblog import distinct_lines
@@ -29,14 +30,14 @@ def _changed(case):
 
 
 def _verdicts(obj):
-    v = [c["verdict"] for c in obj.get("comparisons", [])]
-    return f"{v.count('agree')} agree, {v.count('disagree')} disagree" + "".join(
-        f", {v.count(k)} {k}" for k in ("inconclusive", "skipped") if v.count(k))
+    n = Verdict.tally(c["verdict"] for c in obj.get("comparisons", []))
+    return f"{n[Verdict.AGREE]} agree, {n[Verdict.DISAGREE]} disagree" + "".join(
+        f", {n[k]} {k}" for k in (Verdict.INCONCLUSIVE, Verdict.SKIPPED) if n[k])
 
 
 def _worst(obj):
     """The comparison closest to (or furthest over) its tolerance."""
-    cs = [c for c in obj.get("comparisons", []) if c.get("verdict") != "skipped"
+    cs = [c for c in obj.get("comparisons", []) if c.get("verdict") != Verdict.SKIPPED
           and c.get("max_rel") is not None and c.get("tolerance")]
     return max(cs, key=lambda c: c["max_rel"] / c["tolerance"]) if cs else None
 

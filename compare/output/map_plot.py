@@ -3,6 +3,7 @@ plots' colours, the runs as dots), the Markdown section, and map.rrd (points per
 boundary as line strips)."""
 import numpy as np
 
+from ..analysis.verdict import Verdict
 from ..atomic import atomic_path, write_json, write_text
 from .recording import APPLICATION_ID, PALETTE
 from .report import plot_style, save_figure
@@ -27,9 +28,8 @@ def status_line(result) -> str:
     """The map's verdicts in one line: how many solver pairs agree, every other verdict
     counted (a `--strict` run fails on any of them)."""
     st = result.get("status") or {}
-    others = [f"{st[k]} {k}" for k in ("disagree", "incomplete", "unconfirmed", "no data")
-              if st.get(k)]
-    return (f"map {result['scene']}: {st.get('agree', 0)} of {st.get('pairs', 0)} solver "
+    others = [f"{st[k]} {k}" for k in Verdict.by_rank() if k != Verdict.AGREE and st.get(k)]
+    return (f"map {result['scene']}: {st.get(Verdict.AGREE, 0)} of {st.get('pairs', 0)} solver "
             "pairs agree" + (f"; {', '.join(others)}" if others else "")
             + f" (status: {st.get('status', '—')})")
 
@@ -89,7 +89,8 @@ def plot_map(path, result):
         else:                       # in the legend all the same: a missing boundary shows
             ax.plot([], [], "|", color=col, label=f"{s}: no crossing")
     # crossings without a counterpart in another solver: a disagreement or a gap, never hidden
-    for outcome, mark, col in (("disagree", "X", "#d62728"), ("incomplete", "X", "#ff7f0e")):
+    for outcome, mark, col in ((Verdict.DISAGREE, "X", "#d62728"),
+                               (Verdict.INCOMPLETE, "X", "#ff7f0e")):
         miss = [u for v in result.get("verdicts", []) for u in v.get("unmatched", [])
                 if u["outcome"] == outcome]
         if miss:

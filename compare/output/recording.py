@@ -18,6 +18,7 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
+from ..analysis.verdict import Verdict
 from ..atomic import atomic_path
 from .report import analytic_curve
 from .tables import VERDICT_HEADER, markdown, verdict_rows
@@ -73,7 +74,7 @@ def _deviations(rec, result, colors):
     trs = {t.solver: t for t in result.trajectories}
     for c in result.comparisons:
         a, b = trs[c.a], trs[c.b]
-        if c.verdict == "skipped":
+        if c.verdict == Verdict.SKIPPED:
             continue
         d = np.abs(a.channels[c.channel] - b.channels[c.channel])
         ent = pair_entity(c.channel, c.a, c.b)

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..analysis import metrics
+from ..analysis.verdict import MARGINAL
 from ..atomic import atomic_path, write_text
 from .citations import cite_short, papers_in
 from .tables import VERDICT_HEADER, markdown, verdict_rows
@@ -244,7 +245,7 @@ def run_markdown(result, figures):
     out += ["", "## Agreement", "",
             "Verdict per pair and channel: the deviation max|Δ| against its bound — both "
             "solvers' error estimates (their tighter reruns) plus the scene's modelling "
-            f"allowance; Δ/bound ≤ 1 agrees, above {metrics.MARGINAL:g} it is marginal.", "",
+            f"allowance; Δ/bound ≤ 1 agrees, above {MARGINAL:g} it is marginal.", "",
             markdown(VERDICT_HEADER, verdict_rows(result.comparisons))]
     out += power_markdown(getattr(result, "power", None))
     out += [""] + [f"![{f}]({f})" for f in figures]

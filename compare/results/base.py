@@ -4,7 +4,8 @@
 `Result.load(path)` reads any of them back — a run, modes, bench, extremes, map, campaign,
 power or diff folder, its JSON file, or a baseline — as the type its "result" field names
 (folders written before that field: by their files). Views: `str()` (the tables as text),
-Markdown and HTML (Jupyter), `figure()`, and `side()`: what `xval diff` compares."""
+Markdown and HTML (Jupyter), `figure()`, and `side()`: what `xval diff` compares;
+`problems()`: what `--strict` and `xval.assert_agree` fail on."""
 from __future__ import annotations
 
 import dataclasses
@@ -15,6 +16,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..analysis.metrics import Comparison
+from ..analysis.verdict import Verdict
 from ..errors import BadInput
 from ..scenes import get_scene
 from . import tables
@@ -145,6 +147,36 @@ class Result:
     def where(self) -> str:
         """The result's folder, or what it is when held in memory (the diff names it)."""
         return str(self.out_dir) if self.out_dir else f"{self.TYPE} result in memory"
+
+    # --- what --strict refuses -------------------------------------------------------------
+
+    def problems(self, channels=None) -> list[str]:
+        """What `--strict` and `xval.assert_agree` fail on, one line each ([]: nothing to
+        refuse); `channels`: only the comparisons on these (a run or modes result)."""
+        return []
+
+
+class ComparedResult(Result):
+    """A run or modes result: `runs` {solver: run with a status} and pairwise `comparisons`."""
+    runs: dict
+    comparisons: list
+
+    def problems(self, channels=None) -> list[str]:
+        """A solver without an answer, a comparison (on `channels`) whose verdict is refused,
+        and a result with nothing compared (a skipped comparison's failed run is named)."""
+        chosen = [c for c in self.comparisons if channels is None or c.channel in channels]
+        return verdict_problems([(s, r.status) for s, r in self.runs.items()],
+                                [(c.a, c.b, c.channel, c.verdict) for c in chosen])
+
+
+def verdict_problems(statuses, comparisons) -> list[str]:
+    """What --strict refuses of (solver, status) pairs and (a, b, channel, verdict) rows: a
+    solver without an answer, a refused verdict (`Verdict.refused`), nothing compared."""
+    out = [f"{s} {status} (incomplete)" for s, status in statuses if status != "ok"]
+    out += [f"{a} vs {b} {ch}: {v}" for a, b, ch, v in comparisons if Verdict(v).refused]
+    if not comparisons:
+        out.append("nothing was compared (incomplete)")
+    return out
 
 
 def _guess(name: str, obj: dict, folder) -> str:

@@ -7,9 +7,10 @@ from pathlib import Path
 import numpy as np
 
 from ..analysis.trajectory import Modes
+from ..analysis.verdict import Verdict
 from ..errors import BadInput
 from . import tables
-from .base import Result, comparisons_from_json
+from .base import ComparedResult, comparisons_from_json
 from .records import Side, modes_case
 
 # the run fields of the JSON (contract.md); any other key of a run is one of its `extra` arrays
@@ -83,7 +84,7 @@ def growing_modes(results: list[Modes], floor: float = 0.0) -> list[dict]:
     return out
 
 
-class ModesResult(Result):
+class ModesResult(ComparedResult):
     """`xval.modes(...)`, `xval modes`: per solver the `Modes` (`r["mstmm"].frequencies_hz`,
     `.labels`, `.status`, `.wall_s`), the mode-by-mode `comparisons`, the `critical_speeds`
     (solver -> {name: value}) and `campbell` (the diagram's JSON) where the scene sweeps,
@@ -119,7 +120,7 @@ class ModesResult(Result):
 
     solvers = property(lambda self: list(self.runs))
     disagreements = property(lambda self: [c for c in self.comparisons
-                                           if c.verdict == "disagree"])
+                                           if c.verdict == Verdict.DISAGREE])
 
     def __getitem__(self, solver):
         return self.runs[solver]

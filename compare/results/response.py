@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..analysis.verdict import Verdict
 from .studies import StudyResult
 
 RPM = 60 / (2 * math.pi)
@@ -51,10 +52,10 @@ class ResponseResult(StudyResult):
         return max(vs, key=lambda v: v["amplitude_diff"] / max(v["amplitude_bar"], 1e-300),
                    default=None)
 
-    def problems(self) -> list[str]:
-        """What --strict refuses: a verdict that is not `agree`."""
+    def problems(self, channels=None) -> list[str]:
+        """What --strict refuses: a disagreement, a speed a solver gave no answer at."""
         return [f"{v['a']} vs {v['b']} at {v['speed_rad_s']:.6g} rad/s: {v['verdict']}"
-                for v in self.data["verdicts"] if v["verdict"] != "agree"]
+                for v in self.data["verdicts"] if Verdict(v["verdict"]).refused]
 
     def table_lines(self) -> list[str]:
         names = self.solvers
@@ -90,7 +91,7 @@ class ResponseResult(StudyResult):
             vs = [v for v in d["verdicts"] if v["kind"] == kind]
             if not vs:
                 continue
-            n_ok = sum(v["verdict"] == "agree" for v in vs)
+            n_ok = Verdict.tally(v["verdict"] for v in vs)[Verdict.AGREE]
             amp = max(vs, key=lambda v: v.get("amplitude_rel", -1))
             ph = max(vs, key=lambda v: v.get("phase_diff_deg", -1))
             w = self.worst(kind)
@@ -107,7 +108,7 @@ class ResponseResult(StudyResult):
                  for k, rows in d["time"].items()]
         out.append("cost per speed (with each error estimate): " + ", ".join(cost))
         for v in d["verdicts"]:
-            if v["verdict"] == "incomplete":
+            if v["verdict"] == Verdict.INCOMPLETE:
                 out.append(f"{v['a']} at {v['speed_rad_s']:.6g} rad/s: {v['why']}")
         return out
 

@@ -12,7 +12,8 @@ import shutil
 import weakref
 from pathlib import Path
 
-from .base import Result
+from ..analysis.verdict import Verdict
+from .base import Result, verdict_problems
 from .records import Side, is_modes_json, modes_case, read_maps, readable, time_case
 
 
@@ -80,6 +81,22 @@ class BenchResult(StudyResult):
         return list(self.data["summary_lines"])
 
 
+KNOWN = "FAILED (known)"            # an extreme case's declared failure: reported, not refused
+
+
+def extremes_problems(rows) -> list[dict]:
+    """The rows `--strict` refuses: FAILED (not a declared one), error, stale declarations."""
+    return [r for r in rows if r["outcome"] != KNOWN
+            and r["outcome"].startswith(("FAILED", "error", "stale"))]
+
+
+def map_problems(data: dict) -> list[str]:
+    """A map's refused verdicts: a pair whose boundaries disagree, that one solver could not
+    answer, or whose crossing vanished at the tighter setting."""
+    return [f"{v['a']} vs {v['b']}: {v['verdict']}" for v in data.get("verdicts", [])
+            if Verdict(v["verdict"]).refused]
+
+
 class ExtremesResult(StudyResult):
     """`xval.extremes(...)`: per case and solver the outcome, its number and why."""
     TYPE = "extremes"
@@ -87,6 +104,10 @@ class ExtremesResult(StudyResult):
     def summary_lines(self):
         return [f"{r['case']:32s} {r['solver']:26s} {r['outcome']:18s} {r['detail']}"
                 for r in self.data["results"]]
+
+    def problems(self, channels=None):
+        return [f"{x['case']} {x['solver']}: {x['outcome']}"
+                for x in extremes_problems(self.data["results"])]
 
 
 class PowerResult(StudyResult):
@@ -118,6 +139,9 @@ class MapResult(StudyResult):
         return out + [f"{v['a']} vs {v['b']}: {v['verdict']} — {'; '.join(v['why'])}"
                       for v in d["verdicts"]] + [status_line(d)]
 
+    def problems(self, channels=None):
+        return map_problems(self.data)
+
     def side(self) -> Side:
         if self._dir is None:
             return Side(self.where(), "map", {}, {self.data.get("scene", "map"): {
@@ -135,6 +159,21 @@ class CampaignResult(StudyResult):
         return [f"campaign {d['name']}: {d['n_jobs']} jobs ({d['n_run']} run, "
                 f"{d['n_reused']} reused), {d['n_failed']} cases with a failed solver, "
                 f"{d['n_crashed']} crashed jobs; {d['wall_s']:.1f} s"]
+
+    def problems(self, channels=None):
+        """Every case's error, failed solvers and refused verdicts, and every map's."""
+        out = []
+        for c in self.data.get("cases", []):
+            if "error" in c:
+                out.append(f"{c['case']}: {c['error']}")
+            if c.get("runs") or "error" not in c:
+                out += [f"{c['case']}: {p}" for p in verdict_problems(
+                    [(r["solver"], r["status"]) for r in c.get("runs", [])],
+                    [(x["a"], x["b"], x["channel"], x["verdict"])
+                     for x in c.get("comparisons", [])])]
+        for m in self.data.get("maps", []):
+            out += [f"map {m.get('map')}: {p}" for p in map_problems(m)]
+        return out
 
     def side(self) -> Side:
         p = self._dir

@@ -15,9 +15,9 @@ from ..output.tables import (  # noqa: F401  (the results' tables)
 
 def disagreement_message(result, channels=None) -> str | None:
     """The verdict table of the comparisons on `channels` (default: all) that do not agree
-    (disagree, inconclusive, or skipped because a solver failed), or None when every one
-    agrees. A solver that failed, or a run with nothing compared, is never agreement: the
-    message says so."""
+    (disagree, inconclusive, or skipped because a solver failed), or None where
+    `result.problems(channels)` finds nothing. A solver that failed, or a run with nothing
+    compared, is never agreement: the message says so."""
     chosen = [c for c in result.comparisons if channels is None or c.channel in channels]
     if channels is not None:
         compared = list(dict.fromkeys(c.channel for c in result.comparisons))
@@ -25,11 +25,11 @@ def disagreement_message(result, channels=None) -> str | None:
         if unknown:
             raise BadInput(f"channels: {', '.join(unknown)} not compared in this run "
                            f"(compared: {', '.join(compared)})")
-    bad = [c for c in chosen if c.verdict != "agree"]
+    if not result.problems(channels):
+        return None
+    bad = [c for c in chosen if not c.verdict.agrees]
     missing = [f"{s} {r.status}" + (f" ({r.reason})" if r.reason else "")
                for s, r in result.runs.items() if r.status != "ok"]
-    if not bad and not missing and chosen:
-        return None
     head = f"{len(bad)} of {len(chosen)} comparisons of {result.scene_name} do not agree"
     if missing:
         head += "; incomplete: " + ", ".join(missing)

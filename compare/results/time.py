@@ -5,14 +5,15 @@ from pathlib import Path
 
 from ..analysis import metrics
 from ..analysis.trajectory import Trajectory
+from ..analysis.verdict import Verdict, agree_text
 from ..errors import BadInput
 from ..scenes import Finding
 from . import tables
-from .base import Result, comparisons_from_json
+from .base import ComparedResult, comparisons_from_json
 from .records import CaseRec, Side, readable, trajectory_run, verdicts
 
 
-class TimeResult(Result):
+class TimeResult(ComparedResult):
     """`xval.run(...)`, `xval run`: per solver a `Trajectory` (`r["quaternion"].t`,
     `.channels[...]`, `.errors[...]` — the solver's own error estimate on the grid —,
     `.status`, `.wall_s`, `.settings`, `.stats`), the pairwise `comparisons` with their
@@ -39,7 +40,7 @@ class TimeResult(Result):
     t = property(lambda self: next(iter(self.runs.values())).t)
     ok = property(lambda self: all(tr.status == "ok" for tr in self.runs.values()))
     disagreements = property(lambda self: [c for c in self.comparisons
-                                           if c.verdict == "disagree"])
+                                           if c.verdict == Verdict.DISAGREE])
 
     def __getitem__(self, solver):
         try:
@@ -122,7 +123,7 @@ class TimeResult(Result):
 
     def title(self):
         return (f"{self.scene_name}: {len(self.runs)} solvers, "
-                + metrics.agree_text(c.verdict for c in self.comparisons))
+                + agree_text(c.verdict for c in self.comparisons))
 
     def tables(self):
         return [self._solver_table(), (tables.VERDICT_HEADER,

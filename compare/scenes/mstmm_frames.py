@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..analysis.metrics import frequency_allowance
+from ..analysis.verdict import Verdict
 
 ENGINES = ("exudyn", "mujoco")
 PAPER = {"mstmm": "fem", "fem": "mstmm"}       # the other model with the paper's assumption
@@ -47,7 +48,7 @@ def error_bar(run, i):
 def explain(params, comparisons, modes_at, tolerances):
     """`modes_at(solver name, params)` runs (or returns the run's) modes of one solver;
     `tolerances` the scene's. Returns (JSON rows, report lines)."""
-    bad = [c for c in comparisons if c.verdict == "disagree"
+    bad = [c for c in comparisons if c.verdict == Verdict.DISAGREE
            and (c.a in ENGINES) != (c.b in ENGINES)]
     if not bad or params["speed"] == 0:
         return [], []
@@ -71,7 +72,8 @@ def explain(params, comparisons, modes_at, tolerances):
 
     def differential(c):
         d = [x for x in comparisons if {x.a, x.b} == {c.a, c.b} and "differential" in x.channel]
-        return (max(x.max_rel for x in d), all(x.verdict == "agree" for x in d)) if d else None
+        return ((max(x.max_rel for x in d), all(x.verdict == Verdict.AGREE for x in d))
+                if d else None)
 
     def at_rest(a, b):
         fa, fb = run(a, True).frequencies_hz, run(b, True).frequencies_hz

@@ -29,15 +29,16 @@ import numpy as np
 
 from .. import solvers
 from ..analysis import metrics
-from ..analysis.metrics import MARGINAL
 from ..analysis.trajectory import Trajectory
+from ..analysis.verdict import MARGINAL
 from ..errors import BadInput
 from ..results import ExtremesResult
+from ..results.studies import KNOWN
+from ..results.studies import extremes_problems as problems  # noqa: F401  (the refused rows)
 from ..scenes import Extreme, Scene, get_scene
 from .plan import Knobs, plan
 
 HONEST = ("diverged", "unstable", "singular", "timeout")
-KNOWN = "FAILED (known)"
 
 
 def _own_error(tr: Trajectory, channel: str) -> float:
@@ -157,12 +158,6 @@ def _declared(row: dict, known: str | None):
     else:
         row.update(outcome=f"stale: {row['outcome']}",
                    detail=f"declared a known failure ({known}), yet {row['detail']}")
-
-
-def problems(rows) -> list[dict]:
-    """The rows `--strict` refuses: FAILED (not a declared one), error, stale declarations."""
-    return [r for r in rows if r["outcome"] != KNOWN
-            and r["outcome"].startswith(("FAILED", "error", "stale"))]
 
 
 def _num(v):

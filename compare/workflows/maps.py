@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import solvers
+from ..analysis.verdict import Verdict
 from ..errors import BadInput
 from ..output.store import store_point
 from ..results import MapResult
@@ -469,55 +470,59 @@ def _failed(r):
 
 
 def _unmatched(c, a, b, seen):
-    """A crossing of `a` with no crossing of the same regimes in `b` on its row: False
-    (disagree: b's own runs around it read no such crossing), "incomplete" (a run on either
-    side failed, or b ran nothing), or "outside" (b did not map there: not compared); with
-    the line that says why."""
+    """A crossing of `a` with no crossing of the same regimes in `b` on its row: disagree
+    (b's own runs around it read no such crossing), incomplete (a run on either side failed,
+    or b ran nothing), or None (outside the region b mapped: not compared); with the line that
+    says why."""
     what = f"{a}'s crossing {c['from']}→{c['to']} at x = {c['x']:.6g}{_row(c)}"
     if seen is None:                      # nothing known of the runs: b's rows are mapped
-        return False, f"{what} has no counterpart in {b}"
+        return Verdict.DISAGREE, f"{what} has no counterpart in {b}"
     mine = [r for r in seen.get(a, {}).get(c["y"], []) if r[0] in c["bracket"] and r[2] != "ok"]
     if mine:
-        return "incomplete", f"{what}: a failed run of {a}, no regime ({_failed(mine[0])})"
+        return Verdict.INCOMPLETE, f"{what}: a failed run of {a}, no regime ({_failed(mine[0])})"
     if not seen.get(b):
-        return "incomplete", f"{what}: {b} ran no points"
+        return Verdict.INCOMPLETE, f"{what}: {b} ran no points"
     rb = seen[b].get(c["y"], [])
     if not rb or not rb[0][0] <= c["x"] <= rb[-1][0]:
-        return "outside", f"{what}: outside the region {b} mapped (not compared)"
+        return None, f"{what}: outside the region {b} mapped (not compared)"
     left = [r for r in rb if r[0] <= c["x"]][-1]
     right = next(r for r in rb if r[0] >= c["x"])
     bad = [r for r in (left, right) if r[2] != "ok"]
     if bad:
-        return "incomplete", f"{what}: {b}'s run failed there ({_failed(bad[0])})"
+        return Verdict.INCOMPLETE, f"{what}: {b}'s run failed there ({_failed(bad[0])})"
     same = {r[1] for r in rb} == {left[1]}
-    return False, (f"{what} has no counterpart in {b}: {b} reads {left[1]} at "
+    return Verdict.DISAGREE, (f"{what} has no counterpart in {b}: {b} reads {left[1]} at "
                    f"{left[0]:.6g} and {right[1]} at {right[0]:.6g}"
                    + (f" (and at all its {len(rb)} runs on the row, {rb[0][0]:.6g} to "
                       f"{rb[-1][0]:.6g})" if same else ""))
 
 
 def _no_crossings(a, b, seen):
-    """Neither solver finds a crossing: their regimes at the points both ran."""
+    """Neither solver finds a crossing: their regimes at the points both ran decide (None:
+    nothing known of the runs)."""
     if seen is None:
         return None, "no crossing on a common row"
     for s in (a, b):
         if not seen.get(s):
-            return "incomplete", f"{s} ran no points"
+            return Verdict.INCOMPLETE, f"{s} ran no points"
     ra = {(y, r[0]): r for y, rs in seen[a].items() for r in rs}
     common = [(ra[k], r) for y, rs in seen[b].items() for r in rs if (k := (y, r[0])) in ra]
     if not common:
-        return "incomplete", f"neither finds a crossing, and {a} and {b} ran no common point"
+        return (Verdict.INCOMPLETE,
+                f"neither finds a crossing, and {a} and {b} ran no common point")
     for p, q in common:
         for s, r in ((a, p), (b, q)):
             if r[2] != "ok":
-                return "incomplete", f"{s}'s run failed ({_failed(r)})"
+                return Verdict.INCOMPLETE, f"{s}'s run failed ({_failed(r)})"
     diff = [(p, q) for p, q in common if p[1] != q[1]]
     if diff:
         p, q = diff[0]
-        return False, (f"neither finds a crossing, but at x = {p[0]:.6g} {a} reads {p[1]} and "
-                       f"{b} reads {q[1]} ({len(diff)} of {len(common)} common points differ)")
+        return Verdict.DISAGREE, (f"neither finds a crossing, but at x = {p[0]:.6g} {a} reads "
+                                  f"{p[1]} and {b} reads {q[1]} ({len(diff)} of {len(common)} "
+                                  "common points differ)")
     labels = ", ".join(sorted({p[1] for p, _ in common}))
-    return True, f"neither finds a crossing; both read {labels} at all {len(common)} common points"
+    return Verdict.AGREE, (f"neither finds a crossing; both read {labels} at all "
+                           f"{len(common)} common points")
 
 
 def compare_boundaries(boundaries, width, seen=None):
@@ -542,11 +547,11 @@ def compare_boundaries(boundaries, width, seen=None):
                              and cb["from"] == ca["from"] and cb["to"] == ca["to"]]
                     if not cands:
                         got, line = _unmatched(ca, one, other, seen)
-                        if got != "outside":
+                        if got is not None:
                             pairs.append(got)
                         lines.append(line)
                         unmatched.append({"solver": one, "x": ca["x"], "y": ca["y"],
-                                          "outcome": {False: "disagree"}.get(got, got)})
+                                          "outcome": got or "outside"})
                         continue
                     if one == b:          # matched from a's side already
                         continue
@@ -555,14 +560,15 @@ def compare_boundaries(boundaries, width, seen=None):
                     d = abs(cb["x"] - ca["x"])
                     bound = (width + (ca.get("error") or 0) + (cb.get("error") or 0)
                              + 0.5 * (np.ptp(ca["bracket"]) + np.ptp(cb["bracket"])))
-                    ok = bool(d <= bound * (1 + 1e-9))
-                    if ok and (ca.get("unconfirmed") or cb.get("unconfirmed")):
-                        ok = None
+                    got = Verdict.AGREE if d <= bound * (1 + 1e-9) else Verdict.DISAGREE
+                    if got == Verdict.AGREE and (ca.get("unconfirmed")
+                                                 or cb.get("unconfirmed")):
+                        got = Verdict.UNCONFIRMED
                         lines.append(f"{ca['from']}→{ca['to']}{_row(ca)}: unconfirmed — the "
                                      f"crossing of {a if ca.get('unconfirmed') else b} "
                                      "vanishes at its tighter setting")
-                    pairs.append(ok)
-                    if ok is False:
+                    pairs.append(got)
+                    if got == Verdict.DISAGREE:
                         lines.append(f"{ca['from']}→{ca['to']}{_row(ca)}: {a} at "
                                      f"{ca['x']:.6g} {_bracket(ca)}, {b} at {cb['x']:.6g} "
                                      f"{_bracket(cb)}: {d:.3g} apart > {bound:.3g} "
@@ -572,9 +578,7 @@ def compare_boundaries(boundaries, width, seen=None):
                 if got is not None:
                     pairs.append(got)
                 lines.append(line)
-            verdict = ("disagree" if False in pairs else "incomplete" if "incomplete" in pairs
-                       else "unconfirmed" if None in pairs else "agree" if pairs
-                       else "no data")
+            verdict = Verdict.worst(pairs, default=Verdict.NO_DATA)
             why = lines or ([f"all {matched} crossings within resolution + error "
                              "estimates + half-brackets"] if pairs else ["nothing compared"])
             out.append({"a": a, "b": b, "verdict": verdict, "matched": matched, "why": why,
@@ -582,15 +586,17 @@ def compare_boundaries(boundaries, width, seen=None):
     return out
 
 
-VERDICT_ORDER = ("disagree", "incomplete", "unconfirmed", "no data", "agree")
+# what a map's pair can be, worst first (the status counts each)
+MAP_VERDICTS = (Verdict.DISAGREE, Verdict.INCOMPLETE, Verdict.UNCONFIRMED, Verdict.NO_DATA,
+                Verdict.AGREE)
 
 
 def verdict_status(verdicts):
     """The map's status for a CI: counts per verdict, and the worst verdict over its pairs
     (`no comparison` for a map of one solver)."""
-    counts = {v: sum(1 for x in verdicts if x["verdict"] == v) for v in VERDICT_ORDER}
-    worst = next((v for v in VERDICT_ORDER if counts[v]), "no comparison")
-    return {"status": worst, "pairs": len(verdicts), **counts}
+    n = Verdict.tally(x["verdict"] for x in verdicts)
+    worst = Verdict.worst((x["verdict"] for x in verdicts), default="no comparison")
+    return {"status": worst, "pairs": len(verdicts), **{v: n[v] for v in MAP_VERDICTS}}
 
 
 def _row(c):

@@ -17,6 +17,7 @@ from .. import solvers
 from ..analysis import campbell, metrics
 from ..analysis.campbell import mac
 from ..analysis.trajectory import Modes
+from ..analysis.verdict import Verdict, agree_text
 from ..errors import BadInput
 from ..results import ModesResult
 from ..results.modes import (
@@ -399,7 +400,7 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
         md += [f"| {u['a']} | {u['b']} | {u['solver']} | {u['mode']} | "
                f"{u['frequency_hz']:.8g} | {u['reason']} |" for u in unpaired]
     report["head"] = md
-    if sc.explain_frequencies and any(c.verdict == "disagree" for c in comparisons):
+    if sc.explain_frequencies and any(c.verdict == Verdict.DISAGREE for c in comparisons):
         ran = {r.solver: r for r in results}        # the runs above, not run again
         rows, lines_md = sc.explain_frequencies(
             params, comparisons, lambda n, p: ran[n] if p == params and n in ran
@@ -464,7 +465,7 @@ def modes_status(comparisons, obj) -> tuple[str, str]:
     failed or nothing was compared, else `disagree` on any disagreement, else `inconclusive` on
     any agreement one solver's error bar is too wide to make, else `agree`; the
     unpaired modes and unconfirmed critical speeds counted alongside."""
-    line = metrics.agree_text(c.verdict for c in comparisons)
+    line = agree_text(c.verdict for c in comparisons)
     missing = [f"{m['solver']} " + (f"{m['status']} ({m['reason']})" if "status" in m
                                     else m["reason"]) for m in obj["incomplete"]]
     if missing:
@@ -485,8 +486,8 @@ def modes_status(comparisons, obj) -> tuple[str, str]:
            if r["status"] != "ok" or not r["agrees"]]
     if off:                            # a threshold not found, or off the closed form
         line += "; threshold off the closed form: " + ", ".join(off)
-    verdicts = {c.verdict for c in comparisons}
-    status = ("incomplete" if missing or not comparisons else
-              "disagree" if off or verdicts - {"agree", "inconclusive"} else
-              "inconclusive" if "inconclusive" in verdicts else "agree")
+    # a failed solver outranks every verdict; any verdict worse than inconclusive is disagree
+    worst = Verdict.worst(c.verdict for c in comparisons)
+    status = (Verdict.INCOMPLETE if missing or not comparisons else
+              Verdict.DISAGREE if off or worst.rank > Verdict.INCONCLUSIVE.rank else worst)
     return status, line

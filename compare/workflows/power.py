@@ -20,6 +20,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from .. import solvers
+from ..analysis.verdict import Verdict
 from ..errors import BadInput
 from ..results import PowerResult
 from .plan import plan
@@ -85,7 +86,8 @@ class _Study:
         nominal error bars stay, so `inconclusive` would only be the scale moving, no flip)."""
         new = self.compare({**self.nominal, solver.name: run})
         return [(b, n) for b, n in zip(self.base, new)
-                if b.verdict == "agree" and n.verdict not in ("agree", "inconclusive")
+                if b.verdict == Verdict.AGREE
+                and n.verdict not in (Verdict.AGREE, Verdict.INCONCLUSIVE)
                 and solver.name in (b.a, b.b)]
 
 
@@ -104,7 +106,8 @@ def _change(sc, a, b, channel) -> float:
 def _estimate(study, solver, name):
     """(ε estimate, deciding comparison) from one finite-difference run, or (None, why)."""
     sc = study.sc
-    agreeing = [c for c in study.base if c.verdict == "agree" and solver.name in (c.a, c.b)]
+    agreeing = [c for c in study.base
+                if c.verdict == Verdict.AGREE and solver.name in (c.a, c.b)]
     if not agreeing:
         return None, "no agreeing comparison to flip"
     fd = study.perturbed(solver, name, H)
@@ -218,7 +221,7 @@ def estimated(comparisons: list, sens: dict, by: str) -> list[Power]:
             ends = [((c.tolerance * c.scale - c.max_abs) / d[c.channel],
                      (c.tolerance * c.scale + c.max_abs) / d[c.channel], c)
                     for c in comparisons
-                    if c.verdict == "agree" and s in (c.a, c.b) and d.get(c.channel)]
+                    if c.verdict == Verdict.AGREE and s in (c.a, c.b) and d.get(c.channel)]
             if not ends or min(e[1] for e in ends) > EPS_MAX:
                 rows.append(Power(name, s, None, None, None,
                                   f"no agreeing comparison responds to it up to {EPS_MAX:g}"))
@@ -275,7 +278,8 @@ def run_power(scene_name: str, overrides: dict, names: list[str],
                    if r.epsilon is not None else f"none ({r.how})"))
     return PowerResult({"scene": sc.name, "params": {k: overrides[k] for k in overrides},
                         "solvers": [s.name for s in chosen],
-                        "nominal": {"agree": sum(c.verdict == "agree" for c in study.base),
+                        "nominal": {Verdict.AGREE: Verdict.tally(
+                                        c.verdict for c in study.base)[Verdict.AGREE],
                                     "comparisons": len(study.base)},
                         "power": [r.as_dict() for r in rows], "summary": summary(rows),
                         "runs": study.n_runs, "wall_s": round(time.perf_counter() - t0, 3)})

@@ -14,6 +14,7 @@ import numpy as np
 
 from .. import solvers
 from ..analysis import response as resp
+from ..analysis.verdict import Verdict
 from ..errors import BadInput
 from ..results.response import ResponseResult, time_label
 from ..scenes import SCENES, get_scene
@@ -183,7 +184,7 @@ def _judge(scene, data, params, freq, timed):
             if r["status"] != "ok":
                 data["verdicts"].append({"speed_rad_s": r["speed_rad_s"],
                                          "a": time_label(name), "b": None, "kind": "time",
-                                         "verdict": "incomplete",
+                                         "verdict": Verdict.INCOMPLETE,
                                          "why": f"{r['status']}: {r.get('reason')}"})
 
 

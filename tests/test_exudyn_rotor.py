@@ -1,4 +1,4 @@
-"""Exudyn rotor leaf (reference_models/exudyn/rotor.py) against independent numbers.
+"""Exudyn rotor leaf (reference_models/exudyn/rotor/) against independent numbers.
 
 Independent references used here: closed-form whirl / oscillation frequencies, the conservation
 of T + U − A and of the axial angular momentum, and the MuJoCo probe value of the final spin

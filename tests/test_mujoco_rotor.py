@@ -1,4 +1,4 @@
-"""MuJoCo rotor leaf (reference_models/mujoco/rotor.py): checks against independent numbers only.
+"""MuJoCo rotor leaf (reference_models/mujoco/rotor/): checks against independent numbers only.
 
 Independent numbers: closed-form tilt/whirl frequencies, energy conservation (T + U − A), the
 MuJoCo probe value |ω|(10 s) = 43.310 rad/s for the cone-angle spring (notes, 1.5 N·m), the
@@ -105,8 +105,8 @@ def test_the_speed_switches_change_no_bit(monkeypatch):
     pipeline with its own clock gives it."""
     p = params(torque=3.2, tilt0=0.2, spin0=10.0, t_end=1.0)
     fast = rotor.simulate(p, grid(1.0), {})
-    monkeypatch.setattr(rotor, "_NO_STAGES", int(mujoco.mjtDisableBit.mjDSBL_AUTORESET))
-    monkeypatch.setitem(rotor._NATIVE, "clock", None)
+    monkeypatch.setattr(rotor.model, "_NO_STAGES", int(mujoco.mjtDisableBit.mjDSBL_AUTORESET))
+    monkeypatch.setitem(rotor.callback._NATIVE, "clock", None)
     full = rotor.simulate(p, grid(1.0), {})
     assert fast.settings["callback"] == full.settings["callback"] == "native"
     for name in SPINUP.channels:

@@ -7,8 +7,8 @@ from scipy.spatial.transform import Rotation
 from compare import solvers
 from compare.analysis import metrics
 from compare.analysis.identify import matrix_pencil, transverse_components
+from compare.physics import rotation
 from compare.scenes import get_scene
-from custom_models import rotation
 
 SCENE = get_scene("rotor-spinup")
 I_T = 5 * 0.25**2 / 4 + 5 * 0.5**2          # 1.328125 kg·m²

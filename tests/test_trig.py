@@ -1,4 +1,4 @@
-"""custom_models.trig against libm (numpy's sin, cos, arctan2): the rotor kernels' elementary
+"""compare.physics.trig against libm (numpy's sin, cos, arctan2): the rotor kernels' elementary
 functions, written so that LLVM can vectorise them, must give libm's numbers to round-off.
 
 Measured (10⁶ random arguments per range): at most 2 ulp of the result for sin, cos and atan2;
@@ -7,7 +7,7 @@ import numba as nb
 import numpy as np
 import pytest
 
-from custom_models.trig import LOSS, atan2, sincos
+from compare.physics.trig import LOSS, atan2, sincos
 
 ULP = 2
 

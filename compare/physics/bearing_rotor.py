@@ -36,9 +36,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from custom_models.rotation import quat_matrix, quat_matrix_t  # noqa: F401  (the leaves' too)
-
 from ..contract import LeafModes
+from .rotation import quat_matrix, quat_matrix_t  # noqa: F401  (the leaves' too)
 
 OMEGA_SMOOTH = 0.1     # rad/s, the tanh width of the friction moment's sign (spec)
 

@@ -104,18 +104,6 @@ def regime_summaries(t: np.ndarray, runs: list, reach, stay, window: float) -> d
     return out
 
 
-def rotations_from_quaternions(q: np.ndarray) -> np.ndarray:
-    """(n, 4) unit quaternions w, x, y, z (normalised here) → (n, 3, 3) rotation matrices."""
-    q = np.asarray(q, float)
-    q = q / np.linalg.norm(q, axis=1, keepdims=True)
-    w, x, y, z = q.T
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-    ], 1)
-
-
 def whirl_closed_form(p: dict, spins) -> tuple[np.ndarray, np.ndarray]:
     """(backward, forward) whirl frequencies [rad/s] of I_t w² ∓ I_p Ω w − k_eff = 0.
     Exact for eccentricity 0 and gravity along the shaft."""

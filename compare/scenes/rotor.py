@@ -4,13 +4,8 @@ import numpy as np
 from ..analysis.identify import fft_peak, matrix_pencil, transverse_components
 from ..analysis.metrics import first_crossing
 from ..contract import Channel
-from ..physics.rotor import (
-    constants,
-    instability_speed,
-    rotations_from_quaternions,
-    unbalance_response,
-    whirl_damped,
-)
+from ..physics.rotation import quats_to_matrices
+from ..physics.rotor import constants, instability_speed, unbalance_response, whirl_damped
 from .base import (
     Campbell,
     Extreme,
@@ -323,7 +318,7 @@ def _observe(p, tr):
     axis; to first order in the tilt its spin angle)."""
     q = tr.extra["orientation"]
     gx, gy = transverse_components(q)
-    R = rotations_from_quaternions(q)
+    R = quats_to_matrices(np.ascontiguousarray(q, dtype=float))
     u = R[:, 0, 0] + 1j * R[:, 1, 0]
     return gx + 1j * gy, u / np.abs(u)
 

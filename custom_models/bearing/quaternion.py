@@ -31,10 +31,16 @@ import numpy as np
 
 from compare.contract import LeafResult, merge_settings
 from compare.physics import bearing_rotor as phys
+from compare.physics.rotation import (
+    cross_t,
+    mat_tvec_t,
+    quat_matrix_t,
+    quat_times_vector,
+    quat_times_vector_t,
+)
 
 from ..integrators import FAIL_REASONS, FIXED_TABLEAUS
 from ..integrators.dense import DENSE_TABLEAUS, solve
-from ..rotation import cross_t, mat_tvec_t, quat_matrix_t, quat_times_vector, quat_times_vector_t
 
 INTEGRATORS = tuple(DENSE_TABLEAUS) + tuple(FIXED_TABLEAUS)
 ADAPTIVE = tuple(DENSE_TABLEAUS)

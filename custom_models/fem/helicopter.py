@@ -16,8 +16,8 @@ import numpy as np
 
 from compare.contract import LeafModes, merge_settings
 from compare.physics.mstmm import helicopter_layout
+from compare.physics.rotation import skew
 
-from ..rotation import skew
 from .beam import bending
 
 MODES_SETTINGS = {"blade_elements": 12, "shaft_elements": 2, "tail_elements": 6,

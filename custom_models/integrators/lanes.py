@@ -9,7 +9,7 @@ the scalar driver's (tests/test_map_batch.py). What the lanes share is the loop 
 stage sums, the right-hand side `f(T, Z)` and the per-row reduce `row(Z)` loop over the lanes
 innermost, which LLVM vectorises (the rotor's quaternion right-hand side: 23–37 ns a lane
 against 57–71 ns scalar, measured in the same process, twice; 19 ns once its atan2 was
-`custom_models.trig`'s rather than libm's).
+`compare.physics.trig`'s rather than libm's).
 
 A lane whose point is done (or failed) takes the next point at once, so no lane waits for the
 slowest. Outputs: per point the failure code and time (as the scalar driver's) and the row

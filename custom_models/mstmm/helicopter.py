@@ -53,8 +53,8 @@ import numpy as np
 
 from compare.contract import LeafModes, merge_settings
 from compare.physics.mstmm import helicopter_layout
+from compare.physics.rotation import skew
 
-from ..rotation import skew
 from . import elements as el
 from .roots import SEARCH_RTOL, find_roots, root_error_hz
 

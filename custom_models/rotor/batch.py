@@ -23,6 +23,9 @@ import numba as nb
 import numpy as np
 from numba import types as nt
 
+from compare.physics.rotation import mat_tvec_t, mat_vec_t
+from compare.physics.trig import atan2
+
 from ..integrators import FIXED_TABLEAUS
 from ..integrators.dense import (
     DENSE_TABLEAUS,
@@ -33,8 +36,6 @@ from ..integrators.dense import (
 )
 from ..integrators.explicit import _MAT, _VEC, GUARD
 from ..integrators.lanes import LANES, RHS_LANES, ROW_LANES, integrate_dop853_lanes, nine
-from ..rotation import mat_tvec_t, mat_vec_t
-from ..trig import atan2
 from .model import I0, I0INV, K_, M_, RC0, G, check_settings, pack_many
 
 # kinematics(Y, p, O): each row of O = rotation body → fixed (9, row-major), fixed-frame ω (3),

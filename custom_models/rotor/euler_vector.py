@@ -12,8 +12,7 @@ which `rotor.tilt_guard_z` reports.
 import numba as nb
 import numpy as np
 
-from ..integrators.lanes import LANES, nine
-from ..rotation import (
+from compare.physics.rotation import (
     all_finite,
     cross_t,
     mat_tvec_t,
@@ -23,7 +22,9 @@ from ..rotation import (
     rotation_zhilin_inverse_t,
     transverse_vector,
 )
-from ..trig import sincos
+from compare.physics.trig import sincos
+
+from ..integrators.lanes import LANES, nine
 from . import batch
 from . import model as rotor
 from .model import (  # noqa: F401  (re-exported: the leaf's settings)

@@ -16,10 +16,10 @@ import numpy as np
 
 from compare.contract import LeafResult, merge_settings
 from compare.physics import rotor as physics
+from compare.physics.rotation import matrices_to_quats, rotation_tensor
 
 from ..integrators import FAIL_REASONS, FIXED_TABLEAUS
 from ..integrators.dense import DENSE_TABLEAUS, solve
-from ..rotation import matrices_to_quats, rotation_tensor
 
 INTEGRATORS = tuple(DENSE_TABLEAUS) + tuple(FIXED_TABLEAUS)
 ADAPTIVE = tuple(DENSE_TABLEAUS)          # integrators that take rtol

@@ -11,8 +11,7 @@ The right-hand side is fused scalar code writing into `dy` (no allocation per ev
 import numba as nb
 import numpy as np
 
-from ..integrators.lanes import LANES, nine
-from ..rotation import (
+from compare.physics.rotation import (
     cross_t,
     mat_tvec_t,
     mat_vec_t,
@@ -21,6 +20,8 @@ from ..rotation import (
     quats_to_matrices,
     transverse_t,
 )
+
+from ..integrators.lanes import LANES, nine
 from . import batch
 from . import model as rotor
 from .model import (  # noqa: F401  (re-exported: the leaf's settings)

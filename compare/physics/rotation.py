@@ -1,4 +1,4 @@
-"""Rotation math shared by every custom model (numba-compiled, plain arrays).
+"""Rotation math shared by the models of every solver (numba-compiled, plain arrays).
 
 Euler-vector tensors follow the paper (seed 000) and Zhilin's notation:
     L(θ) = E cos θ + (1 − cos θ) θ⊗θ/θ² + (sin θ/θ) θ×E        rotation tensor
@@ -74,16 +74,6 @@ def zhilin_inverse(theta):
 def rotation_z(phi):
     s, c = sincos(phi)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-@nb.njit(cache=True)
-def quat_to_matrix(q):
-    """Rotation matrix of a (not necessarily unit) quaternion, normalised on the fly."""
-    w, x, y, z = q / np.sqrt(q @ q)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
 @nb.njit(cache=True)

@@ -1,0 +1,21 @@
+"""Exudyn reference model of the spin-up rotor (scenes `rotor-spinup` and `rotor-whirl`).
+
+The rotor (massless shaft of length l on a spherical joint at O, eccentric disk at its end) is an
+`ObjectKinematicTree` gimbal in a Cardan chart, loaded by the scene's cone spring −kγ and a drive
+torque fixed in space through compiled user functions. One module per capability:
+
+- `settings`: integrators, DEFAULT_SETTINGS, check_settings;
+- `chart`: the Cardan charts (R and ω from the coordinates and back, the change of chart);
+- `kernels`: the compiled loads and work rates (and why they are compiled);
+- `model`: the engine model, built from the resolved parameters (`build`), and the solver calls;
+- `time`: `simulate`; `batch`: `regimes` (the map's batch path, rotors as branches of one tree);
+- `modes`: `modes`, `whirl_sweep` (the linearised whirl); `response`: `unbalance_response`.
+"""
+from .batch import regimes
+from .modes import modes, whirl_sweep
+from .response import unbalance_response
+from .settings import ADAPTIVE, CHEAP_DT, DEFAULT_SETTINGS, INTEGRATORS, check_settings
+from .time import simulate
+
+__all__ = ["ADAPTIVE", "CHEAP_DT", "DEFAULT_SETTINGS", "INTEGRATORS",
+           "check_settings", "modes", "regimes", "simulate", "unbalance_response", "whirl_sweep"]

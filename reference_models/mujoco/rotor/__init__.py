@@ -1,0 +1,21 @@
+"""MuJoCo reference model of the spin-up rotor (scenes `rotor-spinup` and `rotor-whirl`).
+
+A disk on a massless shaft on a ball joint; the scene's cone spring −kγ (MuJoCo has none that
+leaves the spin free) is a passive-force callback, by default a numba cfunc. One module per
+capability:
+
+- `settings`: integrators, DEFAULT_SETTINGS, check_settings;
+- `kernel`: the spring and damper moments; `callback`: the passive callback that applies them
+  (native or Python) and its installation;
+- `model`: the MjModel compiled from the resolved parameters and the data of one point;
+- `time`: `simulate`; `batch`: `regimes` (the map's batch path, one rollout for many points);
+- `modes`: `modes`, `whirl_sweep` (the linearised whirl); `response`: `unbalance_response`.
+"""
+from .batch import regimes
+from .modes import modes, whirl_sweep
+from .response import unbalance_response
+from .settings import CHEAP_DT, DEFAULT_SETTINGS, INTEGRATORS, check_settings
+from .time import simulate
+
+__all__ = ["CHEAP_DT", "DEFAULT_SETTINGS", "INTEGRATORS", "check_settings", "modes", "regimes",
+           "simulate", "unbalance_response", "whirl_sweep"]

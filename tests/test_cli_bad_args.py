@@ -96,9 +96,9 @@ def test_level_without_an_observable_is_refused(tmp_path):
 @pytest.mark.parametrize("command", ["map", "campaign"])
 def test_more_workers_than_cores_is_one_warning_line_and_goes_on(command, monkeypatch, capsys,
                                                                   tmp_path):
+    import importlib
     import os
 
-    from compare import api
     from compare.cli import main
     cores = len(os.sched_getaffinity(0))
 
@@ -107,7 +107,7 @@ def test_more_workers_than_cores_is_one_warning_line_and_goes_on(command, monkey
 
     def started(*a, workers=None, **kw):       # the study starts, with the workers asked for
         raise Ran(workers)
-    monkeypatch.setattr(api, command, started)
+    monkeypatch.setattr(importlib.import_module(f"compare.commands.{command}"), command, started)
     argv = [command] + (["rotor-spinup", "--x", "torque=1:5"] if command == "map" else [])
     for n, warned in ((cores, False), (cores + 1, True)):
         with pytest.raises(Ran) as ran:

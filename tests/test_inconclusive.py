@@ -41,6 +41,24 @@ def test_the_fraction_is_of_the_scale():
     assert below.verdict == "agree" and above.verdict == "inconclusive"
 
 
+def test_an_energy_balance_is_judged_against_the_energy_it_balances():
+    """A residual at round-off (3e-10 J) with an error bar of 3e-9 J is sharp against the 5 J
+    it balances (6e-10 of it), not inconclusive for being 10 × its own size."""
+    from types import SimpleNamespace
+
+    from compare.scenes.base import TimeScene
+    runs = [Trajectory("synthetic", s, T, {"energy_balance": np.full_like(T, v),
+                                            "energy": np.full_like(T, 5.0)},
+                       errors={"energy_balance": np.full_like(T, 3e-9)})
+            for s, v in (("a", 3e-10), ("b", -3e-10))]
+    scene = SimpleNamespace(energy_channel="energy_balance", energy_scale_channels=("energy",))
+    scales = TimeScene.power_scales(scene, runs)
+    assert scales == {"energy_balance": 5.0}
+    judged = deviation(*runs, "energy_balance", 1e-9, scales["energy_balance"])
+    alone = deviation(*runs, "energy_balance", 1e-9)
+    assert judged.verdict == "agree" and alone.verdict == "inconclusive", alone.decided_by
+
+
 def test_a_frequency_with_a_wide_error_bar_is_inconclusive():
     tol = {"frequency": 1e-6}
     a = Modes("s", "a", np.array([10.0, 20.0]), ["m1", "m2"],

@@ -26,8 +26,8 @@ LAYERS = (("shared", ("compare.contract", "compare.errors", "compare.atomic", "c
           ("output", ("compare.output",)),
           ("results", ("compare.results",)),
           ("orchestration", ("compare.workflows",)),
-          ("front door", ("compare.cli", "compare.api", "compare.pytest_plugin",
-                          "compare.__main__", "xval")))
+          ("front door", ("compare.commands", "compare.cli", "compare.api",
+                          "compare.pytest_plugin", "compare.__main__", "xval")))
 
 
 def imports(path):

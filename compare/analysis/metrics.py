@@ -86,13 +86,15 @@ def ratio_text(r: float) -> str:
 
 
 def deviation(a: Trajectory, b: Trajectory, channel: str,
-              allowance: float | tuple) -> Comparison:
+              allowance: float | tuple, power_scale: float | None = None) -> Comparison:
     """Deviation of two trajectories on their common output grid, with the verdict.
 
     `allowance`: relative to the channel's scale, ("abs", bound) in SI units, or
     ("rel+abs", rel, floor): rel · scale + floor (a channel that stays near zero, like the
     tilt of an upright rotor, needs an absolute floor). The solvers' own errors come from
-    `Trajectory.errors` where estimated."""
+    `Trajectory.errors` where estimated. `power_scale`: what an error bar is too wide against
+    (`too_wide`) where the channel's own values are not — a residual that stays at zero, as an
+    energy balance, is judged against the energy it balances; default the channel's scale."""
     if a.status != "ok" or b.status != "ok":
         why = ", ".join(f"{t.solver} {t.status}" for t in (a, b) if t.status != "ok")
         tol = allowance if not isinstance(allowance, tuple) else allowance[1]
@@ -113,7 +115,7 @@ def deviation(a: Trajectory, b: Trajectory, channel: str,
     unit = getattr(channel, "unit", "")
     verdict, wide = judged(max_abs, bound, {a.solver: float(np.nanmax(ea)),
                                             b.solver: float(np.nanmax(eb))} if both else None,
-                           allow, scale, f" {unit}" if unit else "")
+                           allow, max(scale, power_scale or 0.0), f" {unit}" if unit else "")
     why = (f"max|Δ| = {max_abs:.2e} (at t = {a.t[np.argmax(d)]:.4g} s) "
            f"{'>' if verdict == Verdict.DISAGREE else '≤'} "
            + (f"error estimates {err:.1e} + allowance {allow:.1e}" if err is not None
@@ -151,10 +153,13 @@ def allowance_channels(tolerances: dict) -> list[str]:
                                  "wider"))]
 
 
-def pairwise(trajectories: list[Trajectory], tolerances: dict) -> list[Comparison]:
+def pairwise(trajectories: list[Trajectory], tolerances: dict,
+             power_scales: dict | None = None) -> list[Comparison]:
     """Every pair on every channel of `tolerances` (channel -> allowance; `allowance` reads
-    the pair's own from "by_pair" / "by_solver")."""
-    return [deviation(a, b, ch, allowance(tolerances, a.solver, b.solver, ch))
+    the pair's own from "by_pair" / "by_solver"); `power_scales`: channel -> `deviation`'s
+    power_scale."""
+    return [deviation(a, b, ch, allowance(tolerances, a.solver, b.solver, ch),
+                      (power_scales or {}).get(ch))
             for i, a in enumerate(trajectories) for b in trajectories[i + 1:]
             for ch in allowance_channels(tolerances)]
 

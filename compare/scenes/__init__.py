@@ -14,6 +14,7 @@ import sys
 from ..errors import BadInput
 from . import bearing, mstmm, press, rotor, sail
 from .base import (  # noqa: F401  (the scene types, for plug-ins)
+    Calibration,
     Campbell,
     Extreme,
     Finding,

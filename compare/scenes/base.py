@@ -245,6 +245,24 @@ class Linearisation:
 
 
 @dataclass(frozen=True)
+class Calibration:
+    """Where `xval calibrate` draws parameter sets (compare/workflows/calibrate.py). By default
+    each float physical parameter with a non-zero default, log-uniformly in [default/2,
+    2·default] within its admissible range, a time scene's horizon a tenth of its default;
+    `region` (name -> (lo, hi)) adds or replaces axes, drawn log-uniformly where named in `log`
+    (else uniformly); `fixed` (name -> value) holds names out of the region (a short horizon);
+    `outside` (solver, "*" any -> why): where in the region that solver leaves its domain and
+    stops (a set it stops at is skipped with this reason, never counted as agreement);
+    `truth` (solver -> another): whose run is that solver's true answer where it has no
+    tighter discretisation of its own (a closed form of the same model)."""
+    region: dict = field(default_factory=dict)
+    fixed: dict = field(default_factory=dict)
+    log: tuple = ()
+    outside: dict = field(default_factory=dict)
+    truth: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
 class Scene:
     name: str
     title: str
@@ -327,6 +345,8 @@ class Scene:
     # parameters held at fixed values (name -> value: its leaves get them, `--set` refuses them)
     linearisation: "Linearisation | None" = None
     held: dict = field(default_factory=dict)
+    # `xval calibrate`'s sampling region (None: the default region, `Calibration`)
+    calibration: Calibration | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "channels", tuple(
@@ -390,6 +410,15 @@ class Scene:
         """The first allowance case that holds at `params` (None: the scene's own)."""
         return next((c for c in self.allowance_cases if c.when(params)), None)
 
+    def power_scales(self, runs) -> dict:
+        """The energy balance, a residual that stays near zero, weighed against the energy it
+        balances (the largest |value| of `energy_scale_channels` over the runs) when an error
+        bar's width is judged (`metrics.too_wide`)."""
+        ch, of = self.energy_channel, self.energy_scale_channels
+        values = [np.nanmax(np.abs(r.channels[c])) for r in runs if r.status == "ok"
+                  for c in of if c in r.channels]
+        return {ch: float(max(values))} if ch and values else {}
+
     def tolerances_for(self, params):
         """The allowances a run at `params` is judged by: the first allowance case that holds,
         else the scene's, with every entry that is a function of the parameters evaluated at
@@ -404,7 +433,7 @@ class Scene:
         damping ratios too where the scene has an allowance for them ("damping")."""
         tol = self.tolerances_for(params)
         if not self.is_modes:
-            return pairwise(runs, tol)
+            return pairwise(runs, tol, self.power_scales(runs))
         return frequency_comparisons(runs, tol) + (damping_comparisons(runs, tol)
                                                     if "damping" in tol else [])
 
@@ -430,7 +459,7 @@ class Scene:
             "tolerances": lin.tolerances, "allowance_cases": (), "identify": lin.identify,
             "energy_channel": None, "findings": None, "draw_3d": None, "plots": None,
             "campaign_cases": (), "extremes": (), "regime": None, "map_observables": {},
-            "maps": ()})
+            "maps": (), "calibration": None})
 
     def output_steps(self, params):
         """The output grid's number of steps; BadInput unless output_dt divides t_end."""

@@ -7,6 +7,7 @@ from ..contract import Channel
 from ..physics.rotation import quats_to_matrices
 from ..physics.rotor import constants, instability_speed, unbalance_response, whirl_damped
 from .base import (
+    Calibration,
     Campbell,
     Extreme,
     Finding,
@@ -402,4 +403,11 @@ WHIRL = ModesScene(
     # solver's largest Re λ crosses zero — the internal-damping threshold located by a map
     map_observables={"growth_rate": (lambda p, m: m.extra.get("max_re_per_s"), "1/s",
                                      "largest real part of the eigenvalues (> 0: a root grows)")},
+    # the spin over the Campbell sweep (gyroscopic split) and both dampers (ζ up to ~0.05; roots
+    # grow above the internal-damping threshold); at eccentricity 0 (held) the closed form is
+    # exact, the truth of the three that linearise
+    calibration=Calibration(region={"spin": (0.0, 150.0), "c_ext": (0.0, 5.0),
+                                    "c_int": (0.0, 5.0)},
+                            truth=dict.fromkeys(("euler-vector", "exudyn", "mujoco"),
+                                                "closed-form")),
 )

@@ -82,6 +82,12 @@ def point(scene: Scene, solver: solvers.Solver, params: dict, warm_up: bool = Fa
     if tr.status != "ok" or not tr.errors:
         return {"status": tr.status if tr.status != "ok" else tr.stats.get("error_estimate_by")}
     ref = ref or reference_run(scene, solver, params, dt=tr.settings.get("dt"))
+    return bars(scene, tr, ref)
+
+
+def bars(scene: Scene, tr, ref) -> dict:
+    """A run's error bars against its reference `ref` (as `point`): per channel the estimate
+    and the true error, or a status saying why there is no truth."""
     if ref is None:
         return {"status": "no accuracy knob for a reference"}
     if ref.status != "ok":

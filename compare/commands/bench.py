@@ -1,0 +1,90 @@
+"""`xval bench`: speed against accuracy — the work-precision sweep, or a map's throughput."""
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+from ..errors import BadInput
+from ..output.folders import check_out, make_out
+from ..results import BenchResult
+from ..workflows.inputs import positive, positive_int
+from ..workflows.plan import names
+from . import Command, arg
+from .common import (
+    BUDGET,
+    OUT,
+    STUDY,
+    answer,
+    log,
+    out_or_temporary,
+    overrides,
+    parse_sets,
+    quiet,
+    removed_on_error,
+    stdout_to_stderr,
+)
+from .common import positive_int as positive_int_arg
+
+
+def bench(scene: str, solvers=None, *, repeats: int = 3, vary=None, out=None,
+          max_output_gib=None, max_steps=None, params: dict | None = None,
+          log: Callable | None = None, points: int | None = None, **kw) -> BenchResult:
+    """Work-precision sweep (`xval bench`): each solver along its accuracy knob, error of the
+    key channel against a tight reference, median wall time of `repeats` runs. `vary`: trade a
+    model parameter instead, as `"stiffness=1e5,1e6"` or `{"stiffness": [1e5, 1e6]}`.
+    `points=N`: throughput instead — each solver's points per second over N points of the
+    scene's first default map."""
+    from ..workflows.bench import run_bench, run_throughput
+    positive_int("--repeats", repeats)
+    if points is not None:              # throughput: points per second over the default map
+        positive_int("--points", points)
+        out, temporary = out_or_temporary(out)
+        with removed_on_error(temporary):
+            obj = run_throughput(scene, names(solvers), overrides(params, kw), out, points,
+                                 log=log or quiet, make_out=make_out)
+        return BenchResult(obj, Path(obj["report"]).parent, temporary)
+    max_output_gib, max_steps = (positive("--max-output-gib", max_output_gib),
+                                 positive("--max-steps", max_steps))
+    if isinstance(vary, dict):
+        if len(vary) != 1:
+            raise BadInput(f"--vary: one parameter, got {len(vary)}")
+        (name, values), = vary.items()
+        vary = f"{name}={','.join(repr(v) for v in values)}"
+    over = overrides(params, kw)
+    out, temporary = out_or_temporary(out)
+    with removed_on_error(temporary):
+        obj = run_bench(scene, names(solvers), over, out, repeats=repeats, log=log or quiet,
+                        vary=vary, max_output_gib=max_output_gib, max_steps=max_steps,
+                        make_out=make_out)
+    return BenchResult(obj, Path(obj["report"]).parent, temporary)
+
+
+def main(args) -> int:
+    check_out(args.out)
+    with stdout_to_stderr():
+        r = bench(args.scene, args.solver, repeats=args.repeats, vary=args.vary, out=args.out,
+                  max_output_gib=args.max_output_gib, max_steps=args.max_steps,
+                  params=parse_sets(args.set), log=log, points=args.points)
+    answer(args, r)
+    return 0
+
+
+COMMAND = Command(
+    "bench", order=7, main=main, api=bench, result=BenchResult, docs="bench.md",
+    help="speed/accuracy (work-precision) sweep",
+    description="Work-precision: each solver along its accuracy knob (step or tolerance; "
+                "frequency scenes: mesh, segments or root tolerance), error of the key "
+                "channel's final value (frequency scenes: the largest relative frequency "
+                "error, and the paper's computing times against each solver's defaults) "
+                "against a tight reference, median wall time.",
+    args=(*STUDY,
+          arg("--repeats", type=positive_int_arg("--repeats"), default=3, metavar="N",
+              help="timed runs per rung; the median counts (default 3)"),
+          arg("--points", type=positive_int_arg("--points"), metavar="N",
+              help="throughput instead: each solver's points per second over N points of the "
+                   "scene's default map (the map's batch path)"),
+          arg("--vary", metavar="NAME=V1,V2,...",
+              help="trade a model parameter instead of the step: each solver's default "
+                   "settings at each value, errors against the reference at the --set value "
+                   "(e.g. --vary stiffness=1e5,1e6)"),
+          OUT, *BUDGET))

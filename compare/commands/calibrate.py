@@ -1,0 +1,57 @@
+"""`xval calibrate`: the verdicts' false-alarm rate and the error bars' coverage over parameter
+sets drawn from the scene's sampling region."""
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from ..results import CalibrationResult
+from ..workflows.inputs import positive_int
+from ..workflows.plan import names
+from . import Command, arg
+from .common import (
+    JSON,
+    SCENE,
+    SOLVERS,
+    STRICT,
+    answer,
+    log,
+    quiet,
+    stdout_to_stderr,
+    strict_exit,
+)
+from .common import positive_int as positive_int_arg
+
+
+def calibrate(scene: str, samples: int = 20, seed: int = 0, solvers=None,
+              log: Callable | None = None) -> CalibrationResult:
+    """Calibration (`xval calibrate`): `samples` parameter sets drawn with `seed` from the
+    scene's sampling region (`Calibration`), every solver (or those named) run at each with
+    its error estimate. Returns a `CalibrationResult` (`s["disagree"]`, `s["coverage"]`,
+    `s["sharpness"]`, `s["widest_window"]`, `s["skipped"]`); writes no file."""
+    from ..workflows.calibrate import calibrate as run_calibration
+    return run_calibration(scene, positive_int("samples", samples), seed=int(seed),
+                           solvers=names(solvers), log=log or quiet)
+
+
+def main(args) -> int:
+    with stdout_to_stderr():
+        r = calibrate(args.scene, args.samples, args.seed, args.solver, log=log)
+    answer(args, r)
+    return strict_exit(args, r.problems())
+
+
+COMMAND = Command(
+    "calibrate", order=10, main=main, api=calibrate, result=CalibrationResult,
+    docs="calibrate.md",
+    help="false alarms and error-bar coverage over parameter sets drawn from the scene's "
+         "sampling region",
+    description="Draw parameter sets from the scene's sampling region, run every solver with "
+                "its error estimate at each, and report the comparisons that disagree (none "
+                "expected), the error bars' coverage and sharpness against each solver's far "
+                "tighter run, the widest window (bound / deviation) and the solvers that "
+                "stopped.",
+    args=(SCENE, SOLVERS,
+          arg("--samples", type=positive_int_arg("--samples"), default=20, metavar="N",
+              help="parameter sets to draw (default 20)"),
+          arg("--seed", type=int, default=0, metavar="S", help="random seed (default 0)"),
+          JSON, STRICT))

@@ -1,0 +1,204 @@
+"""What the commands share: the arguments most of them take, the command line's output
+conventions (JSON on stdout, logs and engine chatter on stderr, --strict's one line), and the
+Python API's argument checks (scene parameters, the output folder)."""
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import math
+import os
+import shutil
+import sys
+
+from ..atomic import clean_json
+from ..errors import BadInput
+from ..output.folders import check_out, temporary_folder
+from . import arg
+
+# --- arguments --------------------------------------------------------------------------------
+
+STRICT_HELP = ("exit 1 on any disagree, inconclusive (one solver's error bar too wide to "
+               "tell), incomplete (a solver failed or gave no answer), unconfirmed or FAILED "
+               "verdict")
+OUT_HELP = "output folder, made if missing (default: logs)"
+
+
+def positive(name):
+    """argparse type: a positive finite number."""
+    def conv(text):
+        try:
+            v = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a number, got {text!r}") from None
+        if not (math.isfinite(v) and v > 0):
+            raise argparse.ArgumentTypeError(f"{name} must be a positive number, got {text!r}")
+        return v
+    return conv
+
+
+def positive_int(name):
+    """argparse type: a whole number ≥ 1."""
+    def conv(text):
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a whole number, got {text!r}") \
+                from None
+        if v < 1:
+            raise argparse.ArgumentTypeError(f"{name} must be at least 1, got {text!r}")
+        return v
+    return conv
+
+
+SCENE = arg("scene", help="scene name (see `xval list`)")
+SOLVERS = arg("--solver", action="append", default=[], metavar="NAME",
+              help="run this solver; repeat for several (default: every solver of the scene)")
+SETS = arg("--set", action="append", default=[], metavar="NAME=VALUE",
+           help="override a scene parameter (repeatable; `xval show SCENE` lists them), e.g. "
+                "--set torque=3.2")
+JSON = arg("--json", action="store_true",
+           help="print one JSON object on standard output (logs go to standard error)")
+# a scene, its solvers and parameters, JSON: what every study of one scene takes
+STUDY = (SCENE, SOLVERS, SETS, JSON)
+OUT = arg("--out", default="logs", metavar="DIR", help=OUT_HELP)
+STRICT = arg("--strict", action="store_true", help=STRICT_HELP)
+TIMEOUT = arg("--timeout", type=positive("--timeout"), metavar="S",
+              help="wall-clock limit per solver run: status timeout")
+NO_RECORD = arg("--no-record", action="store_true", help="skip the .rrd recording")
+BUDGET = (arg("--max-output-gib", type=positive("--max-output-gib"), metavar="GIB",
+              help="refuse to start when the output (samples × channels × solvers × 8 bytes) "
+                   "would exceed GIB (default 2)"),
+          arg("--max-steps", type=positive("--max-steps"), metavar="N",
+              help="refuse to start a fixed-step run of more than N steps (t_end / dt; "
+                   "default 1e9)"))
+
+
+def executor_args(what: str) -> tuple:
+    return (arg("--executor", choices=("local", "dask"), default="local",
+                help="local process pool (default) or Dask distributed"),
+            arg("--scheduler", metavar="ADDR",
+                help="address of a running Dask scheduler, e.g. tcp://host:8786 (with "
+                     "--executor dask; default: a LocalCluster on this machine)"),
+            arg("--workers", type=positive_int("--workers"), default=None, metavar="N",
+                help=f"parallel {what} (default 2)"))
+
+
+# --- the command line's output ----------------------------------------------------------------
+
+def log(msg):
+    print(msg, file=sys.stderr, flush=True)
+
+
+@contextlib.contextmanager
+def stdout_to_stderr():
+    """Engines print to stdout (MuJoCo warnings, Exudyn banners); keep stdout for our output."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    os.dup2(2, 1)
+    try:
+        yield
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+def emit_json(obj):
+    print(json.dumps(clean_json(obj)), flush=True)
+
+
+def answer(args, result, as_json=None) -> None:
+    """A study's answer: its JSON (`as_json`, default `result.as_json()`) with --json, else its
+    text."""
+    if args.json:
+        emit_json(result.as_json() if as_json is None else as_json)
+    else:
+        print(result)
+
+
+def parse_sets(items) -> dict:
+    out = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise BadInput(f"--set {item!r}: expected NAME=VALUE")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def strict_exit(args, problems: list[str]) -> int:
+    """--strict: 1 with one line on stderr naming what failed, else 0 (as `xval diff`)."""
+    if getattr(args, "strict", False) and problems:
+        more = f" (+{len(problems) - 3} more)" if len(problems) > 3 else ""
+        print(f"xval: --strict: {'; '.join(problems[:3])}{more}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def warn_workers(args):
+    """--workers above the cores this process may use: one line, then carry on (the jobs
+    share the cores: no faster, more memory)."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    if args.workers and not args.scheduler and cores and args.workers > cores:
+        print(f"xval: warning: --workers {args.workers} is more than the {cores} cores here: "
+              f"the jobs share them (no faster, more memory)", file=sys.stderr)
+
+
+# --- the Python API's checks ------------------------------------------------------------------
+
+def overrides(params: dict | None, kw: dict) -> dict:
+    """Scene parameters from `params={...}` and keywords (either, not the same name twice);
+    values as the scene reads them from `--set` or a campaign file (numbers, strings, lists
+    for vectors)."""
+    twice = sorted(set(params or {}) & set(kw))
+    if twice:
+        raise BadInput(f"{twice[0]}: given twice (params= and a keyword)")
+    return {**(params or {}), **kw}
+
+
+def quiet(msg):
+    pass
+
+
+@contextlib.contextmanager
+def removed_on_error(temporary):
+    """A temporary folder does not outlive a call that fails."""
+    try:
+        yield
+    except BaseException:
+        if temporary:
+            shutil.rmtree(temporary, ignore_errors=True)
+        raise
+
+
+def out_or_temporary(out):
+    """(folder, temporary folder or None): `out` checked, or a fresh temporary folder."""
+    if out is None:
+        tmp = temporary_folder()
+        return tmp, tmp
+    check_out(str(out))
+    return str(out), None
+
+
+def compared_answer(args, result) -> int:
+    """Print a run or modes result (each solver's status and final values, each comparison, the
+    summary, the files); its exit status: 3 where a solver crashed, --strict's rule else."""
+    obj = result.as_json()
+    if args.json:
+        emit_json(obj)
+    else:
+        for r in obj["runs"]:
+            print(f"{r['solver']:14s} {r['status']:8s} wall {r['wall_s']:.3g} s  "
+                  + "  ".join(f"{k}={v:.6g}" for k, v in (r.get("final") or {}).items()
+                              if v is not None))
+        for c in result.comparisons:
+            print(f"{c.a} vs {c.b} {c.channel}: max rel {c.max_rel:.2e} → {c.verdict}")
+        if obj.get("summary"):             # a modes run: incomplete, unpaired, unconfirmed
+            print(obj["summary"])
+        for k in ("recording", "report"):
+            if obj.get(k):
+                print(f"{k}: {obj[k]}")
+    if any(run.status == "error" for run in result.runs.values()):
+        return 3
+    return strict_exit(args, result.problems())

@@ -1,0 +1,282 @@
+"""Calibration as a study (`xval.calibrate`): N admissible parameter sets drawn from the region
+the scene declares (`Calibration`), every solver run at each with its error estimate, and two
+questions answered over all of them. Do the verdicts hold — no pair disagrees, and how wide is
+the widest window (bound / deviation) a comparison leaves? Do the error bars bound the error —
+coverage: the fraction of (set, solver, channel or mode) whose true error (against the
+solver's own far tighter run, coverage.py's; a frequency scene's: its mesh ×2 (MESH_FAR) and
+its root tolerance /1000, or the run of the solver the scene names as its truth) is within its
+estimate; sharpness: the median true/estimate. A solver that stops at a set is skipped there
+with its status and reason, never compared; where the scene's `outside` declares that stop (a
+singular chart), the set is outside the region and nothing there is compared or counted.
+
+The sets are drawn on [0, 1]^axes (numpy's Generator, or a hypothesis strategy: `strategy`),
+mapped to each axis (log-uniform or uniform) and kept where `Scene.resolve` admits them.
+Writes no file: the Result is held in memory."""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import solvers as adapter
+from ..analysis.metrics import frequency_errors, match_modes
+from ..analysis.verdict import Verdict
+from ..errors import BadInput
+from ..results.calibrate import CalibrationResult
+from ..scenes import Calibration, Scene, get_scene
+from ..scenes.params import RUN_PARAMS
+from .coverage import FAR_RTOL, bars, reference_run
+
+SPREAD = 2.0        # the default region: default/SPREAD … default·SPREAD
+HORIZON = 0.1       # a time scene's default horizon: this fraction of its default t_end
+# a frequency leaf's truth: its mesh (ints named *elements/*segments) ×2, not finer: fem's
+# Hermite beam is at its round-off floor past that (stiffness conditioning ∝ N⁴: rotating-beam's
+# third mode moves 3e-6 Hz at ×4 and 1.4e-4 Hz at ×8, above the default's own error)
+MESH_FAR = 2
+MESH_SUFFIXES = ("elements", "segments")
+FLOOR = 1e3         # a deviation below FLOOR·eps·scale is round-off: it opens no window
+TRIES = 100         # draws per admissible set before the region is called inadmissible
+EPS = np.finfo(float).eps
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One drawn parameter: u in [0, 1] ↦ a value in [lo, hi], log-uniform (lo, hi of one
+    sign) or uniform."""
+    name: str
+    lo: float
+    hi: float
+    log: bool
+
+    def at(self, u: float) -> float:
+        if not self.log:
+            return float(self.lo + u * (self.hi - self.lo))
+        a, b = np.log(abs(self.lo)), np.log(abs(self.hi))
+        return float(np.sign(self.lo) * np.exp(a + u * (b - a)))
+
+
+def region(scene: Scene) -> tuple[list[Axis], dict]:
+    """The scene's sampling region: (axes, fixed values), `Calibration`'s rules."""
+    cal = scene.calibration or Calibration()
+    axes = {}
+    for p in scene.params:
+        if p.is_float and p.physical and p.name not in RUN_PARAMS and p.default \
+                and p.name not in cal.fixed:
+            lo, hi = sorted((p.default / SPREAD, p.default * SPREAD))
+            lo = max(lo, np.nextafter(p.lo, np.inf) if p.open_lo else p.lo)
+            axes[p.name] = Axis(p.name, lo, min(hi, p.hi), True)
+    for name, (lo, hi) in cal.region.items():
+        scene.param(name)
+        log = name in cal.log
+        if log and not lo * hi > 0:
+            raise BadInput(f"{scene.name}: calibration axis {name} is log-uniform over "
+                           f"[{lo:g}, {hi:g}], which spans zero")
+        axes[name] = Axis(name, float(lo), float(hi), log)
+    fixed = dict(cal.fixed)
+    if scene.is_time and "t_end" not in fixed:
+        dt = fixed.get("output_dt", scene.param("output_dt").default)
+        steps = max(1, round(HORIZON * scene.param("t_end").default / dt))
+        fixed["t_end"] = steps * dt
+    return list(axes.values()), fixed
+
+
+def overrides(axes: list[Axis], fixed: dict, us) -> dict:
+    """The parameter overrides at the point `us` of [0, 1]^axes."""
+    return {**fixed, **{a.name: a.at(u) for a, u in zip(axes, us)}}
+
+
+def admissible(scene: Scene, over: dict) -> dict | None:
+    """The resolved parameters, or None where the scene refuses them (a loop that cannot
+    close)."""
+    try:
+        return scene.resolve(over)
+    except BadInput:
+        return None
+
+
+def sample(scene: Scene, n: int, seed: int = 0) -> list[tuple[dict, dict]]:
+    """`n` admissible (overrides, resolved parameters) drawn from the scene's region."""
+    axes, fixed = region(scene)
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(TRIES * n):
+        if len(out) == n:
+            return out
+        over = overrides(axes, fixed, rng.random(len(axes)))
+        params = admissible(scene, over)
+        if params is not None:
+            out.append((over, params))
+    raise BadInput(f"{scene.name}: fewer than 1 in {TRIES} draws of its calibration region is "
+                   f"admissible ({len(out)} of {n} sets found)")
+
+
+def strategy(scene: Scene):
+    """A hypothesis strategy of admissible overrides from the scene's region (the same map
+    from [0, 1]^axes as `sample`)."""
+    from hypothesis import strategies as st
+    axes, fixed = region(scene)
+    unit = st.floats(0.0, 1.0, allow_nan=False)
+    return (st.tuples(*[unit] * len(axes)).map(lambda us: overrides(axes, fixed, us))
+            .filter(lambda over: admissible(scene, over) is not None))
+
+
+def modes_far_tighter(info, preset: dict) -> dict | None:
+    """A frequency leaf's truth settings: its mesh ×MESH_FAR, its root tolerance ×FAR_RTOL
+    (not below 1e-14); None where it has neither (a finite-difference step is no monotone
+    accuracy knob, nor a root search's grid step)."""
+    base = {**info.modes_defaults, **preset}
+    out = dict(base)
+    for k, v in base.items():
+        if k.endswith(MESH_SUFFIXES) and isinstance(v, int) and not isinstance(v, bool):
+            out[k] = v * MESH_FAR
+        elif k == "rtol" and isinstance(v, float):
+            out[k] = max(v * FAR_RTOL, 1e-14)
+    return None if out == base else out
+
+
+def mode_bars(m, ref) -> dict:
+    """Per mode of run `m`: its estimate (plus what the truth `ref` knows of itself) and its
+    true error |f − f_ref|, modes paired as bench_modes pairs them; or a status saying why
+    there is none."""
+    if ref is None:
+        return {"status": "no tighter discretisation of its own and no declared truth"}
+    if ref.status != "ok":
+        return {"status": f"truth {ref.status}"}
+    est, known = frequency_errors(m), frequency_errors(ref)
+    if est is None:
+        return {"status": "no frequency error estimate"}
+    known = np.zeros(len(ref.frequencies_hz)) if known is None else known
+    fr, fm = list(ref.frequencies_hz), list(m.frequencies_hz)
+    pairs = match_modes(fr, ref.labels, fm, m.labels)
+    if len(pairs) < len(fr) <= len(fm):       # repeated roots named differently: by order
+        pairs = list(zip(np.argsort(fr, kind="stable"), np.argsort(fm, kind="stable")))
+    name = lambda j: m.labels[j] or f"mode {j + 1}"      # noqa: E731
+    return {"status": "ok",
+            "estimate": {name(j): float(est[j] + known[i]) for i, j in pairs},
+            "true": {name(j): float(abs(fm[j] - fr[i])) for i, j in pairs}}
+
+
+def _run(scene, solver, params, first):
+    if scene.is_modes:
+        return adapter.modes(scene, solver, params)
+    settings = adapter.settings_for(solver, scene.name, t_out=scene.output_grid(params))
+    return adapter.simulate(scene, solver, params, settings, warm_up=first,
+                            estimate_error=scene.error_estimate)
+
+
+def _truth(scene, solver, params, run, cal, cache):
+    """The solver's truth at this set (its own far tighter run, else the declared truth
+    solver's run or far tighter run), or None."""
+    if scene.is_modes:
+        s = modes_far_tighter(solver.info(scene), solver.preset)
+        if s is not None:
+            return adapter.modes(scene, solver, params, s)
+        other = cal.truth.get(solver.name)
+        if other and other not in cache:
+            cache[other] = adapter.modes(scene, adapter.get_solver(other), params)
+        return cache.get(other)
+    if solver.name in cal.truth:
+        other = cal.truth[solver.name]
+        if other not in cache:
+            cache[other] = reference_run(scene, adapter.get_solver(other), params)
+        return cache[other]
+    return reference_run(scene, solver, params, dt=run.settings.get("dt"))
+
+
+def _plain(v):
+    return v.tolist() if isinstance(v, np.ndarray) else v
+
+
+def evaluate(scene: Scene, chosen: list, params: dict, first: bool = False) -> dict:
+    """One set: every chosen solver's run, their verdicts (ok runs only: a stopped solver is
+    never compared) and per ok solver its error bars against its truth (`bars`: status, and
+    per channel or mode "estimate" and "true")."""
+    cal = scene.calibration or Calibration()
+    runs = {s.name: _run(scene, s, params, first) for s in chosen}
+    ok = [r for r in runs.values() if r.status == "ok"]
+    cache, out = {}, {}
+    for s in chosen:
+        r = runs[s.name]
+        if r.status != "ok":
+            continue
+        if scene.is_modes:
+            out[s.name] = mode_bars(r, _truth(scene, s, params, r, cal, cache))
+        elif not r.errors:
+            out[s.name] = {"status": f"no error estimate ({r.stats.get('error_estimate_by')})"}
+        else:
+            out[s.name] = bars(scene, r, _truth(scene, s, params, r, cal, cache))
+    return {"runs": runs, "comparisons": scene.verdicts(params, ok), "bars": out}
+
+
+def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
+              log=None) -> CalibrationResult:
+    """The study over `samples` sets drawn with `seed` (solvers: the scene's unless named)."""
+    t0 = time.perf_counter()
+    scene = get_scene(scene_name)
+    cal = scene.calibration or Calibration()
+    chosen = adapter.pick(scene, solvers)
+    axes, fixed = region(scene)
+    defaults = scene.resolve(fixed)
+    rows, skipped, disagree, n_cmp, verdicts = [], [], [], 0, {}
+    left_out = {s.name: {} for s in chosen}
+    widest = None
+    for k, (over, params) in enumerate(sample(scene, samples, seed)):
+        one = evaluate(scene, chosen, params, first=(k == 0))
+        changed = {n: _plain(params[n]) for n in over if n not in fixed
+                   and not np.array_equal(params[n], defaults[n])}
+        stopped = [{"set": k, "solver": s, "status": r.status, "reason": r.reason,
+                    "declared": cal.outside.get(s, cal.outside.get("*"))}
+                   for s, r in one["runs"].items() if r.status != "ok"]
+        skipped += stopped
+        if log:
+            log(f"{scene.name} set {k + 1}/{samples}: "
+                + ", ".join(f"{s} {r.status}" for s, r in one["runs"].items()))
+        if any(x["declared"] for x in stopped):
+            continue      # outside a solver's declared domain: outside the region
+        for c in one["comparisons"]:
+            if c.verdict == Verdict.SKIPPED:
+                continue
+            n_cmp += 1
+            verdicts[str(c.verdict)] = verdicts.get(str(c.verdict), 0) + 1
+            where = {"set": k, "params": changed, "pair": [c.a, c.b], "channel": c.channel}
+            if c.verdict == Verdict.DISAGREE:
+                disagree.append({**where, "ratio": float(c.ratio)})
+            bound = c.tolerance * c.scale
+            if c.deviation > FLOOR * EPS * c.scale and bound > 0:
+                window = bound / c.deviation
+                if widest is None or window > widest["window"]:
+                    widest = {**where, "window": float(window), "deviation": float(c.deviation),
+                              "bound": float(bound)}
+        for s, b in one["bars"].items():
+            if b["status"] != "ok":
+                left_out[s][b["status"]] = left_out[s].get(b["status"], 0) + 1
+                continue
+            rows += [(s, k, c, b["true"][c], b["estimate"][c]) for c in b["true"]]
+    data = {"scene": scene.name, "samples": samples, "comparisons": n_cmp,
+            "disagree": disagree, **_coverage(rows),
+            "widest_window": widest["window"] if widest else None,
+            "skipped": skipped, "seed": seed, "solvers": [s.name for s in chosen],
+            "verdicts": verdicts, "widest_at": widest,
+            "by_solver": {s.name: {**_coverage([r for r in rows if r[0] == s.name]),
+                                   "left_out": left_out[s.name]} for s in chosen},
+            "region": {a.name: [a.lo, a.hi, "log" if a.log else "uniform"] for a in axes},
+            "fixed": {n: _plain(v) for n, v in fixed.items()},
+            "floor": f"a deviation below {FLOOR:g}·eps·scale opens no window",
+            "wall_s": time.perf_counter() - t0}
+    return CalibrationResult(data)
+
+
+def _coverage(rows) -> dict:
+    """Coverage, sharpness and the worst misses of (solver, set, channel, true, estimate)."""
+    if not rows:
+        return {"coverage": None, "sharpness": None, "pairs": 0, "misses": []}
+    true = np.array([r[3] for r in rows])
+    est = np.array([r[4] for r in rows])
+    miss = sorted((r for r, t, e in zip(rows, true, est) if t > e),
+                  key=lambda r: -r[3] / max(r[4], 1e-300))[:5]
+    return {"coverage": float(np.mean(true <= est)),
+            "sharpness": float(np.median(true[est > 0] / est[est > 0])) if np.any(est > 0)
+            else None, "pairs": len(rows),
+            "misses": [{"solver": s, "set": k, "channel": c, "true": t, "estimate": e}
+                       for s, k, c, t, e in miss]}

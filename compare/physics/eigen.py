@@ -84,11 +84,14 @@ def _matched(A: np.ndarray, roots):
     return lam, V, left_rows(V), [int(np.argmin(np.abs(lam - r))) for r in np.atleast_1d(roots)]
 
 
-def root_errors(A: np.ndarray, roots, A_varied: np.ndarray | None = None) -> np.ndarray:
-    """Bounds on |δλ| of the given `roots` of a small A: round-off, plus the first-order change
-    to `A_varied` (the same linearisation at another finite-difference step) where given."""
+def root_errors(A: np.ndarray, roots, A_varied: np.ndarray | None = None,
+                formation: float = 1.0) -> np.ndarray:
+    """Bounds on |δλ| of the given `roots` of a small A: round-off (× `formation` where the
+    engine's own forming of A rounds more than the eigensolver, measured by its leaf), plus the
+    first-order change to `A_varied` (the same linearisation at another finite-difference
+    step) where given."""
     lam, V, W, idx = _matched(A, roots)
-    out = round_off(A, lam, V, W, idx)
+    out = formation * round_off(A, lam, V, W, idx)
     if A_varied is not None:
         out = out + change(np.asarray(A_varied) - A, lam, V, W, idx)[1]
     return out

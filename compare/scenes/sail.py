@@ -129,7 +129,7 @@ SAIL_EXTREMES = (
 # twice), relative to H = J_eff Ω with J_eff = J_hub + 2L_c²Σm_j (Ω ≤ |Ω₀| after t = 0, so Ω
 # cancels to an upper bound). Measured at 6 parameter sets to 1 % (docs/scenes/sail-deploy.md).
 EXUDYN_RELEASE_OFFSET = 1e-9
-RELEASE_OFFSET_SAFETY = 2.0
+RELEASE_OFFSET_SAFETY = 1.25
 
 
 def release_offset_momentum(params):
@@ -142,8 +142,10 @@ def release_offset_momentum(params):
 
 
 def exudyn_momentum_allowance(params):
-    """The release offset's momentum × RELEASE_OFFSET_SAFETY (2: the bound takes Ω₀ for Ω at
-    each release and the Verlet round-off, ≤ 1e-14 of H over 2 s, is not in it)."""
+    """The release offset's momentum × RELEASE_OFFSET_SAFETY (1.25: the formula met the
+    deviation to 1–3 % at six sets; the Verlet round-off, ≤ 1e-14 of H over 2 s, is not in it;
+    a wider factor costs the verdicts power — Exudyn's thread damping is seen through this
+    channel only)."""
     return RELEASE_OFFSET_SAFETY * release_offset_momentum(params)
 
 

@@ -7,7 +7,8 @@
 - inside compare/, each room imports only from its own layer or the ones below it (LAYERS),
   and no module imports one that imports it back (no cycle, lazy imports in functions counted);
 - nothing in compare/ or xval/ outside compare/scenes/ names a scene or tests a scene's (or a
-  parameter's) kind: the scene answers (`Scene.is_time`, `Param.is_numeric`, ...);
+  parameter's) kind: the scene answers (`TimeScene`/`ModesScene`: `command`, `either`, ...;
+  `Param.is_numeric`, ...), and `Scene.is_time`/`is_modes` are for compare/scenes/ alone;
 - a leaf's attributes are read only by compare/leafinfo.py and compare/solvers.py (`LeafInfo`);
 - xval/ (the front door) is held by the same rules as compare/.
 """
@@ -136,8 +137,10 @@ def test_xval_is_covered():
 
 
 # what a scene's kind and a parameter's kind can be (Scene.kind, Param.kind): outside
-# compare/scenes/ code asks the scene (`sc.is_time`, `sc.is_modes`, `p.is_numeric`, ...)
+# compare/scenes/ code asks the scene what it needs (`sc.command`, `sc.has_output_grid`,
+# `sc.either(time=…, modes=…)`, `p.is_numeric`, ...), never which kind it is
 PARAM_KINDS = {"float", "int", "vector", "choice"}
+SCENE_KIND_TESTS = {"is_time", "is_modes"}
 
 
 def _literals(node):
@@ -150,11 +153,14 @@ def _literals(node):
 
 def kind_checks(path):
     """`x.kind ==/!=/in ...` comparisons in a file that test a scene or parameter kind: against
-    one of their kinds, or against anything not a string literal (a constant in disguise)."""
+    one of their kinds, or against anything not a string literal (a constant in disguise);
+    and every use of `x.is_time` / `x.is_modes`."""
     from compare.scenes import SCENES
     kinds = {sc.kind for sc in SCENES.values()} | {"time", "modes"} | PARAM_KINDS
     hits = []
     for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Attribute) and node.attr in SCENE_KIND_TESTS:
+            hits.append(f"{path.relative_to(ROOT)}:{node.lineno}: {ast.unparse(node)}")
         if not isinstance(node, ast.Compare):
             continue
         sides = [node.left, *node.comparators]
@@ -211,6 +217,8 @@ def test_leaf_attributes_read_only_by_leafinfo_and_solvers(path):
     ("def f(p):\n    return p.kind not in ('float', 'int')\n", kind_checks),
     ("from compare.scenes.base import MODES\ndef f(sc):\n    return sc.kind != MODES\n",
      kind_checks),
+    ("def f(sc):\n    return 1 if sc.is_time else 0\n", kind_checks),
+    ("def f(sc):\n    if not sc.is_modes:\n        return 1\n", kind_checks),
     ("def f(leaf):\n    return getattr(leaf, 'ADAPTIVE', ())\n", leaf_reads),
     ("def f(leaf):\n    return leaf.DEFAULT_SETTINGS\n", leaf_reads),
     ("def f(s, sc):\n    return s.leaf(sc)\n", leaf_reads),

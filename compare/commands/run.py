@@ -48,8 +48,8 @@ def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol
     from ..workflows import runner
     from ..workflows.plan import Knobs, Limits, plan
     sc = get_scene(scene)
-    if not sc.is_time:
-        raise BadInput(f"scene {sc.name!r} is a frequency scene: use `xval modes {sc.name}`")
+    if sc.command != "run":
+        raise BadInput(f"scene {sc.name!r} is {sc.described}: use `xval {sc.command} {sc.name}`")
     if out is not None:
         check_out(str(out))
     if record and out is None:

@@ -20,7 +20,7 @@ from ..analysis.verdict import Verdict
 from ..errors import BadInput
 from ..scenes import get_scene
 from . import tables
-from .records import Side, is_modes_json, read_json, readable
+from .records import Side, case_type, read_json, readable
 
 
 class Result:
@@ -186,7 +186,7 @@ def _guess(name: str, obj: dict, folder) -> str:
                 "diff.json": "diff"}[name]
     if "results" in obj and "n_failed" in obj:
         return "extremes"
-    return "modes" if is_modes_json(obj, folder) else "time"
+    return case_type(obj, folder)
 
 
 def _typed(obj, name, folder, path) -> Result:

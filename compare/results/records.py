@@ -147,10 +147,14 @@ def modes_case(name, obj):
                    error=obj.get("error"))
 
 
-def is_modes_json(obj, folder=None) -> bool:
-    """A result's JSON (or a campaign case's) holds frequencies, not trajectories."""
-    return obj.get("result") == "modes" or "frequencies_hz" in (obj.get("runs") or [{}])[0] \
-        or "campbell" in obj or bool(folder and (Path(folder) / "modes.json").exists())
+def case_type(obj, folder=None) -> str:
+    """"modes" or "time": the type a result's JSON (or a campaign case's) says it is in its
+    "result" field; one written before every case said so, by what it holds."""
+    if obj.get("result"):
+        return obj["result"]
+    holds_modes = "frequencies_hz" in (obj.get("runs") or [{}])[0] or "campbell" in obj \
+        or bool(folder and (Path(folder) / "modes.json").exists())
+    return "modes" if holds_modes else "time"
 
 
 def read_maps(p):

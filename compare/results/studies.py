@@ -14,7 +14,7 @@ from pathlib import Path
 
 from ..analysis.verdict import Verdict
 from .base import Result, verdict_problems
-from .records import Side, is_modes_json, modes_case, read_maps, readable, time_case
+from .records import Side, case_type, modes_case, read_maps, readable, time_case
 
 
 class StudyResult(Result):
@@ -181,7 +181,7 @@ class CampaignResult(StudyResult):
         with readable(p / "summary.json"):
             for obj in self.data["cases"]:
                 name = obj["case"]
-                cases[name] = (modes_case(name, obj) if is_modes_json(obj, p / name)
+                cases[name] = (modes_case(name, obj) if case_type(obj, p / name) == "modes"
                                else time_case(name, obj, p / name))
         return Side(p, "campaign", cases, read_maps(p))
 

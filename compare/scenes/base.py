@@ -3,6 +3,7 @@ which leaf serves it for each solver, and its hooks (Campbell sweep, 3D drawing,
 campaign cases, findings). Nothing in `compare/` outside `compare/scenes/` names a scene."""
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields
+from typing import ClassVar
 
 import numpy as np
 
@@ -351,6 +352,10 @@ class Scene:
     def __post_init__(self):
         object.__setattr__(self, "channels", tuple(
             c if isinstance(c, Channel) else Channel(c) for c in self.channels))
+        if type(self) is Scene and self.kind in SCENE_KINDS:
+            # `Scene(kind="time", …)` (a plugin's spelling) is a TimeScene: the kind's class
+            # answers what the workflows ask of it
+            object.__setattr__(self, "__class__", SCENE_KINDS[self.kind])
 
     def unit(self, channel: str) -> str:
         """The SI unit of `channel` ("" where the scene names none)."""
@@ -487,12 +492,51 @@ class Finding:
 @dataclass(frozen=True)
 class TimeScene(Scene):
     """A scene `xval run` simulates: channels over time, compared pair by pair against the
-    solvers' error estimates and the allowances (`Scene(kind="time", …)` is the same)."""
+    solvers' error estimates and the allowances. What the workflows ask of a scene's kind,
+    this class and `ModesScene` answer (nothing outside compare/scenes/ tests the kind)."""
     kind: str = field(default="time", init=False)
+    command: ClassVar[str] = "run"               # the command that answers the scene
+    described: ClassVar[str] = "a time-domain scene"
+    has_output_grid: ClassVar[bool] = True       # t_end / output_dt: budgets, settings, steps
+    # its runs (Trajectories) carry per-channel error bars, kept by a perturbed run
+    runs_carry_errors: ClassVar[bool] = True
+    # the default campaign reports its cases' detection power (one sensitivity job each)
+    power_in_campaign: ClassVar[bool] = True
+    # `xval map` maps its regimes as well as its observables
+    mappable: ClassVar[bool] = True
+
+    def samples_per_run(self, params) -> float:
+        """Output samples per channel of one run at `params` (what a run costs)."""
+        return params["t_end"] / params["output_dt"] + 1
+
+    def either(self, time, modes):
+        """`time`: of a workflow's two per-kind functions (or values), the one for this scene
+        (the scene picks; it may not import the workflows that define them)."""
+        return time
 
 
 @dataclass(frozen=True)
 class ModesScene(Scene):
-    """A scene `xval modes` answers: frequencies, damping, Campbell diagram, critical speeds
-    (`Scene(kind="modes", …)` is the same)."""
+    """A scene `xval modes` answers: frequencies, damping, Campbell diagram, critical speeds."""
     kind: str = field(default="modes", init=False)
+    command: ClassVar[str] = "modes"
+    described: ClassVar[str] = "a frequency scene"
+    has_output_grid: ClassVar[bool] = False
+    runs_carry_errors: ClassVar[bool] = False    # Modes carry no per-channel error bars
+    power_in_campaign: ClassVar[bool] = False
+
+    @property
+    def mappable(self) -> bool:
+        """Only through its map observables: a frequency scene has no regimes to map."""
+        return bool(self.map_observables)
+
+    def samples_per_run(self, params) -> int:
+        """One eigen-analysis, costed like one output sample's run."""
+        return 1
+
+    def either(self, time, modes):
+        """`modes`: of a workflow's two per-kind functions (or values), the one for this scene."""
+        return modes
+
+
+SCENE_KINDS = {"time": TimeScene, "modes": ModesScene}

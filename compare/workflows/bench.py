@@ -149,11 +149,21 @@ def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, va
     sc = get_scene(scene_name)
     if not (isinstance(repeats, int) and repeats >= 1):
         raise BadInput(f"--repeats must be at least 1, got {repeats!r}")
-    if sc.is_modes:
-        if vary is not None:
-            raise BadInput("--vary: frequency scenes are benched along the solvers' own "
-                           "accuracy knobs only")
-        return run_bench_modes(sc, solver_names, overrides, out, repeats, log, make_out)
+    bench = sc.either(time=_bench_time, modes=_bench_modes)
+    return bench(sc, solver_names, overrides, out, repeats, log, vary, max_output_gib,
+                 max_steps, make_out)
+
+
+def _bench_modes(sc, solver_names, overrides, out, repeats, log, vary, max_output_gib,
+                 max_steps, make_out):
+    if vary is not None:
+        raise BadInput("--vary: frequency scenes are benched along the solvers' own "
+                       "accuracy knobs only")
+    return run_bench_modes(sc, solver_names, overrides, out, repeats, log, make_out)
+
+
+def _bench_time(sc, solver_names, overrides, out, repeats, log, vary, max_output_gib,
+                max_steps, make_out):
     pl = plan(sc, overrides, solver_names or list(sc.bench_solvers),
               limits=Limits(max_output_gib, max_steps))
     chosen, params = list(pl.solvers), pl.params

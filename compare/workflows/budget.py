@@ -33,7 +33,7 @@ def _gib(n_bytes):
 def check_output(scene, overrides, n_solvers, max_gib=None, where=""):
     """BadInput when the output of `n_solvers` runs would exceed the budget. Call it before
     `scene.resolve` (which builds the grid)."""
-    if not scene.is_time:
+    if not scene.has_output_grid:
         return
     max_gib = MAX_OUTPUT_GIB if max_gib is None else max_gib
     n = n_samples(scene, overrides)

@@ -74,7 +74,7 @@ def region(scene: Scene) -> tuple[list[Axis], dict]:
                            f"[{lo:g}, {hi:g}], which spans zero")
         axes[name] = Axis(name, float(lo), float(hi), log)
     fixed = dict(cal.fixed)
-    if scene.is_time and "t_end" not in fixed:
+    if scene.has_output_grid and "t_end" not in fixed:
         dt = fixed.get("output_dt", scene.param("output_dt").default)
         steps = max(1, round(HORIZON * scene.param("t_end").default / dt))
         fixed["t_end"] = steps * dt
@@ -158,8 +158,14 @@ def mode_bars(m, ref) -> dict:
 
 
 def _run(scene, solver, params, first):
-    if scene.is_modes:
-        return adapter.modes(scene, solver, params)
+    return scene.either(time=_simulate, modes=_modes)(scene, solver, params, first)
+
+
+def _modes(scene, solver, params, first):
+    return adapter.modes(scene, solver, params)
+
+
+def _simulate(scene, solver, params, first):
     settings = adapter.settings_for(solver, scene.name, t_out=scene.output_grid(params))
     return adapter.simulate(scene, solver, params, settings, warm_up=first,
                             estimate_error=scene.error_estimate)
@@ -168,14 +174,21 @@ def _run(scene, solver, params, first):
 def _truth(scene, solver, params, run, cal, cache):
     """The solver's truth at this set (its own far tighter run, else the declared truth
     solver's run or far tighter run), or None."""
-    if scene.is_modes:
-        s = modes_far_tighter(solver.info(scene), solver.preset)
-        if s is not None:
-            return adapter.modes(scene, solver, params, s)
-        other = cal.truth.get(solver.name)
-        if other and other not in cache:
-            cache[other] = adapter.modes(scene, adapter.get_solver(other), params)
-        return cache.get(other)
+    truth = scene.either(time=_time_truth, modes=_modes_truth)
+    return truth(scene, solver, params, run, cal, cache)
+
+
+def _modes_truth(scene, solver, params, run, cal, cache):
+    s = modes_far_tighter(solver.info(scene), solver.preset)
+    if s is not None:
+        return adapter.modes(scene, solver, params, s)
+    other = cal.truth.get(solver.name)
+    if other and other not in cache:
+        cache[other] = adapter.modes(scene, adapter.get_solver(other), params)
+    return cache.get(other)
+
+
+def _time_truth(scene, solver, params, run, cal, cache):
     if solver.name in cal.truth:
         other = cal.truth[solver.name]
         if other not in cache:
@@ -186,6 +199,16 @@ def _truth(scene, solver, params, run, cal, cache):
 
 def _plain(v):
     return v.tolist() if isinstance(v, np.ndarray) else v
+
+
+def _mode_bars(scene, solver, params, run, cal, cache):
+    return mode_bars(run, _truth(scene, solver, params, run, cal, cache))
+
+
+def _time_bars(scene, solver, params, run, cal, cache):
+    if not run.errors:
+        return {"status": f"no error estimate ({run.stats.get('error_estimate_by')})"}
+    return bars(scene, run, _truth(scene, solver, params, run, cal, cache))
 
 
 def evaluate(scene: Scene, chosen: list, params: dict, first: bool = False) -> dict:
@@ -200,12 +223,8 @@ def evaluate(scene: Scene, chosen: list, params: dict, first: bool = False) -> d
         r = runs[s.name]
         if r.status != "ok":
             continue
-        if scene.is_modes:
-            out[s.name] = mode_bars(r, _truth(scene, s, params, r, cal, cache))
-        elif not r.errors:
-            out[s.name] = {"status": f"no error estimate ({r.stats.get('error_estimate_by')})"}
-        else:
-            out[s.name] = bars(scene, r, _truth(scene, s, params, r, cal, cache))
+        out[s.name] = scene.either(time=_time_bars, modes=_mode_bars)(
+            scene, s, params, r, cal, cache)
     return {"runs": runs, "comparisons": scene.verdicts(params, ok), "bars": out}
 
 

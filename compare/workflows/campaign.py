@@ -53,6 +53,7 @@ from ..output.store import (
     store_sensitivity,
     store_trajectory,
 )
+from ..results import ModesResult, TimeResult
 from ..scenes import get_scene
 from . import plan as planner
 from . import power, runner
@@ -85,8 +86,8 @@ def default_campaign(name: str = "default") -> dict:
     # the default campaign's time cases report their detection power (`power`: one
     # sensitivity run per physical parameter of the case's first solver)
     camp = {"name": name,
-            "cases": [{"scene": sc.name, **({"power": True} if name == "default" and sc.is_time
-                                            else {}),
+            "cases": [{"scene": sc.name, **({"power": True} if name == "default"
+                                            and sc.power_in_campaign else {}),
                        **{k: v for k, v in case.items() if k != "campaign"}}
                       for sc in SCENES.values() for case in sc.campaign_cases
                       if case.get("campaign", "default") == name]}
@@ -576,7 +577,8 @@ def _finish_safely(case, jobs, store, out_dir, crashed, reused, view):
         for j in jobs:
             if j.case == case.name:
                 crashed.setdefault(j.label, msg)
-        return {"scene": case.scene.name, "params": case.params, "runs": [],
+        return {"result": case.scene.either(time=TimeResult.TYPE, modes=ModesResult.TYPE),
+                "scene": case.scene.name, "params": case.params, "runs": [],
                 "comparisons": [], "findings": [], "error": msg}
 
 def finish_case(case, jobs, store, out_dir, crashed, reused, view):
@@ -639,8 +641,8 @@ def _case_power(job, store, crashed):
 def _finish_modes(case, job, store, case_dir, crashed):
     src = store / job.key
     if job.label in crashed or not (src / "modes.json").exists():
-        return {"scene": case.scene.name, "params": case.params, "runs": [],
-                "comparisons": [], "findings": [],
+        return {"result": ModesResult.TYPE, "scene": case.scene.name, "params": case.params,
+                "runs": [], "comparisons": [], "findings": [],
                 "error": crashed.get(job.label, "no result file")}
     for f in sorted(src.iterdir()):
         if f.is_file() and not f.name.startswith("."):

@@ -174,8 +174,8 @@ def run_extremes(scene_name: str, solver_names, include_slow=False, timeout_s=No
     sc = get_scene(scene_name)
     if not sc.extremes:
         raise BadInput(f"scene {sc.name!r} lists no extreme cases")
-    if not sc.is_time:
-        raise BadInput(f"scene {sc.name!r}: its extremes run through `xval modes`")
+    if sc.command != "run":
+        raise BadInput(f"scene {sc.name!r}: its extremes run through `xval {sc.command}`")
     chosen = solvers.pick(sc, solver_names)
     cases = [c for c in sc.extremes if include_slow or c.slow is not True]
     rows = [r for c in cases for r in run_case(

@@ -111,8 +111,16 @@ def evaluate_chunk(scene_name, solver_name, base, points, settings, what):
     Exudyn 384 → 111–122 ms (8 rotors per kinematic tree)."""
     sc, s = get_scene(scene_name), solvers.get_solver(solver_name)
     params = sc.resolve_many(base, points)
-    if not sc.is_time:               # a frequency scene's observable: one eigen-analysis
-        return [_classify(sc, p, solvers.modes(sc, s, p), what) for p in params]
+    return sc.either(time=_simulated_chunk, modes=_modes_chunk)(sc, s, params, settings, what)
+
+
+def _modes_chunk(sc, s, params, settings, what):
+    """A frequency scene's observable: one eigen-analysis a point."""
+    return [_classify(sc, p, solvers.modes(sc, s, p), what) for p in params]
+
+
+def _simulated_chunk(sc, s, params, settings, what):
+    """A time scene's chunk: the regime batch where the leaf has one, else a run a point."""
     batch = solvers.regimes(sc, s, params, settings) if what is None else None
     labels, wall = batch or ([None] * len(params), 0.0)
     out, warm = [], True
@@ -622,8 +630,7 @@ def estimate(sc, x_axis, y_axis, chosen, resolution, coarse, engines, params,
         (y_resolution or resolution) * (ny - 1)))))) if y_axis else 0)
     per_custom = (nx + 2 * rounds + 4) * (rows + traced)
     per_engine = (nx * rows + 2 * rows * rounds) if engines == "everywhere" else 8 * rows
-    # a frequency scene's point is one eigen-analysis, costed like one output sample's run
-    samples = params["t_end"] / params["output_dt"] + 1 if sc.is_time else 1
+    samples = sc.samples_per_run(params)
     runs, secs = 0, 0.0
     for s in chosen:
         n = per_engine if is_engine(s) else per_custom
@@ -639,7 +646,7 @@ def plan_map(scene_name, x, y=None, overrides=None, solver_names=None, resolutio
     """Everything checked before a run (one line, BadInput): scene, axes, parameters,
     solvers, the work against the budget."""
     sc = get_scene(scene_name)
-    if not sc.is_time and not sc.map_observables:
+    if not sc.mappable:
         raise BadInput(f"scene {sc.name!r} is a frequency scene with no map observable: maps "
                        f"are of time scenes' regimes and of observables")
     if level is not None and observable is None:      # a level of which observable?

@@ -136,7 +136,7 @@ def plan(scene: Scene | str, overrides: dict | None = None, solvers=None,
     overrides = dict(overrides or {})
     chosen = registry.pick(sc, names(solvers))
     extra = per_solver_settings(settings, chosen)
-    if not sc.is_time:
+    if not sc.has_output_grid:                   # nothing to budget or set on a grid
         return Plan(sc, overrides, sc.resolve(overrides), tuple(chosen),
                     {s.name: {} for s in chosen}, None, timeout_s, estimate_errors)
     budget.check_output(sc, overrides, len(chosen) if limits.together else 1,

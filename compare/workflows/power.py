@@ -64,11 +64,16 @@ class _Study:
 
     def _run(self, solver, params, estimate=False):
         self.n_runs += 1 + bool(estimate and self.sc.error_estimate)
-        if self.sc.is_modes:
-            return solvers.modes(self.sc, solver, params)
+        run = self.sc.either(time=self._simulate, modes=self._modes)
+        return run(solver, params, estimate and self.sc.error_estimate)
+
+    def _simulate(self, solver, params, estimate):
         return solvers.simulate(self.sc, solver, params, self.pl.settings[solver.name],
-                                self.pl.timeout_s, estimate and self.sc.error_estimate,
-                                warm_up=False, t_out=self.pl.t_out)
+                                self.pl.timeout_s, estimate, warm_up=False,
+                                t_out=self.pl.t_out)
+
+    def _modes(self, solver, params, estimate):
+        return solvers.modes(self.sc, solver, params)
 
     def compare(self, runs: dict) -> list:
         return self.sc.verdicts(self.p, [runs[s.name] for s in self.chosen])
@@ -76,7 +81,7 @@ class _Study:
     def perturbed(self, solver, name, eps):
         """The run of `solver` with parameter `name` × (1 + eps), its nominal error bars."""
         r = self._run(solver, {**self.p, name: _scaled(self.p[name], 1.0 + eps)})
-        if not self.sc.is_modes:
+        if self.sc.runs_carry_errors:
             r.errors = self.nominal[solver.name].errors
         return r
 
@@ -93,14 +98,20 @@ class _Study:
 
 def _change(sc, a, b, channel) -> float:
     """max |a − b| of one channel (a time channel, a mode's frequency, or its ζ: "<mode> ζ")."""
-    if sc.is_modes:
-        zeta = channel.endswith(" ζ")
-        if zeta and (a.damping is None or b.damping is None):
-            return math.inf
-        fa, fb = (dict(zip(m.labels, m.damping if zeta else m.frequencies_hz)) for m in (a, b))
-        key = channel[:-2] if zeta else channel
-        return abs(fa[key] - fb[key]) if key in fa and key in fb else math.inf
+    return sc.either(time=_channel_change, modes=_mode_change)(a, b, channel)
+
+
+def _channel_change(a, b, channel) -> float:
     return float(np.max(np.abs(a.channels[channel] - b.channels[channel])))
+
+
+def _mode_change(a, b, channel) -> float:
+    zeta = channel.endswith(" ζ")
+    if zeta and (a.damping is None or b.damping is None):
+        return math.inf
+    fa, fb = (dict(zip(m.labels, m.damping if zeta else m.frequencies_hz)) for m in (a, b))
+    key = channel[:-2] if zeta else channel
+    return abs(fa[key] - fb[key]) if key in fa and key in fb else math.inf
 
 
 def _estimate(study, solver, name):

@@ -2,8 +2,8 @@
 spelling per integrator.
 
 Leaves (`custom_models/`, `reference_models/`) may import this module and `compare.physics`
-(both numpy only) — nothing else from `compare` (tests/test_layers.py enforces it). The adapter
-in `compare/solvers.py` validates every result a leaf returns.
+(both numpy only) — nothing else from `compare` (tests/front/test_layers.py enforces it). The
+adapter in `compare/solvers.py` validates every result a leaf returns.
 """
 from __future__ import annotations
 

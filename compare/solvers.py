@@ -371,7 +371,7 @@ def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) ->
     - round-off: √(steps of both runs) × machine epsilon × the channel's scale (its largest
       |value|): each step rounds the state once, independently, so the rounding errors add
       like a random walk (n × eps was 20× the quaternion rotor's whole error at rtol 1e-11:
-      `tests/test_coverage.py` measures the floor's sharpness);
+      `tests/verdicts/test_coverage.py` measures the floor's sharpness);
     - an error-controlled rerun's own error: the step-size controller makes the solution jump
       by about its tolerance under any tiny change (rotor-spinup at 3.2 N·m: a 1e-15 change of
       the torque moves `potential` by 2.5e-9 J at rtol 1e-11, the size of the rtol-1e-13

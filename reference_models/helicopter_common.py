@@ -14,7 +14,7 @@ any rotor azimuth ψ, q̈ = A_q q + A_v q̇, transformed with q = T(ψ) p,
 
     p̈ = T⁻¹[(A_q T + Ω A_v T′ − Ω² T″) p + (A_v T − 2Ω T′) ṗ],
 
-gives constant matrices — `tests/test_helicopter_engines.py` checks that they do not depend
+gives constant matrices — `tests/engines/test_helicopter_engines.py` checks that they do not depend
 on ψ. This needs neither a time-domain identification (close roots 6.30–6.37 Hz would need
 records of minutes) nor Floquet analysis (one linearisation instead of many).
 

@@ -3,8 +3,8 @@ modelling allowance is set from (issue 26, item 5).
 
 `python -m tests.allowances [SCENE …] [--case=NAME …]` reruns the cases and rewrites
 tests/allowances.json (minutes; the engines' full sail deployment, `--long`, ~20 min more);
-`--table` prints the allowance table. tests/test_allowances.py reads the table, checks every
-allowance against it (≤ 10 × measured, or a documented exception) and reruns one cheap case
+`--table` prints the allowance table. tests/verdicts/test_allowances.py reads the table, checks
+every allowance against it (≤ 10 × measured, or a documented exception) and reruns one cheap case
 per scene to check the table is what the solvers produce today.
 
 Measured, per pair and channel: max|Δ| over the run (SI), the channel's scale, the two solvers'

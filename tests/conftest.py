@@ -62,20 +62,16 @@ def wait_for(cond, timeout=120.0, poll=0.1, what="timed out waiting"):
 
 
 # pytest-xdist (addopts `-n 2`): each module runs whole on one worker, so that its module-scoped
-# fixtures (a campaign, an engine run) run once. test_layers writes probe files into the source
-# tree, which the docs build and a campaign test (a copy of the packages) read whole: one worker
-# runs those three modules. (xdist 3.8's own `loadgroup` does not group under pytest 9.)
-SOURCE_TREE = ("tests/test_layers.py", "tests/test_docs.py", "tests/test_campaign.py")
-
-
+# fixtures (a campaign, an engine run) run once. No test writes into the source tree (test_layers
+# seeds its probes in a scratch copy), so the docs build and a campaign's copy of the packages
+# need no worker of their own.
 @pytest.hookimpl(optionalhook=True)
 def pytest_xdist_make_scheduler(config, log):
     from xdist.scheduler import LoadScopeScheduling
 
     class ByModule(LoadScopeScheduling):
         def _split_scope(self, nodeid):
-            module = nodeid.split("::", 1)[0]
-            return "source tree" if module in SOURCE_TREE else module
+            return nodeid.split("::", 1)[0]
     return ByModule(config, log)
 
 
@@ -83,9 +79,10 @@ def pytest_xdist_make_scheduler(config, log):
 # test_plugin 60, test_helicopter_engines 56, test_sail 50, test_diff 38, test_campaign_scale
 # 37, test_faults 33, test_cross_solvers 31; the rest ≤ 30): a worker takes the next module when
 # it has two tests left, so a long module taken last kept one worker busy alone at the end
-LONGEST = ("tests/test_golden.py", "tests/test_plugin.py", "tests/test_helicopter_engines.py",
-           "tests/test_sail.py", "tests/test_diff.py", "tests/test_campaign_scale.py",
-           "tests/test_faults.py", "tests/test_cross_solvers.py")
+LONGEST = ("tests/verdicts/test_golden.py", "tests/front/test_plugin.py",
+           "tests/engines/test_helicopter_engines.py", "tests/physics/test_sail.py",
+           "tests/studies/test_diff.py", "tests/studies/test_campaign_scale.py",
+           "tests/front/test_faults.py", "tests/verdicts/test_cross_solvers.py")
 
 
 def pytest_collection_modifyitems(config, items):

@@ -11,7 +11,7 @@ Measured in one process against the libm build (ns a lane, AMD EPYC, AVX2): quat
 right-hand side 40 → 19, row reduce 48 → 19; euler-vector 53 → 30 and 91 → 48. Cephes' atan adds
 the bits of π/2 below its double (MOREBITS) back in; measured against libm that made more
 results differ (28 % against 26 %, each within 2 ulp), so it is left out.
-tests/test_trig.py holds them to libm within 2 ulp over the ranges the models use.
+tests/physics/test_trig.py holds them to libm within 2 ulp over the ranges the models use.
 """
 import numba as nb
 import numpy as np

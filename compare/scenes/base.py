@@ -277,7 +277,7 @@ class Scene:
     # per-channel modelling allowance, relative to the channel's scale (max |value| of the
     # pair) or ("abs", SI): what the models may differ by beyond the solvers' own errors —
     # each set from a measured deviation, with the reason, in the scene file, ≤ 10 × it
-    # (tests/test_allowances.py). "by_pair" {"a|b": {channel: allowance}} gives a pair its
+    # (tests/verdicts/test_allowances.py). "by_pair" {"a|b": {channel: allowance}} gives a pair its
     # own (engine–engine: both engines share one model), "by_solver" {solver: {…}} every pair
     # with that solver; modes scenes: "frequency", "frequency_by_pair", "frequency_by_solver"
     # (compare.analysis.metrics.allowance / frequency_allowance). Any entry may be a function

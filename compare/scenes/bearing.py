@@ -319,7 +319,7 @@ BEARING_ROTOR = TimeScene(
             "defect_width", "defect_angle", "spin0", "offset0", "tilt0", "t_end", "output_dt"))},
         # Allowances ≤ 10 × the deviation left beyond both error estimates, measured at the
         # defaults, spin 627 rad/s (motor_no_load_speed 2000), c_b 0 and k_b 1e7
-        # (tests/test_bearing_modes.py::test_allowances_are_within_10x_of_measured): two
+        # (tests/studies/test_bearing_modes.py::test_allowances_are_within_10x_of_measured): two
         # solvers' eigenvalues 1.3e-13 relative (quaternion–exudyn conical, k_b 1e7; max|Δ|
         # 4.6e-12 on the axial root, within the estimates), ζ 1.1e-11 (exudyn–mujoco conical,
         # k_b 1e7); a ring-down against its solver's eigenvalues 4.9e-11 relative (quaternion

@@ -21,11 +21,11 @@ SOURCE = ("seed 002: Yao Song, Rui Xiaoting, Wang Jinghong, 'Calculation of heli
 
 # Allowances per scene and pair kind, each ≤ 10 × the largest relative frequency difference
 # measured over the modes (`python -m tests.allowances SCENE`; tests/allowances.json, checked
-# by tests/test_allowances.py). Frequencies carry no error estimates, so the whole difference
-# is left to the allowance.
+# by tests/verdicts/test_allowances.py). Frequencies carry no error estimates, so the whole
+# difference is left to the allowance.
 # The engines' rigid segments carry the section's rotary inertia, which the paper's
 # Euler–Bernoulli blade has not; a function of the parameters (blade_rotary_inertia_shifts,
-# derived in docs/scenes/rotating-beam.md; tests/test_allowance_models.py checks it against
+# derived in docs/scenes/rotating-beam.md; tests/verdicts/test_allowance_models.py checks it against
 # both engines at 7 parameter sets). At the defaults: lag 1 −1.34e-3, flap 3 −1.4e-4, and at
 # 40 rad/s torsion 1 −6.4e-4 (the rigid section's propeller term).
 ROTARY_INERTIA_SAFETY = 2.0
@@ -107,7 +107,7 @@ BLADE_TOLERANCES = {"frequency": 3e-8,
                     "frequency_one_model": ONE_CHAIN}
 # spinning-shaft at Ω* = 0 and 6: mstmm–fem ≤ 2.8e-9, exudyn–mujoco ≤ 1.04e-8, custom–engine
 # ≤ 1.02e-6 (the chains have no rotary-inertia term: ω* = λ² ± Ω* to 9.1e-7,
-# tests/test_beam_engines.py)
+# tests/engines/test_beam_engines.py)
 SHAFT_TOLERANCES = {"frequency": 1e-8, "frequency_by_solver": {"exudyn": 3e-6, "mujoco": 3e-6},
                     "frequency_by_pair": {"exudyn|mujoco": 3e-8},
                     "frequency_one_model": ONE_CHAIN}
@@ -197,7 +197,7 @@ def tension_torsion():
     1958; Hodges & Dowell, NASA TN D-7818, 1974). The paper's eq. 30 has no such term ('off',
     the default). Uniform blade, r_H = 0, Rayleigh with the rest shape sin(πx/2L):
     ω² = ω₀² + Ω²(1 + π²/12 + 1/4) — independent of the section, as I_α = m̄k_A²
-    (tests/test_mstmm.py checks it against the exact root)."""
+    (tests/physics/test_mstmm.py checks it against the exact root)."""
     return Param("tension_torsion", "off", "", "tension–torsion term T·k_A² in the blade's "
                  "torsional stiffness: off = the paper's eq. 30, on = GJ + T k_A² (Houbolt & "
                  "Brooks 1958)", kind="choice", choices=("off", "on"))

@@ -120,7 +120,7 @@ def draw_press(rec, params, traj, color, offset):
 
 
 # The spec's extremes (scene-press.md). The linear-acceleration cases use the quiet press of
-# tests/test_press_custom.py (slider 1e9 N/m, motor disconnected), whose fastest period
+# tests/physics/test_press_custom.py (slider 1e9 N/m, motor disconnected), whose fastest period
 # T_min = 3.0786 ms comes from the linearised modes: the Newmark β = 1/6 limit is
 # h = (√3/π)·T_min = 0.5513·T_min.
 _QUIET = {"slider_stiffness": 1e9, "gravity": 0.0, "gear_ratio": 0.0, "omega0": 0.0,
@@ -208,7 +208,7 @@ CALIBRATION = Calibration(
     region={"l1": (0.0135, 0.0165), "l2": (0.036, 0.044), "l3": (0.027, 0.033),
             "phi0": (-70.0, -58.0), "psi0": (-51.0, -42.0)},
     fixed={"t_end": 0.02}, outside={"*": _VERTICAL},
-    # Exudyn's own finer runs grow noisier in crank_accel (tests/test_coverage.py)
+    # Exudyn's own finer runs grow noisier in crank_accel (tests/verdicts/test_coverage.py)
     truth={"exudyn": "lagrange-exact"})
 
 

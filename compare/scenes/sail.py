@@ -123,11 +123,11 @@ SAIL_EXTREMES = (
 
 
 # Exudyn puts each released node `release_offset` = 1e-9 m radially beyond Q (its leaf's
-# DEFAULT_SETTINGS; tests/test_allowance_models.py checks the two agree) so that the new boundary
-# spring never has length 0. The node then carries m_j(L_c + δ)·ΩL_c about the axis where the
-# hub gave up m_j L_c²Ω: each release adds m_j δ L_c Ω to the angular momentum (both blades:
-# twice), relative to H = J_eff Ω with J_eff = J_hub + 2L_c²Σm_j (Ω ≤ |Ω₀| after t = 0, so Ω
-# cancels to an upper bound). Measured at 6 parameter sets to 1 % (docs/scenes/sail-deploy.md).
+# DEFAULT_SETTINGS; tests/verdicts/test_allowance_models.py checks the two agree) so that the new
+# boundary spring never has length 0. The node then carries m_j(L_c + δ)·ΩL_c about the axis where
+# the hub gave up m_j L_c²Ω: each release adds m_j δ L_c Ω to the angular momentum (both blades:
+# twice), relative to H = J_eff Ω with J_eff = J_hub + 2L_c²Σm_j (Ω ≤ |Ω₀| after t = 0, so Ω cancels
+# to an upper bound). Measured at 6 parameter sets to 1 % (docs/scenes/sail-deploy.md).
 EXUDYN_RELEASE_OFFSET = 1e-9
 RELEASE_OFFSET_SAFETY = 1.25
 

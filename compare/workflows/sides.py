@@ -5,8 +5,8 @@ output grid chosen so that linear interpolation through the kept samples reprodu
 dropped one within `recon_tol` = max(1e-8 × the channel's scale, 0.1 × the solver's own error
 estimate there). float32 is not enough: its 6e-8 relative rounding of a value of 1e4 is 6e-4,
 comparable with the 1e-6 relative change a baseline must catch (measured in
-tests/test_diff.py). `xval diff` evaluates the baseline on the other side's full grid and adds
-`recon_tol` to the error bars (compare/results/baseline.py reads it back). Error estimates are
+tests/studies/test_diff.py). `xval diff` evaluates the baseline on the other side's full grid and
+adds `recon_tol` to the error bars (compare/results/baseline.py reads it back). Error estimates are
 stored at the kept samples as the envelope over both neighbouring intervals (float32: an error
 bar needs two digits), so their interpolation never under-states the estimate between kept
 samples.

@@ -16,7 +16,7 @@ so, with J Ω̇ = Rᵀ M − Ω × J Ω (Euler's equations (2)),
 No trigonometric function appears. Its scalar row gives q·q̈ = −|q̇|², i.e. d²|q|²/dt² = 0:
 |q|² = 1 and q·q̇ = 0 are first integrals (the paper's (3)), kept by the exact flow only —
 numerically |q| drifts (reported as `invariants["quaternion_norm"]`, the largest | |q| − 1 | over
-every accepted step). tests/test_bearing_rotor.py checks this q̈ against the first-order
+every accepted step). tests/physics/test_bearing_rotor.py checks this q̈ against the first-order
 q̇ = ½ q∘Ω (= ½ ω∘q in the fixed frame).
 
 Setting `project` (default False): after each accepted step q ← q/|q| and the radial part of q̇

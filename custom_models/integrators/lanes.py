@@ -5,8 +5,8 @@ an evaluation for the rotor, and a cheap map point is ~4800 of them. Here LANES 
 by side, each with its own time, step size, error and acceptance, exactly as the scalar driver
 steps it: every stage sum, error norm, step-size rule and dense evaluation is the scalar
 driver's expression evaluated per lane, in its order, so each lane's numbers are bit for bit
-the scalar driver's (tests/test_map_batch.py). What the lanes share is the loop over them: the
-stage sums, the right-hand side `f(T, Z)` and the per-row reduce `row(Z)` loop over the lanes
+the scalar driver's (tests/studies/test_map_batch.py). What the lanes share is the loop over them:
+the stage sums, the right-hand side `f(T, Z)` and the per-row reduce `row(Z)` loop over the lanes
 innermost, which LLVM vectorises (the rotor's quaternion right-hand side: 23–37 ns a lane
 against 57–71 ns scalar, measured in the same process, twice; 19 ns once its atan2 was
 `compare.physics.trig`'s rather than libm's).

@@ -6,7 +6,7 @@ DOP853 (Hairer, Nørsett and Wanner's coefficients, with the dense output's extr
 own coefficient file, `scipy/integrate/_ivp/dop853_coefficients.py` (numpy only), loaded alone.
 RK23 (Bogacki and Shampine, 1989) and RK45 (Dormand and Prince, 1980, with Shampine's 1986
 quartic interpolant at the optimum c₆) written out as the papers give them.
-tests/test_dense_integrators.py holds every array equal to scipy.integrate's public one."""
+tests/physics/test_dense_integrators.py holds every array equal to scipy.integrate's public one."""
 import importlib.util
 from pathlib import Path
 from types import SimpleNamespace

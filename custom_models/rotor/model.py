@@ -31,12 +31,12 @@ DEFAULT_SETTINGS = {"integrator": "dop853", "rtol": 1e-11, "dt": None, "atol": N
 # random points of the default map (10 s, torque 1–5, e 0–0.02) against rtol 1e-11: max ||ω||
 # error over the run 0.099 rad/s (quaternion), 0.126 (euler-vector); 1e-3 errs up to 1.7 rad/s.
 # The margins it is read against are not all wide: on 200 random points the deciding level lies
-# within 1 rad/s of |ω| for 12 % of them (least 0.04 rad/s: a late escape from capture), so a
-# cheap label can be wrong (1000 random points: quaternion 0, euler-vector 2 differ from rtol
-# 1e-11; at 1e-3, 0 and 8 of 300). It stands only where every neighbour reads the same; a point
-# next to a regime change is rerun accurate (compare/workflows/maps.py); tests/test_map_trace.py
-# checks that the boundary is the all-accurate one and that sampled cheap labels hold. Looser
-# buys little: DOP853's steps follow the whirl, 264 per run at 1e-4, 209 at 1e-3 (quaternion).
+# within 1 rad/s of |ω| for 12 % of them (least 0.04 rad/s: a late escape from capture), so a cheap
+# label can be wrong (1000 random points: quaternion 0, euler-vector 2 differ from rtol 1e-11; at
+# 1e-3, 0 and 8 of 300). It stands only where every neighbour reads the same; a point next to a
+# regime change is rerun accurate (compare/workflows/maps.py); tests/studies/test_map_trace.py
+# checks that the boundary is the all-accurate one and that sampled cheap labels hold. Looser buys
+# little: DOP853's steps follow the whirl, 264 per run at 1e-4, 209 at 1e-3 (quaternion).
 CHEAP_RTOL = {"dop853": 1e-4}
 
 # Both the spring law −kγ and the Euler-vector split lose their meaning at tilt π (the transverse

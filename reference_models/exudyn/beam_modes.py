@@ -43,7 +43,7 @@ from compare.contract import LeafModes, merge_settings
 from reference_models import beam_chain_common as bc
 
 # Convergence study (max relative error over the first five modes; second order checked in
-# tests/test_beam_engines.py):
+# tests/engines/test_beam_engines.py):
 #   blade at rest, Euler–Bernoulli segments vs closed forms: N = 10/20/40/80 plain 1.3e-2,
 #   3.3e-3, 8.2e-4, 2.0e-4 (order 2); Richardson N/N/2: 4.2e-4, 1.3e-5, 7.9e-7, 5.0e-8;
 #   blade at 40 rad/s vs Richardson 160/80: plain 3.9e-2, 1.0e-2, 2.6e-3, 6.4e-4; Richardson

@@ -90,7 +90,7 @@ def linearised(params: dict, n: int, psi: float = 0.0, free: bool = False):
         linkParents=[x["parent"] for x in lk],
         # the joint frame's orientation in its parent (its transpose puts blades 1 and 3 at
         # −90° and +90°: the multi-blade matrices then depend on ψ by 3e-3; as given they do
-        # not and equal MuJoCo's, tests/test_helicopter_engines.py)
+        # not and equal MuJoCo's, tests/engines/test_helicopter_engines.py)
         jointTransformations=exu.Matrix3DList([np.asarray(x["rot"]) for x in lk]),
         jointOffsets=exu.Vector3DList([list(map(float, x["offset"])) for x in lk]),
         linkInertiasCOM=exu.Matrix3DList([x["inertia"] for x in lk]),

@@ -8,7 +8,7 @@ work A = ∫ torque·ω_z dt is an extra state integrated by MuJoCo's own integr
 with integrator dynamics and zero gain/gear (it exerts no force) whose `ctrl` the callback sets
 to torque·ω_z in every stage, so A is RK4-consistent (act_dot = ctrl). The constraint and
 contact stages are disabled (the model has neither): they cost time and change no bit
-(tests/test_mujoco_rotor.py).
+(tests/engines/test_mujoco_rotor.py).
 """
 import math
 

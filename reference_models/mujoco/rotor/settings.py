@@ -17,7 +17,7 @@ INTEGRATORS = ("rk4", "euler", "implicitfast", "implicit")
 # step. RK4 is stable to |λ dt| ≤ 2.78; on the rotor map the tilt root is ~41 rad/s and the
 # spin at most 56 rad/s (torque 5, e 0.02, 10 s): |λ dt| ≤ 0.6. Measured (`xval bench
 # rotor-spinup --points 400 --solver mujoco`): 0 of 400 labels differ from the all-accurate
-# grid, 16 % rerun accurate; 5e-2 gives wrong cheap labels (tests/test_map_trace.py fails)
+# grid, 16 % rerun accurate; 5e-2 gives wrong cheap labels (tests/studies/test_map_trace.py fails)
 CHEAP_DT = {"rk4": 1e-2}
 SPRINGS = ("cone", "cardan")
 CALLBACKS = ("native", "python")

@@ -14,11 +14,12 @@
 """
 import ast
 import re
+import shutil
 from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 LEAF_ALLOWED = ("compare.contract", "compare.physics")
 # compare/'s rooms, lowest first (ARCHITECTURE.md): a module may import its own layer and below
 LAYERS = (("shared", ("compare.contract", "compare.errors", "compare.atomic", "compare.physics")),
@@ -70,14 +71,22 @@ def test_shared_layer_imports_no_orchestration(path):
     assert not bad, f"{path.name} imports {bad}"
 
 
-def test_the_check_catches_a_leaf_importing_the_runner(tmp_path):
-    leaf = ROOT / "custom_models" / "_layer_probe.py"
+def scratch_root(tmp_path, monkeypatch, *copied):
+    """A scratch checkout under tmp_path that the checks read as ROOT (the source tree is never
+    written): the folders `copied` copied from the real one, compare/workflows/ made."""
+    for d in copied:
+        shutil.copytree(ROOT / d, tmp_path / d, ignore=shutil.ignore_patterns("__pycache__"))
+    (tmp_path / "compare" / "workflows").mkdir(parents=True, exist_ok=True)
+    monkeypatch.setitem(globals(), "ROOT", tmp_path)
+    return tmp_path
+
+
+def test_the_check_catches_a_leaf_importing_the_runner(tmp_path, monkeypatch):
+    leaf = scratch_root(tmp_path, monkeypatch) / "custom_models" / "_layer_probe.py"
+    leaf.parent.mkdir(parents=True)
     leaf.write_text("from compare.workflows.runner import run_scene\n")
-    try:
-        with pytest.raises(AssertionError, match="compare.workflows.runner"):
-            test_leaves_import_only_the_contract_and_shared_physics(leaf)
-    finally:
-        leaf.unlink()
+    with pytest.raises(AssertionError, match="compare.workflows.runner"):
+        test_leaves_import_only_the_contract_and_shared_physics(leaf)
 
 
 def docstring_lines(path):
@@ -223,22 +232,16 @@ def test_leaf_attributes_read_only_by_leafinfo_and_solvers(path):
     ("def f(leaf):\n    return leaf.DEFAULT_SETTINGS\n", leaf_reads),
     ("def f(s, sc):\n    return s.leaf(sc)\n", leaf_reads),
 ])
-def test_the_rules_catch_a_seeded_violation(code, check):
-    probe = ROOT / "compare" / "workflows" / "_layer_probe.py"
+def test_the_rules_catch_a_seeded_violation(code, check, tmp_path, monkeypatch):
+    probe = scratch_root(tmp_path, monkeypatch) / "compare" / "workflows" / "_layer_probe.py"
     probe.write_text(code)
-    try:
-        assert check(probe)
-    finally:
-        probe.unlink()
+    assert check(probe)
 
 
-def test_a_campbell_event_kind_is_no_scene_kind(tmp_path):
-    probe = ROOT / "compare" / "workflows" / "_layer_probe.py"
+def test_a_campbell_event_kind_is_no_scene_kind(tmp_path, monkeypatch):
+    probe = scratch_root(tmp_path, monkeypatch) / "compare" / "workflows" / "_layer_probe.py"
     probe.write_text("def f(e):\n    return e.kind != 'crossing'\n")
-    try:
-        assert kind_checks(probe) == []
-    finally:
-        probe.unlink()
+    assert kind_checks(probe) == []
 
 
 def _graph():
@@ -320,22 +323,18 @@ def test_workflows_write_no_files():
     "import numpy as np\ndef f(p, x):\n    np.savez(p, x=x)\n",
     "def f(tr, p):\n    tr.save(p / 'run.npz')\n",
 ])
-def test_the_writer_rule_catches_a_seeded_writer(code):
-    probe = ROOT / "compare" / "workflows" / "_layer_probe.py"
+def test_the_writer_rule_catches_a_seeded_writer(code, tmp_path, monkeypatch):
+    # a copy of compare/workflows/ with the probe added: the rule over the whole room fails on it
+    root = scratch_root(tmp_path, monkeypatch, "compare/workflows")
+    probe = root / "compare" / "workflows" / "_layer_probe.py"
     probe.write_text(code)
-    try:
-        assert writes(probe)
-        with pytest.raises(AssertionError, match="_layer_probe"):
-            test_workflows_write_no_files()
-    finally:
-        probe.unlink()
+    assert writes(probe)
+    with pytest.raises(AssertionError, match="_layer_probe"):
+        test_workflows_write_no_files()
 
 
-def test_the_writer_rule_lets_reads_be():
-    probe = ROOT / "compare" / "workflows" / "_layer_probe.py"
+def test_the_writer_rule_lets_reads_be(tmp_path, monkeypatch):
+    probe = scratch_root(tmp_path, monkeypatch) / "compare" / "workflows" / "_layer_probe.py"
     probe.write_text("import json\ndef f(p):\n    with open(p) as fh:\n        return json.load(fh)"
                      "\ndef g(p):\n    return open(p, 'rb').read()\n")
-    try:
-        assert writes(probe) == []
-    finally:
-        probe.unlink()
+    assert writes(probe) == []

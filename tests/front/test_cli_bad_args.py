@@ -5,7 +5,8 @@ import sys
 import time
 
 import pytest
-from conftest import xval
+
+from tests.conftest import xval
 
 
 @pytest.mark.parametrize("args, words", [
@@ -79,7 +80,7 @@ def test_version_is_the_one_in_pyproject():
     """`xval --version`: exit 0, the version pyproject.toml declares (read here, not by xval)."""
     import tomllib
     from pathlib import Path
-    declared = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())
+    declared = tomllib.loads((Path(__file__).parents[2] / "pyproject.toml").read_text())
     rc, so, se = xval("--version")
     assert rc == 0 and so.strip() == f"xval {declared['project']['version']}", se
 
@@ -127,7 +128,7 @@ def test_to_pandas_without_pandas_names_the_extra(monkeypatch):
     import pyarrow as pa
 
     from compare.results import ModesResult, TimeResult
-    extras = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())[
+    extras = tomllib.loads((Path(__file__).parents[2] / "pyproject.toml").read_text())[
         "project"]["optional-dependencies"]
     arrow = pa.table({"t": [0.0]})                             # before pandas is hidden
     table = SimpleNamespace(to_arrow=lambda what: arrow)

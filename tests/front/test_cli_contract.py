@@ -3,10 +3,10 @@ import json
 
 import numpy as np
 import pytest
-from conftest import xval
 
 from compare.output.recording import load_scalar_series
 from compare.scenes import get_scene
+from tests.conftest import xval
 
 CHANNELS = get_scene("rotor-spinup").channels
 

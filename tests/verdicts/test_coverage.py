@@ -4,7 +4,7 @@ tolerance, 1/16 of the step; on rotor-spinup the quaternion's, an independent so
 same equations) — in ≥ 95 % of sampled (point, channel) pairs, and is sharp (median
 true/estimate ≥ 0.1). Points near each scene's defaults, short horizons to stay cheap.
 
-Reproduce the table: `python -m pytest tests/test_coverage.py -m slow -s -q`."""
+Reproduce the table: `python -m pytest tests/verdicts/test_coverage.py -m slow -s -q`."""
 import pytest
 
 from compare.workflows import coverage

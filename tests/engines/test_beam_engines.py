@@ -154,7 +154,7 @@ def test_tension_torsion_four_solvers_agree(speed):
     - engines against mstmm once the propeller terms are set alike (same ν: ω_engine² =
       ω_mstmm² − (1 − r)Ω² exactly for the continuous blade): the chain's discretisation.
     The term drops from one solver only: that solver is off by 1.4 % (20) / 5 % (40)."""
-    from conftest import tension_torsion_exact_hz
+    from tests.conftest import tension_torsion_exact_hz
     s = blade_section()
     r = (s["I_lag"] - s["I_flap"]) / (s["I_lag"] + s["I_flap"])
     exact = tension_torsion_exact_hz(speed, s["L"], s["GJ"], s["I_alpha"], r)

@@ -385,9 +385,8 @@ def test_report_and_recording_carry_formula18(tmp_path):
     entity hub_rate/formula18); its values are the rigid-blade closed form, computed here."""
     import json
 
-    from conftest import xval
-
     from compare.output.recording import load_scalar_series
+    from tests.conftest import xval
     rc, so, se = xval("run", "sail-deploy", "--solver", "thread-spool-conservative", "--set",
                       "t_end=2", "--json", "--out", str(tmp_path))
     assert rc == 0, se

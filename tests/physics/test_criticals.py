@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import xval
 from scipy.optimize import brentq
 
 from compare import solvers
@@ -25,6 +24,7 @@ from compare.analysis.campbell import in_frame
 from compare.scenes import get_scene
 from compare.scenes.base import UNBALANCE
 from compare.workflows.modes import critical_speeds, sweep
+from tests.conftest import xval
 
 SHAFT = get_scene("spinning-shaft")
 LAMBDA2 = np.array([brentq(lambda x: np.cos(x) * np.cosh(x) + 1, a, b)
@@ -34,7 +34,7 @@ LAMBDA2 = np.array([brentq(lambda x: np.cos(x) * np.cosh(x) + 1, a, b)
 # mapped to the fixed frame at Ω* = 2 and 25: mstmm 4.4e-13 / 3.0e-13 (the transfer matrix is
 # exact: its root finding), fem 4.7e-10 / 2.6e-9 (Hermite elements, Richardson), exudyn 7.43e-7
 # / 7.94e-7, mujoco 7.46e-7 / 7.92e-7 (the rigid-segment chain, N = 40/20 extrapolated: its
-# λ² as in tests/test_beam_engines.py). Tolerances ≤ 10× those.
+# λ² as in tests/engines/test_beam_engines.py). Tolerances ≤ 10× those.
 TOL = {"mstmm": 4e-12, "fem": 2e-8, "exudyn": 3e-6, "mujoco": 3e-6}
 W0 = np.sqrt(582.996 / (2.87 * 1.29 ** 4))         # ω₀ = √(EI/(m L⁴)) of the defaults [rad/s]
 

@@ -15,10 +15,10 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from conftest import wait_for, xval
 
 from compare.analysis.trajectory import Trajectory
 from compare.output.recording import load_scalar_series
+from tests.conftest import wait_for, xval
 
 SPIN = {"name": "spin", "scene": "rotor-spinup", "set": {"t_end": 0.5},
         "solvers": ["euler-vector", "quaternion"]}

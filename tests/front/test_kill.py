@@ -12,8 +12,9 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import wait_for, xval
 from test_faults import SLOW
+
+from tests.conftest import wait_for, xval
 
 CAMPAIGN = SLOW % 4         # four ~3-s jobs: long enough to be killed mid-run
 # the rotor's capture boundary along the torque over a long horizon: ~0.1 s a point

@@ -6,7 +6,8 @@ The physics is asserted elsewhere; here the numbers that count are the two engin
 import json
 
 import pytest
-from conftest import xval
+
+from tests.conftest import xval
 
 
 def _campaign(tmp_path, cases):

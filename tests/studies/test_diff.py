@@ -7,13 +7,13 @@ import shutil
 
 import numpy as np
 import pytest
-from conftest import xval
 
 from compare.results import Result
 from compare.results.records import RunRec
 from compare.scenes import get_scene
 from compare.workflows import diff as diff_mod
 from compare.workflows import sides
+from tests.conftest import xval
 
 TORQUE = 2.0
 TINY = """name = "tiny"

@@ -9,12 +9,12 @@ solver's comparisons — independent of how power.py searches for it.
 import json
 
 import pytest
-from conftest import xval as cli
 
 import xval
 from compare import solvers
 from compare.analysis import metrics
 from compare.scenes import get_scene
+from tests.conftest import xval as cli
 
 
 def test_epsilon_star_of_the_whirl_stiffness_is_the_closed_form():

@@ -6,7 +6,7 @@ The incomplete case is an independent fact, not our verdict: RK4 on the rotor wi
 it must end `diverged` (scene-rotor.md's extreme "rk4 above its stability limit")."""
 import json
 
-from conftest import xval
+from tests.conftest import xval
 
 UNSTABLE = ["--set", "k=1e7", "--set", "t_end=0.2", "--set", "output_dt=0.005",
             "--integrator", "rk4", "--dt", "5e-3", "--solver", "quaternion",

@@ -6,13 +6,13 @@ import sys
 
 import numpy as np
 import pytest
-from conftest import xval
 
 from compare import solvers
 from compare.physics.rotor import constants
 from compare.scenes import get_scene
 from compare.workflows import maps
 from compare.workflows.campaign import run_campaign
+from tests.conftest import xval
 
 BASE = {"eccentricity": 0.005, "t_end": 10}
 RES = 1e-2                                    # of the torque range 2.5–3.5: brackets ≤ 0.01

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import xval as cli
 
 import xval
 from compare.cli import main
+from tests.conftest import xval as cli
 
 PASSAGE = {"torque": 3.2, "t_end": 5}        # the paper's passage case (README, Commands)
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 TUTORIAL = ROOT / "docs" / "tutorials" / "own_system.py"
 BUILDERS = ("mkdocs", "material", "mkdocstrings", "mkdocstrings_handlers.python", "jupytext")
 

@@ -14,7 +14,7 @@ the channel's scale. A conserved quantity (the scene's energy balance and invari
 as its drift from t = 0, so its golden pins the conservation, not an offset the noise moves.
 `test_a_one_percent_error_fails_the_golden` proves each golden's power: one physical parameter
 of the scene 1 % off fails every solver's golden. Rewrite them on purpose with
-`python -m pytest tests/test_golden.py --update-golden`; the JSON diff is the review, and a
+`python -m pytest tests/verdicts/test_golden.py --update-golden`; the JSON diff is the review, and a
 failure names the package versions that changed since.
 """
 import importlib.metadata
@@ -27,7 +27,7 @@ import pytest
 from compare import solvers
 from compare.scenes import SCENES, get_scene
 
-GOLDEN = Path(__file__).parent / "golden"
+GOLDEN = Path(__file__).parents[1] / "golden"
 N_SAMPLES = 64
 PERTURB = 1e-12
 SAFETY = 100.0

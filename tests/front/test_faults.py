@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import wait_for, xval
 
 from compare.cli import main
 from compare.output import guard
+from tests.conftest import wait_for, xval
 
 
 def _case(name, t_end, sweep):

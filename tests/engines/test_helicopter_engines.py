@@ -12,7 +12,6 @@ spinning for the differential modes, within the engines' stated blade allowance.
 import mujoco
 import numpy as np
 import pytest
-from conftest import table_counts
 
 import reference_models.exudyn.helicopter as exu_heli
 import reference_models.mujoco.beam_modes as beam
@@ -21,6 +20,7 @@ from compare import solvers
 from compare.scenes import get_scene
 from compare.scenes.mstmm import BLADE_ENGINE_ALLOWANCE
 from reference_models import helicopter_common as hc
+from tests.conftest import table_counts
 
 P = get_scene("helicopter-clamped").resolve()
 HP = get_scene("helicopter-hover").resolve()

@@ -4,10 +4,10 @@ import json
 from pathlib import Path
 
 import numpy as np
-from conftest import xval
 
 from compare.workflows import bench_modes
 from compare.workflows.bench import run_bench
+from tests.conftest import xval
 
 
 def test_frequency_bench_small_ladder(tmp_path, monkeypatch):

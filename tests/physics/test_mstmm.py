@@ -4,13 +4,13 @@ Every expected number is independent of the code under test: closed forms writte
 paper's Tables 1-4 written here, or the other solver (`fem` against `mstmm`)."""
 import numpy as np
 import pytest
-from conftest import table_counts
 
 from compare.errors import BadInput
 from compare.scenes.mstmm import HELICOPTER_CLAMPED, HELICOPTER_HOVER, ROTATING_BEAM, SPINNING_SHAFT
 from custom_models.fem import blade as fem_blade
 from custom_models.fem import shaft as fem_shaft
 from custom_models.mstmm import blade, shaft
+from tests.conftest import table_counts
 
 TWO_PI = 2 * np.pi
 # cantilever roots of cos λ cosh λ = −1 (textbook values, 17 digits)
@@ -95,7 +95,7 @@ def test_tension_torsion_exact_uniform_blade(speed):
     exact root by ₂F₁): mstmm measured ≤ 2.0e-13, fem ≤ 3.6e-12 (20 and 40 rad/s); Rayleigh
     with sin(πx/2L), ω² = ω₀² + Ω²(1 + π²/12 + 1/4), bounds it from above (+1.9e-4 at
     40 rad/s). The term's size: +1.45 % at 20, +5.26 % at 40 rad/s."""
-    from conftest import tension_torsion_exact_hz
+    from tests.conftest import tension_torsion_exact_hz
     _, _, _, GJ, I_a = blade_constants()
     exact = tension_torsion_exact_hz(speed, 6.0, GJ, I_a)
     on = torsion_1(speed, "on")

@@ -4,10 +4,10 @@ import json
 import os
 
 import pytest
-from conftest import xval
 
 from compare.atomic import publish, write_json, write_text
 from compare.output.report import fmt_value
+from tests.conftest import xval
 
 
 @pytest.mark.parametrize("mask, mode", [(0o022, 0o644), (0o027, 0o640), (0o077, 0o600)])

@@ -5,11 +5,11 @@ import json
 
 import numpy as np
 import pytest
-from conftest import xval as xval_cli
 
 import xval
 from compare.analysis.metrics import INCONCLUSIVE_FRACTION, deviation, frequency_comparisons
 from compare.analysis.trajectory import Modes, Trajectory
+from tests.conftest import xval as xval_cli
 
 T = np.linspace(0.0, 1.0, 11)
 

@@ -257,6 +257,16 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
                                       cb.refine if usable else 0, step / 2 ** cb.depth)
     diagrams = {s.name: campbell.track_lines(grid, [p[k] for p in per_point])
                 for k, s in enumerate(usable)}
+    # every sampled value judged as the scene's own point is: pair by pair, mode by mode, with
+    # each solver's error bars and the allowances at that value (a line drawn is a line judged).
+    # Whirling modes are judged as seen from the ground: in the rotating frame a forward whirl's
+    # frequency passes through 0 at its critical speed, where a relative comparison says nothing
+    judged = "fixed" if "fixed" in cb.frames else cb.frame
+    sweep = [replace(c, channel=f"{c.channel} @ {cb.parameter} {v:.6g}")
+             for v, runs in zip(grid, per_point)
+             for c in sc.verdicts({**params, cb.parameter: float(v)},
+                                  [campbell.in_frame(m, cb.excitation_hz(params, v), cb.frame,
+                                                     judged) for m in runs])]
     by_frame = {f: {s.name: diagrams[s.name].lines_of(
         [campbell.in_frame(p[k], cb.excitation_hz(params, v), cb.frame, f)
          for p, v in zip(per_point, grid)]) for k, s in enumerate(usable)} for f in cb.frames}
@@ -290,7 +300,11 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
            "zeta_lines": {s: {k: none(v) for k, v in z.items()} for s, z in zeta.items()},
            "growing_from": {s: o for s, o in onsets.items() if o},
            "unconfirmed_critical_speeds": {s: u for s, u in unconfirmed.items() if u},
-           "incomplete": missing}
+           "incomplete": missing,
+           "sweep_verdicts": {"comparisons": len(sweep),
+                              "counts": dict(Verdict.tally(c.verdict for c in sweep)),
+                              "not_agree": [c.as_dict() for c in sweep
+                                            if c.verdict != Verdict.AGREE]}}
     if lines:
         obj["figure_frame"] = frame
     md = ["", "## Campbell diagram", "",
@@ -313,11 +327,16 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
     md += [f"- {n}: {u['name']} unconfirmed (the lines cross near {u['lines_estimate']:.6g}): "
            f"{u['reason']}" for n, us in unconfirmed.items() for u in us]
     md += [f"- {m['solver']}: no critical speeds — {m['reason']}" for m in missing]
+    md += ["", f"Every sampled {cb.parameter} judged pairwise: "
+           + agree_text(c.verdict for c in sweep) + "."]
+    md += [f"- {c.a} vs {c.b} {c.channel}: {c.verdict} (Δ/bound {c.ratio:.2g})"
+           for c in sweep if c.verdict != Verdict.AGREE]
     md += ["", "![campbell](campbell.png)"]
     growing = {s: {k: np.asarray(z, float) < -(floor + np.nan_to_num(np.asarray(
         zeta_error.get(s, {}).get(k, 0.0), float))) for k, z in zeta[s].items()}
         for s, o in onsets.items() if o}
-    return obj, crit, md, (grid, by_frame[frame], entries, events, frame, lines, growing)
+    return obj, crit, md, (grid, by_frame[frame], entries, events, frame, lines, growing), \
+        [c for c in sweep if c.verdict != Verdict.AGREE]
 
 
 def critical_table(cb, entries: dict) -> list[str]:
@@ -410,8 +429,9 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
     crit, obj_cb, drawing = {}, None, None
     if sc.campbell and campbell_sweep and any(
             not sc.campbell.solvers or s.name in sc.campbell.solvers for s in chosen):
-        obj_cb, crit, report["campbell"], drawing = campbell_diagram(sc, chosen, params, log,
-                                                                     campbell_frame)
+        obj_cb, crit, report["campbell"], drawing, off_sweep = campbell_diagram(
+            sc, chosen, params, log, campbell_frame)
+        comparisons = comparisons + off_sweep        # the sweep's refusals are the run's
     if threshold and sc.threshold is not None and sc.threshold.active(params):
         extra["threshold"], report["threshold"] = run_threshold(sc, params, chosen,
                                                                 solver_names, log)

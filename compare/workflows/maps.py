@@ -441,11 +441,17 @@ def crossing_errors(runner, solver, settings, tight, lines, found, x_axis, width
         bisect_lines(runner, solver, tight, line, x_axis, width, y_name)
         again = [d for d in crossings(line, x_axis, None)
                  if d["from"] == c["from"] and d["to"] == c["to"]]
-        if again:
-            c["error"] = min(abs(d["x"] - c["x"]) for d in again)
-        else:       # no error bar, never a wider window: the verdict says `unconfirmed`
-            c.update(error=None, unconfirmed=True,
-                     error_by=c["error_by"] + ": the crossing vanishes there")
+        shift = min((abs(d["x"] - c["x"]) for d in again), default=None)
+        if shift is not None and shift <= 2 * width:
+            c["error"] = shift       # within two brackets: the location's own error
+            continue
+        # the tighter setting answers otherwise — the crossing gone, or moved past two brackets
+        # (a wider window would agree with anything): the verdict says `unconfirmed`
+        why = ("crossing vanishes at its tighter setting" if shift is None else
+               f"crossing moves {shift:.3g} at its tighter setting, beyond two brackets "
+               f"({2 * width:.3g})")
+        c.update(error=None, unconfirmed=True, unconfirmed_why=why,
+                 error_by=f"{c['error_by']}: the {why}")
 
 
 def _settings_text(st):
@@ -572,9 +578,11 @@ def compare_boundaries(boundaries, width, seen=None):
                     if got == Verdict.AGREE and (ca.get("unconfirmed")
                                                  or cb.get("unconfirmed")):
                         got = Verdict.UNCONFIRMED
-                        lines.append(f"{ca['from']}→{ca['to']}{_row(ca)}: unconfirmed — the "
-                                     f"crossing of {a if ca.get('unconfirmed') else b} "
-                                     "vanishes at its tighter setting")
+                        gone = ca if ca.get("unconfirmed") else cb
+                        lines.append(f"{ca['from']}→{ca['to']}{_row(ca)}: unconfirmed — "
+                                     f"{a if gone is ca else b}'s " + gone.get(
+                                         "unconfirmed_why",
+                                         "crossing vanishes at its tighter setting"))
                     pairs.append(got)
                     if got == Verdict.DISAGREE:
                         lines.append(f"{ca['from']}→{ca['to']}{_row(ca)}: {a} at "

@@ -336,3 +336,41 @@ def test_a_chunk_resolves_its_points_as_resolve_does():
             sc.resolve({**base, **bad})
         with pytest.raises(BadInput):
             sc.resolve_many(base, [{"torque": 1.0}, bad])
+
+
+class _Regimes:
+    """A stand-in runner: capture below a boundary, passage above it — at 2.0 for the accurate
+    settings, at 2.0 + `shift` for the tighter ones (what the map's own runner answers)."""
+    def __init__(self, shift):
+        self.shift, self.tight = shift, {}
+
+    def _key(self, solver, settings, pt):
+        return (solver, repr(settings), repr(pt))
+
+    def run(self, tasks):
+        return [{"label": "capture" if pt["torque"] < 2.0 + (self.shift if st.get("tight")
+                                                              else 0.0) else "passage"}
+                for _, st, pt in tasks]
+
+
+@pytest.mark.parametrize("shift, why", [(0.0, None), (0.0015, None), (0.003, "moves 0.0025"),
+                                        (0.05, "vanishes")])
+def test_a_crossing_moved_past_its_bracket_at_the_tighter_setting_is_unconfirmed(shift, why):
+    """The bracket [1.9995, 2.0005] (resolution 1e-3) rerun at the tighter setting: a boundary
+    there at 2.0015 is the location's own error (1.5e-3, within two brackets); at 2.003, or
+    beyond the search at 2.05, the tighter setting answers otherwise — an error bar that wide
+    is a window that agrees with anything, so the crossing is `unconfirmed` (seeded: a regime
+    flip at the tighter setting)."""
+    width = 1e-3
+    found = [{"x": 2.0, "y": None, "bracket": [2.0 - width / 2, 2.0 + width / 2],
+              "from": "capture", "to": "passage"}]
+    maps.crossing_errors(_Regimes(shift), "s", {}, {"tight": True}, None, found,
+                         maps.Axis("torque", 1.0, 5.0, "N·m"), width, None)
+    (c,) = found
+    if why is None:
+        assert not c.get("unconfirmed") and c["error"] == pytest.approx(shift, abs=width / 2)
+        return
+    assert c["unconfirmed"] and c["error"] is None and why in c["unconfirmed_why"], c
+    got = maps.compare_boundaries({"a": found, "b": [{**found[0], "unconfirmed": False,
+                                                      "error": 0.0}]}, width)
+    assert got[0]["verdict"] == "unconfirmed" and why in got[0]["why"][0]

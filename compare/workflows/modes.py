@@ -146,12 +146,15 @@ def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: 
     return out
 
 
-def entry(cb, params, name, exc, value, whirl) -> dict:
+def entry(cb, params, name, exc, value, whirl, error=None, slope=None) -> dict:
     """One critical speed as a ROSS user reads it: the sweep value, the speed in rad/s and
     rpm, the crossing's frequency in Hz and rad/s (in `frame`, where the lines crossed the
-    excitation), the excitation, the mode's whirl ("forward"/"backward"; None: no whirl)."""
+    excitation), the excitation, the mode's whirl ("forward"/"backward"; None: no whirl); its
+    error estimate in the sweep's unit and the slope of frequency minus excitation there
+    (Hz per unit: what turns a frequency allowance into one on the speed)."""
     speed_hz = cb.excitation_hz(params, value)
-    return {"name": name, "value": float(value), "unit": cb.unit,
+    return {"name": name, "value": float(value), "unit": cb.unit, "error": error,
+            "slope_hz": slope,
             "speed_rad_s": 2 * np.pi * speed_hz, "speed_rpm": 60 * speed_hz,
             "frequency_hz": exc.order * speed_hz,
             "frequency_rad_s": 2 * np.pi * exc.order * speed_hz,
@@ -187,6 +190,8 @@ def _crossing(scene, solver, params, values, i, g, key, f0, shapes, exc, seen, n
             raise ValueError(f"the mode called {key!r} at {v} is another (MAC "
                              f"{np.max(mac(m.shapes[j], shapes)):.2f} with the line's)")
         whirl["last"] = campbell.whirl(m, exc.frame, cb.excitation_hz(params, v))[j]
+        errors = metrics.frequency_errors(m)
+        whirl["error_hz"] = None if errors is None else float(errors[j])
         return m.frequencies_hz[j] - exc.order * cb.excitation_hz(params, v)
     lo, hi = values[i], values[i + 1]
     v0 = _linear(values, g, i)                                 # linear, from the lines
@@ -211,7 +216,50 @@ def _crossing(scene, solver, params, values, i, g, key, f0, shapes, exc, seen, n
         if not x[0] <= v <= x[-1]:
             return (f"{first}; the parabola's root {v:.6g} lies outside the points beside the "
                     f"estimate [{x[0]:.6g}, {x[-1]:.6g}]")
-    return v, whirl.get("last")
+    # the crossing's error: the mode's frequency error over the gap's slope across the step,
+    # plus the root's own tolerance (1e-9 relative)
+    slope = abs((g[i + 1] - g[i]) / (hi - lo))
+    error = (None if whirl.get("error_hz") is None or slope == 0 else
+             whirl["error_hz"] / slope + 1e-9 * abs(v))
+    return v, whirl.get("last"), error, slope
+
+
+def critical_speed_comparisons(sc: Scene, params: dict, entries: dict) -> list:
+    """Every pair of solvers' critical speeds of one name, as Comparisons ("critical speed
+    <name>"): |Δ| against both crossings' error estimates plus the pair's frequency allowance
+    carried onto the speed (δf over the slope of frequency minus excitation, the flatter of the
+    two) — a crossing computed is a crossing judged."""
+    tol = sc.tolerances_for(params)
+    one_model = set(tol.get("frequency_one_model", ()))
+    names = list(entries)
+    out = []
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            mine = {e["name"]: e for e in entries[b]}
+            for ea in entries[a]:
+                eb = mine.get(ea["name"])
+                if eb is None:
+                    continue
+                d = abs(ea["value"] - eb["value"])
+                scale = max(abs(ea["value"]), abs(eb["value"]), 1e-300)
+                slopes = [e["slope_hz"] for e in (ea, eb) if e.get("slope_hz")]
+                allow = (metrics.frequency_allowance(tol, a, b) * ea["frequency_hz"]
+                         / min(slopes) if slopes else 0.0)
+                shared = bool({f"{a}|{b}", f"{b}|{a}"} & one_model)
+                own = (None if shared or ea.get("error") is None or eb.get("error") is None
+                       else {a: ea["error"], b: eb["error"]})
+                err = sum(own.values()) if own else None
+                bound = allow + (err or 0.0)
+                v, wide = metrics.judged(d, bound, own, allow, scale, f" {ea['unit']}"
+                                         if ea["unit"] else "")
+                why = (f"{ea['value']:.8g} vs {eb['value']:.8g}: |Δ| {d:.2e} "
+                       f"{'>' if v == Verdict.DISAGREE else '≤'} "
+                       + (f"error estimates {err:.1e} + " if err is not None else "")
+                       + f"allowance {allow:.1e} (the frequency allowance over the slope)")
+                out.append(metrics.Comparison(
+                    a, b, f"critical speed {ea['name']}", d, d, d / scale, scale,
+                    bound / scale, v, f"{wide}; {why}" if wide else why, d, err, allow))
+    return out
 
 
 def by_name(entries: list[dict]) -> dict[str, float]:
@@ -267,6 +315,7 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
              for c in sc.verdicts({**params, cb.parameter: float(v)},
                                   [campbell.in_frame(m, cb.excitation_hz(params, v), cb.frame,
                                                      judged) for m in runs])]
+    sweep += critical_speed_comparisons(sc, params, entries)
     by_frame = {f: {s.name: diagrams[s.name].lines_of(
         [campbell.in_frame(p[k], cb.excitation_hz(params, v), cb.frame, f)
          for p, v in zip(per_point, grid)]) for k, s in enumerate(usable)} for f in cb.frames}
@@ -327,7 +376,7 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
     md += [f"- {n}: {u['name']} unconfirmed (the lines cross near {u['lines_estimate']:.6g}): "
            f"{u['reason']}" for n, us in unconfirmed.items() for u in us]
     md += [f"- {m['solver']}: no critical speeds — {m['reason']}" for m in missing]
-    md += ["", f"Every sampled {cb.parameter} judged pairwise: "
+    md += ["", f"Every sampled {cb.parameter} and every critical speed judged pairwise: "
            + agree_text(c.verdict for c in sweep) + "."]
     md += [f"- {c.a} vs {c.b} {c.channel}: {c.verdict} (Δ/bound {c.ratio:.2g})"
            for c in sweep if c.verdict != Verdict.AGREE]

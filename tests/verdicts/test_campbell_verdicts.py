@@ -5,6 +5,7 @@ passed every verdict while the diagram drew it)."""
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 import xval
 from compare import solvers
@@ -37,3 +38,22 @@ def test_a_torsion_one_percent_off_at_40_rad_s_disagrees(monkeypatch):
     bad = [c for c in r.comparisons if c.verdict == "disagree"]
     assert bad and all("torsion" in c.channel and "speed 40" in c.channel for c in bad)
     assert r.status == "disagree" and r.problems()
+
+
+def _crit(value, error=1e-6, slope=2.0):
+    return {"name": "flap 1 (2×)", "value": value, "unit": "rad/s", "error": error,
+            "slope_hz": slope, "frequency_hz": 5.0}
+
+
+def test_critical_speeds_are_judged_pairwise_with_the_allowance_carried_onto_the_speed():
+    """A frequency allowance δf = 1e-3 × 5 Hz moves a crossing whose frequency-minus-excitation
+    rises 2 Hz per rad/s by 2.5e-3 rad/s: with error bars of 1e-6 each, 2e-3 apart agrees and
+    3e-3 apart disagrees."""
+    from types import SimpleNamespace
+
+    from compare.workflows.modes import critical_speed_comparisons
+    sc = SimpleNamespace(tolerances_for=lambda p: {"frequency": 1e-3})
+    for d, verdict in ((2e-3, "agree"), (3e-3, "disagree")):
+        (c,) = critical_speed_comparisons(sc, {}, {"a": [_crit(10.0)], "b": [_crit(10.0 + d)]})
+        assert c.verdict == verdict and c.allowance == pytest.approx(2.5e-3), c.decided_by
+        assert c.error_estimate == pytest.approx(2e-6) and c.channel == "critical speed flap 1 (2×)"

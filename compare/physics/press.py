@@ -119,6 +119,71 @@ def initial_state(params: dict) -> dict:
             "A": A, "B": B, "C": C, "vA": vA, "vB": vB, "vC": vC}
 
 
+def chain_jacobians(params: dict, th):
+    """The open chain crank–rod–rocker (joint angles relative, as a kinematic tree has them;
+    absolute link angles `th`): per link its mass, inertia, centre-of-mass Jacobian (2 × 3) and
+    the lengths from the crank pivot to that centre along each link."""
+    lay = link_layout(params)
+    ls = [float(params["l1"]), float(params["l2"]), float(params["l3"])]
+    along = [lay["crank"][0], lay["rod"][0], ls[2] - lay["rocker"][0]]   # rocker: from B
+    out = []
+    for b, (m, J) in enumerate(lay[k][1:] for k in ("crank", "rod", "rocker")):
+        lens = ls[:b] + [along[b]]
+        Jc = np.zeros((2, 3))
+        for i in range(b + 1):
+            for j in range(i, b + 1):
+                Jc[:, i] += lens[j] * np.array([-math.sin(th[j]), math.cos(th[j])])
+        out.append((m, J, Jc, lens))
+    return out
+
+
+def open_tree_at_start(params: dict):
+    """The press as a kinematic tree whose loop is closed at C by a constraint (how an engine
+    builds it: crank → rod → rocker, the slider apart), at the initial state: mass matrix M,
+    generalized forces less velocity terms Q − h, the loop's Jacobian G (2 × 4, C on the rocker
+    minus the slider) and its velocity term γ, over q = (crank, rod − crank, rocker − rod,
+    slider x). qacc = M⁻¹(Q − h) is the tree's free acceleration; with the constraint force
+    f = −(G M⁻¹ Gᵀ)⁻¹ (G qacc + γ) it is the rigid press's (lagrange-exact's, to round-off)."""
+    st = initial_state(params)
+    th = [st["phi"], st["theta2"], st["psi"] + math.pi]
+    thd = [st["phid"], st["theta2d"], st["psid"]]
+    u = [np.array([math.cos(a), math.sin(a)]) for a in th]
+    M, force = np.zeros((4, 4)), np.zeros(4)
+    for m, J, Jc, lens in chain_jacobians(params, th):
+        b = len(lens) - 1
+        Jt = np.array([1.0] * (b + 1) + [0.0] * (3 - b))
+        bias = -sum(lens[j] * thd[j] ** 2 * u[j] for j in range(b + 1))
+        M[:3, :3] += m * Jc.T @ Jc
+        M += J * np.outer(Jt, Jt)
+        force[:3] += Jc.T @ (m * np.array([0.0, -float(params["gravity"])]) - m * bias)
+    M[3, 3] += float(params["m4"])
+    force[0] += motor_torque(st["phid"], float(params["gear_ratio"]))
+    force[3] -= float(params["slider_damping"]) * st["vC"][0]   # the spring is at rest
+    ls = [float(params["l1"]), float(params["l2"]), float(params["l3"])]
+    G = np.zeros((2, 4))
+    for i in range(3):
+        for j in range(i, 3):
+            G[:, i] += ls[j] * np.array([-math.sin(th[j]), math.cos(th[j])])
+    G[:, 3] = (-1.0, 0.0)
+    gamma = -sum(ls[j] * thd[j] ** 2 * u[j] for j in range(3))
+    return M, force, G, gamma
+
+
+def soft_closure_offset(params: dict, impedance: float, diagonal: np.ndarray) -> float:
+    """How much a loop closed by a soft constraint of `impedance` d (MuJoCo's solimp) moves the
+    crank's acceleration at the start, against the rigid closure: the constraint force solves
+    (A + R) f = −a₀ instead of A f = −a₀, A = G M⁻¹ Gᵀ, R = (1 − d)/d · diag(`diagonal`) (the
+    engine's diagonal estimate of A), a₀ the loop's acceleration without it; the difference
+    M⁻¹Gᵀ(f_soft − f_rigid) on the crank (rad/s²)."""
+    M, force, G, gamma = open_tree_at_start(params)
+    Minv = np.linalg.inv(M)
+    A = G @ Minv @ G.T
+    a0 = G @ Minv @ force + gamma
+    R = np.diag((1.0 - impedance) / impedance * np.asarray(diagonal, float))
+    df = np.linalg.solve(A, a0) - np.linalg.solve(A + R, a0)
+    return float((Minv @ G.T @ df)[0])
+
+
 def breakpoints(params: dict, t_out: np.ndarray):
     """Segment ends of a run: the output times plus, for press-cycle, lock_after and
     release_after. Returns (sorted times, output index by time, (lock_after, release_after,

@@ -46,16 +46,45 @@ _MECHANISM = (
 
 CHANNELS = phys.CHANNELS     # each built once, by compare.physics.press.channels
 # the issue's acceptance numbers, as absolute bounds
-# No modelling allowance beyond 1e-9 of scale (the estimates' own inaccuracy): every solver's
-# numerical error is in its error estimate — lagrange-partial's 0.1° central differences (its
-# KNOBS), MuJoCo's constraint time constant tied to its step (its KNOBS: RK4 sampling the stiff
-# constraint at dt/tc = 1/4 left crank_accel 0.146 off the rigid model at every step). What
-# MuJoCo's soft loop closure changes in the model, its impedance d = 0.9999, moves crank_accel
-# by (1 − d) × the constraint's acceleration (0.035 of 2340 at t = 0 at the defaults, exactly
-# ∝ 1 − d), inside the estimates' bound over the run (`python -m tests.allowances press
-# press-cycle`; tests/allowances.json).
-TOLERANCES = {c: 1e-9 for c in ("crank_angle", "crank_rate", "crank_accel", "rocker_angle",
-                                "slider_x")}
+# Every solver's numerical error is in its error estimate — lagrange-partial's 0.1° central
+# differences (its KNOBS), MuJoCo's constraint time constant tied to its step (its KNOBS: RK4
+# sampling the stiff constraint at dt/tc = 1/4 left crank_accel 0.146 off the rigid model at
+# every step) — so the allowances are 1e-9 of scale (the estimates' own inaccuracy) and one
+# model difference: MuJoCo's soft loop closure (`mujoco_soft_closure`).
+MUJOCO_IMPEDANCE = 0.9999   # MuJoCo's solimp d (its press leaf; tests check they agree)
+SOFT_CLOSURE_SAFETY = 3.0
+
+
+def _weight_at_rest(params) -> float:
+    """MuJoCo's diagonal estimate of a connect row: the mean translational inverse inertia of
+    the two bodies it joins — the rocker's centre of mass in the tree at rest (qpos0: the
+    chain straight along x) and the slider — at their centres of mass."""
+    chain = phys.chain_jacobians(params, [0.0, 0.0, 0.0])
+    M = sum(m * Jc.T @ Jc + J * np.outer(np.arange(3) < len(lens), np.arange(3) < len(lens))
+            for m, J, Jc, lens in chain)
+    Jr = chain[-1][2]
+    return float(np.trace(Jr @ np.linalg.solve(M, Jr.T)) / 3 + 1 / (3 * float(params["m4"])))
+
+
+def mujoco_soft_closure(params):
+    """MuJoCo's loop is closed by a soft constraint of impedance d: at the start, where the
+    loop's violation is 0, its constraint force solves (A + R) f = −a₀, R = (1 − d)/d × the
+    engine's diagonal estimate of A, against the rigid A f = −a₀ — crank_accel moves by
+    `phys.soft_closure_offset` (∝ 1 − d, measured exactly so by a helper at d = 0.9999 … 0.99).
+    MuJoCo's estimate (body weights at qpos0) is not reproduced exactly: the offset with diag A
+    and with the weights at rest came to 0.43–1.26 and 0.52–0.83 of the measured one over 11
+    sets; the allowance is SOFT_CLOSURE_SAFETY × the larger (1.6–3.8 × measured), in rad/s²
+    on top of the 1e-9 of scale every pair has."""
+    M, _, G, _ = phys.open_tree_at_start(params)
+    A = G @ np.linalg.solve(M, G.T)
+    largest = max(abs(phys.soft_closure_offset(params, MUJOCO_IMPEDANCE, d))
+                  for d in (np.diag(A), np.full(2, _weight_at_rest(params))))
+    return ("rel+abs", 1e-9, SOFT_CLOSURE_SAFETY * largest)
+
+
+TOLERANCES = {**{c: 1e-9 for c in ("crank_angle", "crank_rate", "crank_accel", "rocker_angle",
+                                   "slider_x")},
+              "by_solver": {"mujoco": {"crank_accel": mujoco_soft_closure}}}
 
 
 def _check(p):

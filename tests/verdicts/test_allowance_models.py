@@ -144,3 +144,39 @@ def test_paper_release_allowances(overrides):
 @pytest.mark.parametrize("overrides", [{}, {"n": 40}], ids=str)
 def test_paper_release_allowances_full_deployment(overrides):
     _check_paper_allowances(overrides)
+
+
+# --- the press: MuJoCo's soft loop closure --------------------------------------------------
+# defaults, the calibration's press-cycle sets (linkage, masses, gear, gravity drawn) and the
+# mid-link mass model; a 1-ms run: the offset lives at the start
+SOFT_SETS = [("press", {}), ("press", {"mass_model": "midpoint"}),
+             ("press", {"l1": 0.017, "m4": 80, "omega0": 50, "gear_ratio": 1.2}),
+             ("press-cycle", {"l1": 0.0121, "l2": 0.0363, "l3": 0.0572, "m1": 5.01, "m2": 14.3,
+                              "m3": 12.6, "m4": 171, "phi0": -56.9, "psi0": -43.0,
+                              "omega0": 66.8, "gravity": 10.7, "gear_ratio": 0.886}),
+             ("press-cycle", {"J1": 0.05, "J3": 0.03, "slider_damping": 200, "omega0": 30})]
+
+
+def test_soft_closure_impedance_is_the_mujoco_leafs():
+    from compare.scenes import press
+    from reference_models.mujoco.press import DEFAULT_SETTINGS
+    assert DEFAULT_SETTINGS["solimp"][0] == press.MUJOCO_IMPEDANCE
+
+
+@pytest.mark.parametrize("scene, overrides", SOFT_SETS, ids=str)
+def test_mujoco_soft_closure_allowance(scene, overrides):
+    """The open tree with its loop closed rigidly reproduces lagrange-exact's crank
+    acceleration at the start (the independent check of the tree's M, forces and Jacobian);
+    the soft closure's allowance covers MuJoCo's distance to it there, within 10×."""
+    import xval
+    from compare.physics import press as phys
+    from compare.scenes.press import mujoco_soft_closure
+    r = xval.run(scene, ["lagrange-exact", "mujoco"], estimate_errors=False,
+                 params={**overrides, "t_end": 0.001, "output_dt": 0.0005})
+    exact, mujoco = (r.runs[s].channels["crank_accel"][0] for s in ("lagrange-exact", "mujoco"))
+    M, force, G, gamma = phys.open_tree_at_start(r.params)
+    Minv = np.linalg.inv(M)
+    f = -np.linalg.solve(G @ Minv @ G.T, G @ Minv @ force + gamma)
+    assert (Minv @ (force + G.T @ f))[0] == pytest.approx(exact, rel=1e-12)
+    ratio = mujoco_soft_closure(r.params)[2] / abs(mujoco - exact)
+    assert 1 <= ratio <= 10, ratio

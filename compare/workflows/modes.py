@@ -224,6 +224,25 @@ def _crossing(scene, solver, params, values, i, g, key, f0, shapes, exc, seen, n
     return v, whirl.get("last"), error, slope
 
 
+def _same_mode(runs: list, c) -> bool:
+    """Whether the two modes a sweep comparison pairs by name are one mode: each is the other
+    solver's nearest in frequency. Where a solver misses a mode (MSTMM's root scan starts at
+    0.1 Hz; the hovering aircraft has two flap modes below it at 1.25 rad/s) the names shift,
+    and a comparison of two different modes says nothing about either solver."""
+    label = c.channel.split(" @ ")[0].removesuffix(" ζ")
+    a, b = (next(m for m in runs if m.solver == s) for s in (c.a, c.b))
+    if label not in a.labels:
+        return True
+    fa, fb = (np.asarray(m.frequencies_hz, float) for m in (a, b))
+    i = a.labels.index(label)
+    # its partner: the mode of that name, else (paired by frequency) the one c measured against
+    # (a ζ comparison's deviation is no frequency: its pair's nearest stands for it)
+    j = (b.labels.index(label) if label in b.labels else
+         int(np.argmin(np.abs(fb - fa[i]))) if c.channel.split(" @ ")[0].endswith(" ζ") else
+         int(np.argmin(np.abs(np.abs(fb - fa[i]) - c.deviation))))
+    return int(np.argmin(np.abs(fb - fa[i]))) == j and int(np.argmin(np.abs(fa - fb[j]))) == i
+
+
 def critical_speed_comparisons(sc: Scene, params: dict, entries: dict) -> list:
     """Every pair of solvers' critical speeds of one name, as Comparisons ("critical speed
     <name>"): |Δ| against both crossings' error estimates plus the pair's frequency allowance
@@ -310,11 +329,13 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
     # Whirling modes are judged as seen from the ground: in the rotating frame a forward whirl's
     # frequency passes through 0 at its critical speed, where a relative comparison says nothing
     judged = "fixed" if "fixed" in cb.frames else cb.frame
-    sweep = [replace(c, channel=f"{c.channel} @ {cb.parameter} {v:.6g}")
-             for v, runs in zip(grid, per_point)
-             for c in sc.verdicts({**params, cb.parameter: float(v)},
-                                  [campbell.in_frame(m, cb.excitation_hz(params, v), cb.frame,
-                                                     judged) for m in runs])]
+    sweep, renamed = [], []
+    for v, runs in zip(grid, per_point):
+        seen = [campbell.in_frame(m, cb.excitation_hz(params, v), cb.frame, judged)
+                for m in runs]
+        for c in sc.verdicts({**params, cb.parameter: float(v)}, seen):
+            c = replace(c, channel=f"{c.channel} @ {cb.parameter} {v:.6g}")
+            (sweep if _same_mode(seen, c) else renamed).append(c)
     sweep += critical_speed_comparisons(sc, params, entries)
     by_frame = {f: {s.name: diagrams[s.name].lines_of(
         [campbell.in_frame(p[k], cb.excitation_hz(params, v), cb.frame, f)
@@ -350,7 +371,8 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
            "growing_from": {s: o for s, o in onsets.items() if o},
            "unconfirmed_critical_speeds": {s: u for s, u in unconfirmed.items() if u},
            "incomplete": missing,
-           "sweep_verdicts": {"comparisons": len(sweep),
+           "sweep_verdicts": {"comparisons": len(sweep), "renamed": [
+                                  f"{c.a} vs {c.b} {c.channel}" for c in renamed],
                               "counts": dict(Verdict.tally(c.verdict for c in sweep)),
                               "not_agree": [c.as_dict() for c in sweep
                                             if c.verdict != Verdict.AGREE]}}
@@ -380,6 +402,11 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
            + agree_text(c.verdict for c in sweep) + "."]
     md += [f"- {c.a} vs {c.b} {c.channel}: {c.verdict} (Δ/bound {c.ratio:.2g})"
            for c in sweep if c.verdict != Verdict.AGREE]
+    if renamed:
+        md += [f"- not judged, the two solvers give the name to different modes there (each "
+               f"one's mode nearest the other's is another): {len(renamed)} comparisons, "
+               + ", ".join(f"{c.a} vs {c.b} {c.channel}" for c in renamed[:4])
+               + (" …" if len(renamed) > 4 else "")]
     md += ["", "![campbell](campbell.png)"]
     growing = {s: {k: np.asarray(z, float) < -(floor + np.nan_to_num(np.asarray(
         zeta_error.get(s, {}).get(k, 0.0), float))) for k, z in zeta[s].items()}

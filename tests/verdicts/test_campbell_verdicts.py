@@ -57,3 +57,21 @@ def test_critical_speeds_are_judged_pairwise_with_the_allowance_carried_onto_the
         (c,) = critical_speed_comparisons(sc, {}, {"a": [_crit(10.0)], "b": [_crit(10.0 + d)]})
         assert c.verdict == verdict and c.allowance == pytest.approx(2.5e-3), c.decided_by
         assert c.error_estimate == pytest.approx(2e-6) and c.channel == "critical speed flap 1 (2×)"
+
+
+def test_a_name_given_to_different_modes_is_not_judged():
+    """At a sweep point where one solver misses a mode, the names shift: "flap 2" of one is
+    "flap 3" of the other. Only a pair that is each other's nearest mode is one mode; the
+    other comparison is listed, not judged — while a mode 1 % off keeps its name's partner."""
+    from compare.analysis.metrics import frequency_comparisons
+    from compare.analysis.trajectory import Modes
+    from compare.workflows.modes import _same_mode
+    def judged(fb, labels=("flap 1", "flap 2", "flap 3")):
+        a = Modes("s", "a", np.array([1.0, 5.0, 9.0]), ["flap 1", "flap 2", "flap 3"])
+        b = Modes("s", "b", np.array(fb), list(labels))
+        return {c.channel: _same_mode([a, b], replace(c, channel=f"{c.channel} @ speed 1"))
+                for c in frequency_comparisons([a, b], {"frequency": 1e-3})}
+    # b misses nothing: its flap 2 1 % off is still a's flap 2 (and disagrees, judged)
+    assert judged([1.0, 5.05, 9.0]) == {"flap 1": True, "flap 2": True, "flap 3": True}
+    # b has an extra mode at 0.06 Hz: every name points at another mode of a
+    assert judged([0.06, 1.0, 5.0]) == {"flap 1": False, "flap 2": False, "flap 3": False}

@@ -141,8 +141,7 @@ def ring_down_of(names):
     return p, rows, md
 
 
-@pytest.mark.parametrize("name", ["quaternion", pytest.param("exudyn", marks=pytest.mark.slow),
-                                  pytest.param("mujoco", marks=pytest.mark.slow)])
+@pytest.mark.parametrize("name", ["quaternion", "exudyn", "mujoco"])
 def test_ring_down_confirms_the_eigenvalues(name):
     """The free response of the time solver fitted by the matrix pencil against the same
     solver's eigenvalues, judged by the scene's verdicts (error estimates: the rerun at the
@@ -162,7 +161,6 @@ def test_ring_down_confirms_the_eigenvalues(name):
         assert whirl == want, label
 
 
-@pytest.mark.slow
 def test_allowances_are_within_10x_of_measured():
     """The modal allowances of bearing.py against the deviations left beyond both error
     estimates at the cases they were measured in; each must cover them (verdict agree) and be

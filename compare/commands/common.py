@@ -181,6 +181,19 @@ def out_or_temporary(out):
     return str(out), None
 
 
+def verdict_line(comparisons) -> str:
+    """The answer in one line: how many agree (how many marginally) and the comparison that
+    came closest to its bound."""
+    from ..analysis.verdict import Verdict, agree_text
+    line = agree_text(c.verdict for c in comparisons)
+    marginal = sum(c.shown == "agree (marginal)" for c in comparisons)
+    judged = [c for c in comparisons if c.verdict != Verdict.SKIPPED and c.ratio == c.ratio]
+    worst = max(judged, key=lambda c: c.ratio, default=None)
+    return (line + (f" ({marginal} marginal)" if marginal else "")
+            + (f"; worst Δ/bound {worst.ratio:.2g} ({worst.a} vs {worst.b} {worst.channel})"
+               if worst else ""))
+
+
 def compared_answer(args, result) -> int:
     """Print a run or modes result (each solver's status and final values, each comparison, the
     summary, the files); its exit status: 3 where a solver crashed, --strict's rule else."""
@@ -193,9 +206,8 @@ def compared_answer(args, result) -> int:
                   + "  ".join(f"{k}={v:.6g}" for k, v in (r.get("final") or {}).items()
                               if v is not None))
         for c in result.comparisons:
-            print(f"{c.a} vs {c.b} {c.channel}: max rel {c.max_rel:.2e} → {c.verdict}")
-        if obj.get("summary"):             # a modes run: incomplete, unpaired, unconfirmed
-            print(obj["summary"])
+            print(f"{c.a} vs {c.b} {c.channel}: max rel {c.max_rel:.2e} → {c.shown}")
+        print(obj.get("summary") or verdict_line(result.comparisons))
         for k in ("recording", "report"):
             if obj.get(k):
                 print(f"{k}: {obj[k]}")

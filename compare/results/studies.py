@@ -12,7 +12,7 @@ import shutil
 import weakref
 from pathlib import Path
 
-from ..analysis.verdict import Verdict
+from ..analysis.verdict import Verdict, agree_text
 from .base import Result, verdict_problems
 from .records import Side, case_type, modes_case, read_maps, readable, time_case
 
@@ -156,9 +156,13 @@ class CampaignResult(StudyResult):
 
     def summary_lines(self):
         d = self.data
+        verdicts = [x["verdict"] for c in d.get("cases", []) for x in c.get("comparisons", [])]
+        maps = [(m.get("status") or {}).get("status") for m in d.get("maps", [])]
         return [f"campaign {d['name']}: {d['n_jobs']} jobs ({d['n_run']} run, "
                 f"{d['n_reused']} reused), {d['n_failed']} cases with a failed solver, "
-                f"{d['n_crashed']} crashed jobs; {d['wall_s']:.1f} s"]
+                f"{d['n_crashed']} crashed jobs; {d['wall_s']:.1f} s",
+                agree_text(verdicts) + (f"; maps: {maps.count(Verdict.AGREE)} of {len(maps)} "
+                                        "agree" if maps else "")]
 
     def problems(self, channels=None):
         """Every case's error, failed solvers and refused verdicts, and every map's."""

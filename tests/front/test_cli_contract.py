@@ -146,3 +146,21 @@ def test_bench_vary_trades_a_model_parameter(tmp_path):
 def test_bench_bad_vary_is_one_line_exit_2(tmp_path, vary):
     rc, so, se = xval("bench", "rotor-spinup", "--vary", vary, "--out", str(tmp_path))
     assert rc == 2 and len(se.strip().splitlines()) == 1 and so == ""
+
+
+def test_run_prints_its_answer_in_one_line(tmp_path):
+    """After the comparisons, one line: how many agree (how many marginally) and the worst
+    Δ/bound — the same counts and ratio the run's JSON holds."""
+    rc, so, _ = xval("run", "rotor-spinup", "--set", "t_end=0.5", "--solver", "quaternion",
+                     "--solver", "euler-vector", "--no-record", "--out", str(tmp_path / "o"))
+    assert rc == 0
+    line = next(x for x in so.splitlines() if "comparisons agree" in x)
+    rc, js, _ = xval("run", "rotor-spinup", "--set", "t_end=0.5", "--solver", "quaternion",
+                     "--solver", "euler-vector", "--json", "--out", str(tmp_path / "o"))
+    comps = json.loads(js)["comparisons"]
+    n = len(comps)
+    assert line.startswith(f"{sum(c['verdict'] == 'agree' for c in comps)} of {n} comparisons "
+                           "agree")
+    marginal = sum(c["shown"] == "agree (marginal)" for c in comps)
+    assert (f"({marginal} marginal)" in line) == (marginal > 0)
+    assert f"worst Δ/bound {max(c['ratio'] for c in comps):.2g}" in line

@@ -181,6 +181,20 @@ def out_or_temporary(out):
     return str(out), None
 
 
+def mode_lines(run: dict) -> list[str]:
+    """A modes run's answer per mode: its frequency in Hz and rad/s, and where the solver gives
+    them ζ, log dec and whirl (ROSS's conventions)."""
+    out = []
+    zeta, dec = run.get("zeta"), run.get("log_dec")
+    for k, (label, f) in enumerate(zip(run.get("labels") or [], run.get("frequencies_hz") or [])):
+        line = f"{label or f'mode {k + 1}'}: {f:.8g} Hz ({2 * math.pi * f:.8g} rad/s)"
+        if zeta is not None:
+            line += f", ζ {zeta[k] + 0.0:.3g}, log dec {dec[k] + 0.0:.3g}"
+        whirl = (run.get("whirl") or [None] * (k + 1))[k]
+        out.append(line + (f", {whirl} whirl" if whirl and whirl not in (label or "") else ""))
+    return out
+
+
 def verdict_line(comparisons) -> str:
     """The answer in one line: how many agree (how many marginally) and the comparison that
     came closest to its bound."""
@@ -205,6 +219,12 @@ def compared_answer(args, result) -> int:
             print(f"{r['solver']:14s} {r['status']:8s} wall {r['wall_s']:.3g} s  "
                   + "  ".join(f"{k}={v:.6g}" for k, v in (r.get("final") or {}).items()
                               if v is not None))
+            for line in mode_lines(r):
+                print(f"    {line}")
+        for name, entries in ((obj.get("campbell") or {}).get("critical_speeds") or {}).items():
+            print(f"{name} critical speeds: " + ", ".join(
+                f"{e['name']} {e['speed_rad_s']:.6g} rad/s ({e['speed_rpm']:.6g} rpm)"
+                for e in entries))
         for c in result.comparisons:
             print(f"{c.a} vs {c.b} {c.channel}: max rel {c.max_rel:.2e} → {c.shown}")
         print(obj.get("summary") or verdict_line(result.comparisons))

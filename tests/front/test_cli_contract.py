@@ -164,3 +164,22 @@ def test_run_prints_its_answer_in_one_line(tmp_path):
     marginal = sum(c["shown"] == "agree (marginal)" for c in comps)
     assert (f"({marginal} marginal)" in line) == (marginal > 0)
     assert f"worst Δ/bound {max(c['ratio'] for c in comps):.2g}" in line
+
+
+def test_modes_prints_frequencies_and_critical_speeds(tmp_path):
+    """`xval modes` answers in the terminal: every mode in Hz and rad/s (ω = 2πf) with ζ and log
+    dec, and the critical speeds in rad/s and rpm (60/2π of it) — the JSON's numbers."""
+    import math
+    rc, so, _ = xval("modes", "rotor-whirl", "--set", "spin=41.3", "--solver", "closed-form",
+                     "--out", str(tmp_path / "o"))
+    assert rc == 0
+    rc, js, _ = xval("modes", "rotor-whirl", "--set", "spin=41.3", "--solver", "closed-form",
+                     "--json", "--out", str(tmp_path / "o"))
+    run = json.loads(js)["runs"][0]
+    for label, f in zip(run["labels"], run["frequencies_hz"]):
+        assert f"{label}: {f:.8g} Hz ({2 * math.pi * f:.8g} rad/s), ζ" in so, so
+    crit = json.loads(js)["campbell"]["critical_speeds"]["closed-form"]
+    line = next(x for x in so.splitlines() if x.startswith("closed-form critical speeds:"))
+    for e in crit:
+        w = e["speed_rad_s"]
+        assert f"{e['name']} {w:.6g} rad/s ({w * 60 / (2 * math.pi):.6g} rpm)" in line

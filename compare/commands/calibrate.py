@@ -13,11 +13,10 @@ from .common import (
     SCENE,
     SOLVERS,
     STRICT,
-    answer,
+    answered,
     log,
     quiet,
     stdout_to_stderr,
-    strict_exit,
 )
 from .common import positive_int as positive_int_arg
 
@@ -36,8 +35,7 @@ def calibrate(scene: str, samples: int = 20, seed: int = 0, solvers=None,
 def main(args) -> int:
     with stdout_to_stderr():
         r = calibrate(args.scene, args.samples, args.seed, args.solver, log=log)
-    answer(args, r)
-    return strict_exit(args, r.problems())
+    return answered(args, r)
 
 
 COMMAND = Command(

@@ -117,6 +117,12 @@ def answer(args, result, as_json=None) -> None:
         print(result)
 
 
+def answered(args, result, as_json=None) -> int:
+    """`answer`, then the exit status --strict gives the result's problems."""
+    answer(args, result, as_json)
+    return strict_exit(args, result.problems())
+
+
 def parse_sets(items) -> dict:
     out = {}
     for item in items or []:

@@ -13,11 +13,10 @@ from .common import (
     OUT,
     SCENE,
     TIMEOUT,
-    answer,
+    answered,
     log,
     quiet,
     stdout_to_stderr,
-    strict_exit,
 )
 
 
@@ -41,8 +40,7 @@ def main(args) -> int:
     with stdout_to_stderr():
         r = extremes(args.scene, args.solver, include_slow=args.all, timeout=args.timeout,
                      out=args.out, log=log)
-    answer(args, r)
-    return strict_exit(args, r.problems())
+    return answered(args, r)
 
 
 COMMAND = Command(

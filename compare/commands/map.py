@@ -17,7 +17,7 @@ from .common import (
     OUT,
     STRICT,
     STUDY,
-    answer,
+    answered,
     executor_args,
     log,
     out_or_temporary,
@@ -26,7 +26,6 @@ from .common import (
     quiet,
     removed_on_error,
     stdout_to_stderr,
-    strict_exit,
     warn_workers,
 )
 from .common import positive as positive_arg
@@ -99,8 +98,7 @@ def main(args) -> int:
         print(f"xval: interrupted: {e}; resume with: {shlex.join(['xval', *args.argv])}",
               file=sys.stderr)
         return 130
-    answer(args, r, r.data)
-    return strict_exit(args, r.problems())
+    return answered(args, r, r.data)
 
 
 COMMAND = Command(

@@ -10,13 +10,12 @@ from . import Command, arg
 from .common import (
     STUDY,
     TIMEOUT,
-    answer,
+    answered,
     log,
     overrides,
     parse_sets,
     quiet,
     stdout_to_stderr,
-    strict_exit,
 )
 
 
@@ -34,8 +33,7 @@ def main(args) -> int:
     with stdout_to_stderr():
         r = power(args.scene, args.solver, parameters=args.parameter, timeout=args.timeout,
                   params=parse_sets(args.set), log=log)
-    answer(args, r, r.data)
-    return strict_exit(args, r.problems())
+    return answered(args, r, r.data)
 
 
 COMMAND = Command(

@@ -15,13 +15,12 @@ from .common import (
     OUT,
     STRICT,
     STUDY,
-    answer,
+    answered,
     log,
     overrides,
     parse_sets,
     quiet,
     stdout_to_stderr,
-    strict_exit,
 )
 from .common import positive_int as positive_int_arg
 
@@ -49,8 +48,7 @@ def main(args) -> int:
     with stdout_to_stderr():
         r = response(args.scene, args.solver, speeds=args.speeds, out=args.out,
                      params=parse_sets(args.set), log=log)
-    answer(args, r)
-    return strict_exit(args, r.problems())
+    return answered(args, r)
 
 
 COMMAND = Command(

@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import HealthCheck, given, settings
 
 from compare import solvers
 from compare.analysis.verdict import Verdict
@@ -38,7 +38,10 @@ def _holds(scene_name, over):
 
 
 def _property(scene_name, examples):
-    @settings(max_examples=examples, derandomize=True, deadline=None)
+    # each example is whole solver runs: on a loaded 2-core machine drawing and running them
+    # is slow by design, which is no failure of the property
+    @settings(max_examples=examples, derandomize=True, deadline=None, database=None,
+              suppress_health_check=[HealthCheck.too_slow])
     @given(cal.strategy(get_scene(scene_name)))
     def check(over):
         _holds(scene_name, over)

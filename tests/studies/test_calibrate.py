@@ -32,8 +32,13 @@ def _holds(scene_name, over):
     for s, b in one["bars"].items():
         if b["status"] != "ok":       # no truth (rotor-whirl's closed form): nothing to check
             continue
+        # below the round-off floor (calibrate's, 1e3·eps·scale) the truth is the reference's
+        # own rounding: lagrange-exact's press is there (crank_accel 6e-11 of ~1e3)
+        run = one["runs"][s]
+        floor = {c: 1e3 * np.finfo(float).eps * float(np.nanmax(np.abs(run.channels[c])))
+                 for c in b["true"]} if hasattr(run, "channels") else {}
         missed = {c: (b["true"][c], b["estimate"][c]) for c in b["true"]
-                  if b["true"][c] > b["estimate"][c]}
+                  if b["true"][c] > max(b["estimate"][c], floor.get(c, 0.0))}
         assert not missed, (s, over, missed)
 
 

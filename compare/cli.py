@@ -27,8 +27,9 @@ def version() -> str:
         return "unknown (not installed: pip install -e .)"
 
 
-def build_parser():
-    from .commands import COMMANDS, add_args
+def build_parser(only: str | None = None):
+    """The parser of every command, or of `only` (one command's module imported, not all)."""
+    from .commands import add_args, command
     p = _Parser(prog="xval", description="Cross-validate multibody dynamics solvers: the same "
                 "scene through our implementations of published methods, Exudyn and MuJoCo, "
                 "compared in numbers, plots and rerun recordings.",
@@ -38,7 +39,12 @@ def build_parser():
                    help="print the installed version and exit")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser,
                            metavar="COMMAND")
-    for c in COMMANDS.values():
+    if only is None:
+        from .commands import COMMANDS
+        chosen = COMMANDS.values()
+    else:
+        chosen = [command(only)]
+    for c in chosen:
         sp = sub.add_parser(c.name, help=c.help, description=c.description)
         add_args(sp, c.args)
         if c.subcommands:
@@ -56,10 +62,13 @@ def main(argv=None):
     # here to name the class would cost a second before every one-line answer)
     warnings.filterwarnings("ignore", module=r"numba(\.|$)")
     try:
-        from .commands import COMMANDS
-        args = build_parser().parse_args(argv)
-        args.argv = list(sys.argv[1:] if argv is None else argv)
-        return COMMANDS[args.command].main(args)
+        from .commands import command, names
+        argv = list(sys.argv[1:] if argv is None else argv)
+        named = next((a for a in argv if not a.startswith("-")), None)
+        only = named if named in names() and argv[0] == named else None
+        args = build_parser(only).parse_args(argv)
+        args.argv = argv
+        return command(args.command).main(args)
     except BadInput as e:
         print(f"xval: error: {e}", file=sys.stderr)
         return 2

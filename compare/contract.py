@@ -7,6 +7,8 @@ adapter in `compare/solvers.py` validates every result a leaf returns.
 """
 from __future__ import annotations
 
+import importlib
+import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -175,3 +177,21 @@ class LeafModes:
 # Deprecated: the name earlier leaves and plug-ins import. It is the same class; the name
 # `ModesResult` now belongs to what `xval.modes` returns (compare/results/modes.py).
 ModesResult = LeafModes
+
+
+def lazy_exports(package: str, where: dict[str, str]):
+    """A package's module `__getattr__` (PEP 562): each name imported from its own submodule on
+    first use — a leaf package's capabilities (`regimes`, `modes`, …: a time run imports none
+    of them), the Result types. `where`: name -> submodule (the package's `LAZY`)."""
+    def __getattr__(name):
+        if name not in where:
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        importlib.import_module(f"{package}.{where[name]}")
+        # importing a submodule binds its name on the package (`modes` the module, not the
+        # function): bind every capability of each loaded submodule over it
+        pkg = sys.modules[package]
+        for n, sub in where.items():
+            if f"{package}.{sub}" in sys.modules:
+                setattr(pkg, n, getattr(sys.modules[f"{package}.{sub}"], n))
+        return getattr(pkg, name)
+    return __getattr__

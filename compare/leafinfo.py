@@ -157,10 +157,14 @@ class LeafInfo:
     cheap_rtol: dict
     own_check: bool                # the leaf checks settings against the grid itself
     batch_regimes: bool            # the leaf classifies many runs in one batch call
-    # unbalance_response(params, spins) -> (complex amplitudes, their errors): a frequency
-    # leaf's steady response to a rotating unbalance (`xval response`); None where it has none
-    unbalance_response: object = None
     knobs: tuple = ()              # Knob records: discretisation knobs besides dt / rtol
+
+    @property
+    def unbalance_response(self):
+        """unbalance_response(params, spins) -> (complex amplitudes, their errors): a frequency
+        leaf's steady response to a rotating unbalance (`xval response`); None where it has
+        none. Looked up on use: a leaf package imports that capability's module only then."""
+        return getattr(self.module, "unbalance_response", None)
 
     @property
     def name(self) -> str:
@@ -286,6 +290,10 @@ def leaf_info(module_name: str) -> LeafInfo:
     return info
 
 
+def _has(leaf: ModuleType, name: str) -> bool:
+    return name in getattr(leaf, "LAZY", {}) or hasattr(leaf, name)
+
+
 def _build(leaf: ModuleType) -> LeafInfo:
     adaptive = tuple(getattr(leaf, "ADAPTIVE", ()))
     orders = {**ORDERS, **getattr(leaf, "ORDERS", {})}
@@ -297,7 +305,6 @@ def _build(leaf: ModuleType) -> LeafInfo:
                     integrators=integrators, auto_dt=dict(getattr(leaf, "AUTO_DT", {})),
                     cheap_dt=dict(getattr(leaf, "CHEAP_DT", {})),
                     cheap_rtol=dict(getattr(leaf, "CHEAP_RTOL", {})),
-                    own_check=hasattr(leaf, "check_settings"),
-                    batch_regimes=hasattr(leaf, "regimes"),
-                    unbalance_response=getattr(leaf, "unbalance_response", None),
+                    own_check=_has(leaf, "check_settings"),
+                    batch_regimes=_has(leaf, "regimes"),
                     knobs=tuple(Knob(n, p) for n, p in getattr(leaf, "KNOBS", {}).items()))

@@ -51,18 +51,32 @@ class Command:
     subcommands: dict = field(default_factory=dict)
 
 
+def names() -> list[str]:
+    """Every command's name: its module's, found by file without importing any."""
+    return [m.name for m in pkgutil.iter_modules(__path__)
+            if not m.name.startswith("_") and m.name != "common"]
+
+
+def command(name: str) -> Command:
+    """One command, importing only its own module (a module's name is its command's)."""
+    c = importlib.import_module(f"{__name__}.{name}").COMMAND
+    assert c.name == name, f"compare/commands/{name}.py declares command {c.name!r}"
+    return c
+
+
 def _discover() -> dict[str, Command]:
-    found = []
-    for info in pkgutil.iter_modules(__path__):
-        if info.name.startswith("_") or info.name == "common":
-            continue
-        found.append(importlib.import_module(f"{__name__}.{info.name}").COMMAND)
-    return {c.name: c for c in sorted(found, key=lambda c: (c.order, c.name))}
+    return {c.name: c for c in sorted(map(command, names()), key=lambda c: (c.order, c.name))}
 
 
-COMMANDS: dict[str, Command] = _discover()
+def __getattr__(attr):
+    # COMMANDS on first use: `xval run` imports run.py alone, not every command's wing
+    if attr == "COMMANDS":
+        globals()["COMMANDS"] = _discover()
+        return globals()["COMMANDS"]
+    raise AttributeError(f"module {__name__!r} has no attribute {attr!r}")
 
 
 def api_functions() -> dict[str, Callable]:
     """The Python API: every command's function under its own name."""
+    from . import COMMANDS
     return {c.api.__name__: c.api for c in COMMANDS.values() if c.api is not None}

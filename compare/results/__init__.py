@@ -5,24 +5,26 @@
 `save`/`Result.load`, its tables as text, Markdown and HTML, and what `xval diff` compares
 (`side()`). Importing the package registers every type, so `Result.load` can dispatch on the
 "result" field of any of them."""
-from .base import Result
-from .baseline import Baseline
-from .calibrate import CalibrationResult
-from .modes import ModesResult
-from .response import ResponseResult
-from .scene_info import SceneInfo
-from .studies import (
-    BenchResult,
-    CampaignResult,
-    DiffResult,
-    ExtremesResult,
-    MapResult,
-    PowerResult,
-    StudyResult,
-)
-from .time import TimeResult
+import importlib
+import pkgutil
 
-__all__ = ["Result", "TimeResult", "ModesResult", "BenchResult", "ExtremesResult",
-           "MapResult", "CampaignResult", "PowerResult", "DiffResult", "Baseline",
-           "ResponseResult", "CalibrationResult",
-           "StudyResult", "SceneInfo"]
+from ..contract import lazy_exports
+
+# each type's module loads on first use (`xval run` needs TimeResult alone); `every_type`
+# loads them all for `Result.load`, which dispatches on the JSON's "result" field
+LAZY = {"Result": "base", "Baseline": "baseline", "CalibrationResult": "calibrate",
+        "ModesResult": "modes", "ResponseResult": "response", "SceneInfo": "scene_info",
+        "TimeResult": "time", **{n: "studies" for n in (
+            "BenchResult", "CampaignResult", "DiffResult", "ExtremesResult", "MapResult",
+            "PowerResult", "StudyResult")}}
+__getattr__ = lazy_exports(__name__, LAZY)
+
+
+def every_type() -> None:
+    """Import every Result type, each module in this package (a type registers itself in
+    `Result.TYPES`)."""
+    for m in pkgutil.iter_modules(__path__):
+        importlib.import_module(f"{__name__}.{m.name}")
+
+
+__all__ = list(LAZY)

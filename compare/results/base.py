@@ -50,6 +50,8 @@ class Result:
         """The result `obj` describes (`folder`: where its files are, if any); on `Result`
         itself, of the type its "result" field names."""
         if cls is Result:
+            from . import every_type
+            every_type()
             if obj.get("result") not in Result.TYPES:
                 raise BadInput(f"not an xval result (result type {obj.get('result')!r})")
             return Result.TYPES[obj["result"]].from_json(obj, folder)
@@ -64,6 +66,8 @@ class Result:
     def load(path) -> Result:
         """A result folder, its JSON file, or a baseline file, read back."""
         from ..output import guard
+        from . import every_type
+        every_type()
         p = Path(path)
         if p.is_file() and p.suffix != ".json":
             return Result.TYPES["baseline"].read(p)

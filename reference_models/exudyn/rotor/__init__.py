@@ -11,11 +11,15 @@ torque fixed in space through compiled user functions. One module per capability
 - `time`: `simulate`; `batch`: `regimes` (the map's batch path, rotors as branches of one tree);
 - `modes`: `modes`, `whirl_sweep` (the linearised whirl); `response`: `unbalance_response`.
 """
-from .batch import regimes
-from .modes import modes, whirl_sweep
-from .response import unbalance_response
+from compare.contract import lazy_exports
+
 from .settings import ADAPTIVE, CHEAP_DT, DEFAULT_SETTINGS, INTEGRATORS, check_settings
 from .time import simulate
+
+# the other capabilities load on first use (a time run needs none of them)
+LAZY = {"regimes": "batch", "modes": "modes", "whirl_sweep": "modes",
+        "unbalance_response": "response"}
+__getattr__ = lazy_exports(__name__, LAZY)
 
 __all__ = ["ADAPTIVE", "CHEAP_DT", "DEFAULT_SETTINGS", "INTEGRATORS",
            "check_settings", "modes", "regimes", "simulate", "unbalance_response", "whirl_sweep"]

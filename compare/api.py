@@ -3,8 +3,9 @@ function, from its module in compare/commands/ (the registry), under its own nam
 returns a `Result` (compare/results/); bad arguments raise `BadInput` with the command's
 one-line message, before anything runs or is written.
 
-Files: with `out=FOLDER` a call writes what the command writes there (a run: the .npz per
-solver, run.rrd, report.md with plots, result.json, in FOLDER/runs/<scene>-<stamp>-<pid>/).
+Files: with `out=FOLDER` a call writes what the command writes into FOLDER itself (a run: the
+.npz per solver, run.rrd, report.md with plots, result.json; FOLDER empty or an earlier result
+of the same command, unless `force=True`).
 Without `out` a run, modes, extremes, power or diff result is held in memory and nothing is
 written; a bench, map or campaign (which store what they compute as they go, to resume from)
 works in a temporary folder that goes away with the result. `result.save(path)` writes the

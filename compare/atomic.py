@@ -67,7 +67,18 @@ def write_text(path, text):
 
 
 def write_json(path, obj):
-    write_text(path, json.dumps(obj, indent=1, default=_jsonable) + "\n")
+    write_text(path, json.dumps(_unsigned_zero(obj), indent=1, default=_jsonable) + "\n")
+
+
+def _unsigned_zero(x):
+    """−0.0 written as 0.0 (x + 0.0 is +0.0 for either zero), everything else as it is."""
+    if isinstance(x, dict):
+        return {k: _unsigned_zero(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_unsigned_zero(v) for v in x]
+    if isinstance(x, float) or getattr(getattr(x, "dtype", None), "kind", "") in ("f", "c"):
+        return x + 0.0                   # a float, a numpy float or float array
+    return x
 
 
 def publish(src, dst):
@@ -91,8 +102,15 @@ def _jsonable(x):
     raise TypeError(f"not JSON serialisable: {type(x).__name__}")
 
 
+def num(x, spec: str = "g") -> str:
+    """`format(x, spec)` without a sign on zero: a ζ of −0.0 (a root's real part rounded to
+    −0) reads 0, as it is."""
+    return format(x + 0.0 if x == 0 else x, spec)
+
+
 def clean_json(x):
-    """JSON without NaN/Infinity (they become null) and with numpy values as plain Python."""
+    """JSON without NaN/Infinity (they become null), −0.0 as 0.0, and with numpy values as
+    plain Python."""
     import math
 
     import numpy as np
@@ -106,4 +124,6 @@ def clean_json(x):
         x = x.item()
     if isinstance(x, float) and not math.isfinite(x):
         return None
+    if isinstance(x, float) and x == 0:
+        return 0.0
     return x

@@ -68,7 +68,9 @@ def main(argv=None):
         only = named if named in names() and argv[0] == named else None
         args = build_parser(only).parse_args(argv)
         args.argv = argv
-        return command(args.command).main(args)
+        from .output.progress import reporting
+        with reporting():              # studies' counters (maps, response, …) on stderr
+            return command(args.command).main(args)
     except BadInput as e:
         print(f"xval: error: {e}", file=sys.stderr)
         return 2

@@ -77,6 +77,7 @@ REGISTRY = {s.name: s for s in (
            compiled=True),
     Solver("fem", "Hermite beam finite elements with centrifugal stiffening, gyroscopic terms "
            "and lumped rigid bodies (independent check of mstmm)", "scipy"),
+    Solver("meijaard", "bicycle: Meijaard et al. 2007's linear equations (App. A)", "numpy"),
     Solver("exudyn", "Exudyn 1.13 reference model", "exudyn"),
     Solver("mujoco", "MuJoCo 4.0 reference model", "mujoco"),
 )}

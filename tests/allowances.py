@@ -47,6 +47,8 @@ CASES = {
            ("speed36.65-engines", {}, ["exudyn", "mujoco"]),
            ("speed0", {"speed": 0.0}, None)] for h in ("helicopter-clamped", "helicopter-hover")},
 }
+CASES["andrews-squeezer"] = [("default", {}, None)]     # the test set's run to t = 0.03 s
+CASES["bicycle"] = [(f"speed{v:g}", {"speed": v}, None) for v in (2.0, 5.0, 8.0)]
 LONG = {"sail-deploy": [("full-engines", {}, ["thread-spool-conservative", "exudyn",
                                                "mujoco"])]}
 

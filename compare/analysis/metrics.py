@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ..atomic import num
 from .trajectory import Modes, Trajectory
 from .verdict import Verdict
 
@@ -375,7 +376,7 @@ def damping_comparisons(results: list[Modes], tolerances: dict) -> list[Comparis
                 err = sum(own.values()) if own else None
                 bound = tol + (err or 0.0)
                 v, wide = judged(d, bound, own, tol, 1.0)
-                why = (f"ζ {za:.8g} vs {zb:.8g}: |Δ| {d:.2e} "
+                why = (f"ζ {num(za, '.8g')} vs {num(zb, '.8g')}: |Δ| {d:.2e} "
                        f"{'>' if v == Verdict.DISAGREE else '≤'} "
                        + (f"error estimates {err:.1e} + allowance {tol:.1e}" if err is not None
                           else f"allowance {tol:.1e} (no error estimate)"))

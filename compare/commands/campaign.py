@@ -8,13 +8,13 @@ from collections.abc import Callable
 from pathlib import Path
 
 from ..errors import BadInput
-from ..output.folders import check_out, make_out
+from ..output.folders import claim_out, make_out
 from ..results import CampaignResult
 from ..workflows.inputs import positive, positive_int
 from . import Command, arg
 from .common import (
     BUDGET,
-    OUT,
+    RESULT_OUT,
     STRICT,
     emit_json,
     executor_args,
@@ -32,13 +32,14 @@ def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | Non
              workers: int | None = None, timeout=None, out=None, verbose: bool = False,
              max_output_gib=None, max_steps=None, max_jobs=None,
              progress: Callable | None = None,
-             checking: Callable = contextlib.nullcontext) -> CampaignResult:
+             checking: Callable = contextlib.nullcontext, force: bool = False) -> CampaignResult:
     """A campaign (`xval campaign`): a .json/.toml file, a built-in name ("default", "long";
-    None is the default campaign) or the campaign as a dict (the file's shape). Stored results
-    are reused only in a folder given as `out`. `progress()`: a context giving the progress
-    view, entered once the plan is checked (compare.output.progress.progress_view; default
-    plain lines on stderr); `checking(text)`: a context shown while the plan is checked (the
-    command's spinner)."""
+    None is the default campaign) or the campaign as a dict (the file's shape). `out`: the
+    campaign's folder (empty, or a campaign folder: its stored results are reused; other files
+    only with `force`); without it a temporary folder, nothing reused. `progress()`: a context
+    giving the progress view, entered once the plan is checked
+    (compare.output.progress.progress_view; default plain lines on stderr); `checking(text)`:
+    a context shown while the plan is checked (the command's spinner)."""
     from ..workflows import campaign as camp
     if executor not in ("local", "dask"):
         raise BadInput(f"--executor: {executor!r} is not local or dask")
@@ -47,7 +48,7 @@ def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | Non
     max_output_gib, max_steps = (positive("--max-output-gib", max_output_gib),
                                  positive("--max-steps", max_steps))
     if out is not None:
-        check_out(str(out))
+        claim_out(str(out), "campaign", force)
     if scheduler and executor != "dask":
         raise BadInput("--scheduler needs --executor dask")
     if isinstance(path_or_dict, dict):
@@ -64,19 +65,19 @@ def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | Non
     with removed_on_error(temporary), (progress or contextlib.nullcontext)() as view:
         summary = camp.run_campaign(None, out, executor=executor, scheduler=scheduler,
                                     workers=workers, verbose=verbose, view=view,
-                                    prepared=prepared)
+                                    prepared=prepared, folder=None if temporary else out)
     return CampaignResult(summary, Path(summary["report"]).parent, temporary)
 
 
 def main(args) -> int:
     from ..output.progress import busy, progress_view
-    from ..workflows.campaign import Interrupted
-    check_out(args.out)
+    from ..workflows.campaign import Interrupted, load_campaign
+    # without --out the campaign's folder is logs/campaign/<name> (resumed when run again)
+    own = args.out or os.path.join("logs", "campaign",
+                                   load_campaign(args.file).get("name", "campaign"))
     if args.baseline:                  # bad input before anything is written
         from ..results import Result
-        from ..workflows.campaign import load_campaign
         Result.load(args.baseline)
-        own = os.path.join(args.out, "campaign", load_campaign(args.file).get("name", "campaign"))
         if os.path.exists(own) and os.path.samefile(args.baseline, own):
             raise BadInput(f"--baseline {args.baseline}: is the folder this campaign writes (it "
                            f"would be diffed against itself): save it first with `xval "
@@ -85,13 +86,14 @@ def main(args) -> int:
     try:
         with stdout_to_stderr():
             r = campaign(args.file, executor=args.executor, scheduler=args.scheduler,
-                         workers=args.workers, timeout=args.timeout, out=args.out,
+                         workers=args.workers, timeout=args.timeout, out=own,
+                         force=args.force,
                          verbose=args.verbose, max_output_gib=args.max_output_gib,
                          max_steps=args.max_steps, max_jobs=args.max_jobs,
                          progress=progress_view, checking=busy)
     except Interrupted as e:             # Ctrl-C: workers stopped, finished jobs kept
         again = " ".join(["xval campaign"] + ([args.file] if args.file else [])
-                         + ["--out", args.out])
+                         + (["--out", args.out] if args.out else []))
         print(f"xval: interrupted: {e}; resume with: {again}", file=sys.stderr)
         return 130
     summary = r.data
@@ -120,7 +122,7 @@ COMMAND = Command(
                 "campaign) as parallel jobs, reuse results whose inputs did not change, and "
                 "write one report.",
     args=(arg("file", nargs="?", help="campaign file, .json or .toml (default: built-in)"),
-          *executor_args("jobs"), OUT,
+          *executor_args("jobs"), *RESULT_OUT,
           arg("--json", action="store_true", help="print the summary as one JSON object"),
           arg("--timeout", type=positive_arg("--timeout"), metavar="S",
               help="wall-clock limit per job unless its case sets timeout_s"),

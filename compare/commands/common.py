@@ -11,7 +11,7 @@ import os
 import shutil
 import sys
 
-from ..atomic import clean_json
+from ..atomic import clean_json, num
 from ..errors import BadInput
 from ..output.folders import check_out, temporary_folder
 from . import arg
@@ -55,13 +55,19 @@ SCENE = arg("scene", help="scene name (see `xval list`)")
 SOLVERS = arg("--solver", action="append", default=[], metavar="NAME",
               help="run this solver; repeat for several (default: every solver of the scene)")
 SETS = arg("--set", action="append", default=[], metavar="NAME=VALUE",
-           help="override a scene parameter (repeatable; `xval show SCENE` lists them), e.g. "
-                "--set torque=3.2")
+           help="override a scene parameter (repeatable; `xval show SCENE` lists them), in its "
+                "unit or with one: --set torque=3.2, --set spin=400rpm, --set l=60cm")
 JSON = arg("--json", action="store_true",
            help="print one JSON object on standard output (logs go to standard error)")
 # a scene, its solvers and parameters, JSON: what every study of one scene takes
 STUDY = (SCENE, SOLVERS, SETS, JSON)
 OUT = arg("--out", default="logs", metavar="DIR", help=OUT_HELP)
+# run, modes, response, campaign: --out names the result's own folder (folders.claim_out)
+RESULT_OUT = (arg("--out", default=None, metavar="DIR",
+                  help="the result's folder, made if missing; an existing one must be empty or "
+                       "hold this command's earlier result (default: a new folder under logs/)"),
+              arg("--force", action="store_true",
+                  help="write into a non-empty --out folder that holds other files"))
 STRICT = arg("--strict", action="store_true", help=STRICT_HELP)
 TIMEOUT = arg("--timeout", type=positive("--timeout"), metavar="S",
               help="wall-clock limit per solver run: status timeout")
@@ -190,14 +196,17 @@ def out_or_temporary(out):
 def mode_lines(run: dict) -> list[str]:
     """A modes run's answer per mode: its frequency in Hz and rad/s, and where the solver gives
     them ζ, log dec and whirl (ROSS's conventions)."""
+    from ..physics.whirl import shown_label
     out = []
     zeta, dec = run.get("zeta"), run.get("log_dec")
     for k, (label, f) in enumerate(zip(run.get("labels") or [], run.get("frequencies_hz") or [])):
+        whirl = (run.get("whirl") or [None] * (k + 1))[k]
+        label = shown_label(label, whirl)
         line = f"{label or f'mode {k + 1}'}: {f:.8g} Hz ({2 * math.pi * f:.8g} rad/s)"
         if zeta is not None:
-            line += f", ζ {zeta[k] + 0.0:.3g}, log dec {dec[k] + 0.0:.3g}"
-        whirl = (run.get("whirl") or [None] * (k + 1))[k]
-        out.append(line + (f", {whirl} whirl" if whirl and whirl not in (label or "") else ""))
+            line += f", ζ {num(zeta[k], '.3g')}, log dec {num(dec[k], '.3g')}"
+        out.append(line + (f", {whirl} whirl" if whirl and whirl != "—"
+                           and whirl not in (label or "") else ""))
     return out
 
 
@@ -222,9 +231,12 @@ def compared_answer(args, result) -> int:
         emit_json(obj)
     else:
         for r in obj["runs"]:
-            print(f"{r['solver']:14s} {r['status']:8s} wall {r['wall_s']:.3g} s  "
-                  + "  ".join(f"{k}={v:.6g}" for k, v in (r.get("final") or {}).items()
-                              if v is not None))
+            bar = r.get("final_error") or {}
+            cost = (r.get("stats") or {}).get("error_estimate_s")
+            print(f"{r['solver']:14s} {r['status']:8s} wall {r['wall_s']:.3g} s"
+                  + (f" (error bar {cost:.3g} s)" if cost else "") + "  "
+                  + "  ".join(f"{k}={v:.6g}" + (f"±{bar[k]:.1g}" if bar.get(k) else "")
+                              for k, v in (r.get("final") or {}).items() if v is not None))
             for line in mode_lines(r):
                 print(f"    {line}")
         for name, entries in ((obj.get("campbell") or {}).get("critical_speeds") or {}).items():

@@ -19,6 +19,12 @@ def main(args) -> int:
         plug = f"  [plug-in: {ORIGIN[sc.name][0]}]" if sc.name in ORIGIN else ""
         print(f"scene  {sc.name:20s} {sc.kind:5s}  solvers: "
               f"{', '.join(s.name for s in solvers_for(sc.name))}  — {sc.title}{plug}")
+    groups = {}
+    for sc in SCENES.values():
+        if sc.group:
+            groups.setdefault(sc.group, []).append(sc.name)
+    for g, names in groups.items():
+        print(f"group  {g:20s} scenes: {', '.join(names)}")
     for s in REGISTRY.values():
         print(f"solver {s.name:20s} scenes: {', '.join(s.leaves)}  — {cite_short(s.doc)}")
     return 0

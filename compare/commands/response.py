@@ -6,13 +6,13 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..output.folders import check_out
+from ..output.folders import claim_out
 from ..results.response import ResponseResult
 from ..workflows.inputs import positive_int
 from ..workflows.plan import names
 from . import Command, arg
 from .common import (
-    OUT,
+    RESULT_OUT,
     STRICT,
     STUDY,
     answered,
@@ -26,28 +26,30 @@ from .common import positive_int as positive_int_arg
 
 
 def response(scene: str, solvers=None, *, speeds: int = 24, out=None,
-             params: dict | None = None, log: Callable | None = None,
+             params: dict | None = None, log: Callable | None = None, force: bool = False,
              **kw) -> ResponseResult:
     """The steady unbalance response vs spin through the first critical speed (`xval
     response`): every solver that takes the unbalance into its linear model (frequency
     domain) and the scene's time solvers at constant spin (time domain), judged speed by speed
-    on amplitude and phase; peaks, Q, half-power ζ. Returns a `ResponseResult`."""
+    on amplitude and phase; peaks, Q, half-power ζ. `out`: the folder its files are written
+    into (empty or an earlier response, unless `force`). Returns a `ResponseResult`."""
     from ..workflows.response import run_response
-    from ..workflows.runner import new_run_dir
     n = positive_int("--speeds", speeds)
     if out is not None:
-        check_out(str(out))
+        claim_out(str(out), "response", force)
     res = run_response(scene, names(solvers), overrides(params, kw), n, log=log or quiet)
     if out is not None:
-        res.save(new_run_dir(out, scene))
+        res.save(out)
     return res
 
 
 def main(args) -> int:
-    check_out(args.out)
+    from ..scenes import get_scene
+    from ..workflows.runner import new_run_dir
+    out = args.out or new_run_dir("logs", get_scene(args.scene).name)   # default: logs/runs/…
     with stdout_to_stderr():
-        r = response(args.scene, args.solver, speeds=args.speeds, out=args.out,
-                     params=parse_sets(args.set), log=log)
+        r = response(args.scene, args.solver, speeds=args.speeds, out=out,
+                     params=parse_sets(args.set), log=log, force=args.force)
     return answered(args, r)
 
 
@@ -63,4 +65,4 @@ COMMAND = Command(
     args=(*STUDY,
           arg("--speeds", type=positive_int_arg("--speeds"), default=24, metavar="N",
               help="number of speeds, half of them within ±3ζ of the critical (default 24)"),
-          OUT, STRICT))
+          *RESULT_OUT, STRICT))

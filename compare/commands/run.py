@@ -2,9 +2,10 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 from ..errors import BadInput
-from ..output.folders import check_out, make_out
+from ..output.folders import claim_out, make_out
 from ..results import TimeResult
 from ..workflows.inputs import positive
 from ..workflows.plan import names
@@ -12,7 +13,7 @@ from . import Command, arg
 from .common import (
     BUDGET,
     NO_RECORD,
-    OUT,
+    RESULT_OUT,
     STRICT,
     STUDY,
     TIMEOUT,
@@ -31,15 +32,17 @@ from .common import (
 def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol=None,
         integrator: str | None = None, out=None, record: bool | None = None,
         timeout=None, max_output_gib=None, max_steps=None, estimate_errors: bool = True,
-        params: dict | None = None, log: Callable | None = None, **kw) -> TimeResult:
+        params: dict | None = None, log: Callable | None = None, force: bool = False,
+        **kw) -> TimeResult:
     """Simulate a time-domain scene with each solver (default: every solver of the scene),
     compare them pairwise, and return a `TimeResult`.
 
     Scene parameters as keywords (`torque=3.2, t_end=5`) or `params={...}`. `settings`: one
     dict for every solver or one per solver name (see `per_solver_settings`), passed to the
     leaves as they are; `dt` / `rtol` / `integrator` as `--dt` / `--rtol` / `--integrator`
-    (which also switch an adaptive default to a fixed-step method and back). `out`: write the
-    run's files there (default: nothing kept); `record`: the rerun recording (default: when
+    (which also switch an adaptive default to a fixed-step method and back). `out`: the folder
+    the run's files are written into (default: nothing kept; an existing one must be empty or
+    hold an earlier run, unless `force`); `record`: the rerun recording (default: when
     `out` is given; the report is written whenever `out` is). `timeout`: wall-clock limit per
     solver (s). `estimate_errors=False` skips the tighter rerun that estimates each solver's
     own error (half the time; the verdicts then weigh the deviation against the scene's
@@ -51,7 +54,7 @@ def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol
     if sc.command != "run":
         raise BadInput(f"scene {sc.name!r} is {sc.described}: use `xval {sc.command} {sc.name}`")
     if out is not None:
-        check_out(str(out))
+        claim_out(str(out), "time", force)
     if record and out is None:
         raise BadInput("record=True needs out=FOLDER (or call .save(path) on the result)")
     knobs = Knobs(positive("--dt", dt), positive("--rtol", rtol), integrator)
@@ -64,7 +67,7 @@ def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol
     out_dir = None
     if out is not None:
         make_out(str(out))
-        out_dir = runner.new_run_dir(out, sc.name)
+        out_dir = Path(out)
     if knobs.rtol is not None:
         for s in pl.solvers:
             if not s.info(sc).adaptive:
@@ -80,11 +83,16 @@ def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol
 
 
 def main(args) -> int:
+    from ..scenes import get_scene
+    from ..workflows.runner import new_run_dir
+    # without --out a new folder under logs/runs/ (the default place since the first release)
+    out = args.out or new_run_dir("logs", get_scene(args.scene).name)
     with stdout_to_stderr():
         r = run(args.scene, args.solver, dt=args.dt, rtol=args.rtol,
-                integrator=args.integrator, out=args.out, record=not args.no_record,
+                integrator=args.integrator, out=out, record=not args.no_record,
                 timeout=args.timeout, max_output_gib=args.max_output_gib,
-                max_steps=args.max_steps, params=parse_sets(args.set), log=log)
+                max_steps=args.max_steps, params=parse_sets(args.set), log=log,
+                force=args.force)
     return compared_answer(args, r)
 
 
@@ -102,4 +110,4 @@ COMMAND = Command(
                    "solvers keep their step and say so)"),
           arg("--integrator", metavar="NAME",
               help="integrator of every chosen solver (each must offer it)"),
-          OUT, STRICT, NO_RECORD, TIMEOUT, *BUDGET))
+          *RESULT_OUT, STRICT, NO_RECORD, TIMEOUT, *BUDGET))

@@ -11,7 +11,7 @@ from .citations import papers_in
 from .joblog import distinct_lines
 from .map_plot import markdown as map_markdown
 from .report import fmt_value, plot_style
-from .tables import VERDICT_HEADER, markdown, verdict_rows
+from .tables import CALIBRATION_HEADER, VERDICT_HEADER, calibration_tables, markdown, verdict_rows
 
 
 def _num(x, spec=".3g"):
@@ -134,7 +134,7 @@ def sweep_plot(parent, points, outcome, path):
 
 
 def write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed, wall_s,
-                          maps=()):
+                          maps=(), calibrations=()):
     out_dir = Path(out_dir)
     name = camp.get("name")
     n_failed = sum(any(r["status"] != "ok" for r in outcome.get(c.name, {}).get("runs", []))
@@ -228,11 +228,32 @@ def write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed, 
                                 "runs": m["runs"], "reused": m["reused"],
                                 "boundaries": m["boundaries"], "verdicts": m["verdicts"],
                                 "status": m.get("status")})
+    summary["calibration"] = list(calibrations)
+    md += _calibration_section(calibrations)
     report = out_dir / "report.md"
     write_text(report, "\n".join(md) + "\n")
     summary["report"] = str(report)
+    from .html_report import write_campaign_html
+    write_campaign_html(out_dir, summary)        # report.html beside report.md
     write_json(out_dir / "summary.json", summary)
     return summary
+
+
+def _calibration_section(calibrations):
+    """The verdicts' false-alarm rate: each scene's `xval calibrate` over sets drawn off the
+    defaults (the detection power, the other rate, is each case's worst ε*)."""
+    if not calibrations:
+        return []
+    rows = []
+    for c in calibrations:
+        rows += ([[c["scene"], str(c["samples"]), f"not measured: {c['error']}"] + ["—"] * 5]
+                 if "error" in c else calibration_tables(c)[0][1])
+    return ["", "## Calibration", "",
+            "False alarms over parameter sets drawn off the defaults (`xval calibrate SCENE "
+            "--samples N`): comparisons, those that disagree (none expected: the solvers are "
+            "correct), the error bars' coverage (true error ≤ estimate) and sharpness (median "
+            "true / estimate), the widest window (bound / deviation).", "",
+            *markdown(CALIBRATION_HEADER, rows).splitlines()]
 
 
 def _findings_table(points, outcome):

@@ -26,6 +26,48 @@ def check_out(path):
         raise BadInput(f"--out {path}: no permission to write in {parent}")
 
 
+def result_kind(folder) -> str | None:
+    """The kind of xval result `folder` holds (the "result" field its JSON names: "time" for
+    `xval run`, "modes", "response", "campaign", …), None where it holds none."""
+    from .guard import LOCK, MARKER
+    p = Path(folder)
+    if (p / "summary.json").exists() or (p / "jobs").is_dir() or (p / LOCK).exists():
+        return "campaign"
+    for name, kind in (("response.json", "response"), ("result.json", None)):
+        if (p / name).exists():
+            try:
+                return kind or json.loads((p / name).read_text()).get("result") or "time"
+            except (OSError, ValueError, AttributeError):
+                return None
+    if (p / MARKER).exists():                        # a stopped run: "xval run started …"
+        try:
+            words = (p / MARKER).read_text().split()
+        except OSError:
+            return None
+        what = words[1] if len(words) > 1 and words[0] == "xval" else None
+        return "time" if what == "run" else what
+    return None
+
+
+def claim_out(path, kind: str, force: bool = False):
+    """`--out DIR` is the result's own folder: missing, empty, or holding an xval result of the
+    same `kind` (run again, it is written over; a campaign resumes in it). Any other non-empty
+    folder is refused (one line) unless `force` — so a folder of other files, or one that holds
+    earlier results under runs/ or campaign/, loses nothing. Checked before anything runs;
+    nothing is created here."""
+    check_out(path)
+    p = Path(path)
+    if force or not p.is_dir() or not any(p.iterdir()) or result_kind(p) == kind:
+        return
+    found = result_kind(p)
+    what = (f"an xval {found} result (this command writes a {kind} result)" if found else
+            "earlier xval results under runs/ or campaign/ (--out now names the result's own "
+            "folder: give a new one, e.g. DIR/NAME)"
+            if (p / "runs").is_dir() or (p / "campaign").is_dir() else "other files")
+    raise BadInput(f"--out {path}: is not empty and holds {what}; name a new or empty folder, "
+                   f"or add --force to write into it anyway")
+
+
 def make_out(path):
     """Create the output folder after every other check passed; a system that refuses
     (/proc, a read-only mount) is bad input, one line."""

@@ -16,7 +16,8 @@ from pathlib import Path
 @contextmanager
 def captured(log_path):
     """Redirect fd 1, fd 2 and Python warnings into `log_path` (overwritten); yields a list that
-    holds the captured text (stripped) once the block has finished."""
+    holds the captured text (stripped) once the block has finished. A log that stays empty is
+    removed."""
     log_path = Path(log_path)
     log_path.parent.mkdir(parents=True, exist_ok=True)
     out = []
@@ -43,6 +44,8 @@ def captured(log_path):
             os.close(saved[0])
             os.close(saved[1])
     out.append(log_path.read_bytes().decode(errors="replace").strip())
+    if not out[0]:                     # nothing said: no empty log left behind
+        log_path.unlink(missing_ok=True)
 
 
 def distinct_lines(text, limit=20):

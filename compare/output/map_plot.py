@@ -6,7 +6,7 @@ import numpy as np
 from ..analysis.verdict import Verdict
 from ..atomic import atomic_path, write_json, write_text
 from .recording import APPLICATION_ID, PALETTE
-from .report import plot_style, save_figure
+from .report import header_lines, params_title, plot_style, save_figure
 
 REGIME_COLOURS = ("#d9d9d9", "#a6cee3", "#fdbf6f", "#b2df8a", "#fb9a99", "#cab2d6")
 
@@ -101,7 +101,9 @@ def plot_map(path, result):
     ax.set_ylabel(f"{y['name']} [{y['unit']}]" if y else "")
     if not y:
         ax.set_yticks([])
-    ax.set_title(f"map: {result['scene']}"
+    from ..scenes import get_scene
+    fixed = params_title(get_scene(result["scene"]), result.get("set"))
+    ax.set_title(f"map: {result['scene']}{fixed}"
                  + (f" — {result['observable']}" if result["observable"] else " — regimes")
                  + (f"\n{status_line(result)}" if result.get("status") else ""), fontsize=9)
     if ax.get_legend_handles_labels()[0]:
@@ -179,7 +181,9 @@ def write_map_outputs(out_dir, result, record=True):
     """map.png, report.md (the map section), map.rrd and, last, map.json (the result dict with
     these files in "files" and "map") in `out_dir`; returns the result dict."""
     plot_map(out_dir / "map.png", result)
-    write_text(out_dir / "report.md", "\n".join([f"# Map: {result['scene']}", ""]
+    from ..scenes import get_scene
+    head = header_lines(get_scene(result["scene"]), result.get("set"))
+    write_text(out_dir / "report.md", "\n".join([f"# Map: {result['scene']}", "", *head]
                                                  + markdown(result)[2:]) + "\n")
     files = {"plot": str(out_dir / "map.png"), "report": str(out_dir / "report.md")}
     if record:

@@ -18,9 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analysis.metrics import match_modes
+from ..analysis.metrics import frequency_errors, match_modes
 from ..atomic import atomic_path
+from ..physics.whirl import shown_label
 from .recording import APPLICATION_ID, PALETTE
+from .report import params_title
 
 FRACTION = 0.1      # largest drawn displacement / the structure's largest dimension
 FRAMES = 36         # frames per period in the recording
@@ -103,7 +105,7 @@ def _whirls(ds) -> bool:
     return np.max(np.abs(d.imag)) > 0.05 * np.max(np.abs(d))
 
 
-def write_figure(path, panels_: list[Panel], colors: dict):
+def write_figure(path, panels_: list[Panel], colors: dict, title: str = ""):
     """One 3D panel per mode: the undeformed structure in grey, each solver's deflected
     structure at its peak (t = T/4 of the recording); where a mode whirls, the orbit of each
     strip's last point over a period."""
@@ -149,8 +151,9 @@ def write_figure(path, panels_: list[Panel], colors: dict):
     handles.append(plt.Line2D([], [], color="0.75", label="undeformed"))
     fig.legend(handles=handles, loc="upper center", ncol=len(handles), fontsize=8,
                frameon=False)
-    fig.text(0.5, 0.005, f"largest displacement drawn = {FRACTION:.0%} of the structure's "
-             "size (rotating frame, metres); whirling modes: the orbit of each strip's end",
+    fig.text(0.5, 0.005, f"{title}largest displacement drawn = {FRACTION:.0%} of the "
+             "structure's size (rotating frame, metres); whirling modes: the orbit of each "
+             "strip's end",
              ha="center", va="bottom", fontsize=8)
     fig.subplots_adjust(left=0.01, right=0.99, bottom=0.04, top=1 - 0.45 / fig.get_figheight(),
                         wspace=0.05, hspace=0.15)
@@ -212,6 +215,42 @@ def write_recording(path, panels_: list[Panel], colors: dict, recording_id: str)
     return Path(path)
 
 
+REPEATED = ("repeated frequency: the solvers' mode shapes span the same plane and may differ "
+            "within it")
+
+
+def repeated_frequencies(results) -> list[str]:
+    """Report lines naming each solver's modes whose frequencies coincide within their error
+    bars (the solver's own estimate, at least 1e-9 relative): any two shapes spanning such a
+    mode's plane are valid, so the solvers' shapes may differ without either being wrong."""
+    groups = {}
+    for m in results:
+        f = np.asarray(m.frequencies_hz, float)
+        if m.status != "ok" or len(f) < 2:
+            continue
+        e = frequency_errors(m)
+        e = np.zeros_like(f) if e is None else np.nan_to_num(e)
+        labels = list(m.labels) if len(m.labels) == len(f) else [f"mode {i + 1}"
+                                                                 for i in range(len(f))]
+        whirl = m.whirl if m.whirl is not None and len(m.whirl) == len(f) else [None] * len(f)
+        labels = [shown_label(lb, w) for lb, w in zip(labels, whirl)]    # no sense at rest
+        order = np.argsort(f)
+        run = [order[0]]
+        for i in list(order[1:]) + [None]:     # runs of neighbours within their bars
+            j = run[-1]
+            if i is not None and abs(f[i] - f[j]) <= e[i] + e[j] + 1e-9 * max(abs(f[i]),
+                                                                                abs(f[j])):
+                run.append(i)
+                continue
+            if len(run) > 1:
+                lo, hi = f"{f[run[0]]:.6g}", f"{f[run[-1]]:.6g}"
+                key = (tuple(labels[k] for k in run), lo if lo == hi else f"{lo}–{hi}")
+                groups.setdefault(key, []).append(m.solver)
+            run = [i]
+    return [f"- {' / '.join(names)} at {hz} Hz ({', '.join(s)}): {REPEATED}."
+            for (names, hz), s in groups.items()]
+
+
 def write(out_dir: Path, scene, params, results) -> dict:
     """Figure and recording into out_dir; returns the files and a sentence for the report
     ({} when no solver returned shapes)."""
@@ -220,7 +259,8 @@ def write(out_dir: Path, scene, params, results) -> dict:
         return {}
     colors = {r.solver: PALETTE[i % len(PALETTE)] for i, r in enumerate(results)}
     mpl = {s: tuple(c / 255 for c in rgb) for s, rgb in colors.items()}
-    png = write_figure(out_dir / "mode_shapes.png", pn, mpl)
+    png = write_figure(out_dir / "mode_shapes.png", pn, mpl,
+                       f"{scene.name}{params_title(scene, params)}: ")
     rrd = write_recording(out_dir / "mode_shapes.rrd", pn, colors,
                           f"mode-shapes-{out_dir.name}")
     solvers = list(dict.fromkeys(s for p in pn for s in p.solvers))

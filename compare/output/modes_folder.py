@@ -1,11 +1,13 @@
 """The folder of `xval modes` (and of a campaign's frequency case, `ModesResult.save`):
 report.md, result.json, the Campbell diagram (campbell.png, campbell.rrd) where the scene
-sweeps, the mode shapes (mode_shapes.png, mode_shapes.rrd) where it draws them."""
+sweeps, the mode shapes (mode_shapes.png, mode_shapes.rrd) where it draws them, else the
+frequency table drawn (frequencies.png, frequencies.rrd: every case has a figure and a
+recording)."""
 from __future__ import annotations
 
 from pathlib import Path
 
-from . import campbell_plot, mode_shapes
+from . import campbell_plot, frequency_plot, mode_shapes
 from .study import write_study
 
 
@@ -19,6 +21,9 @@ def write_modes_folder(out_dir: Path, result) -> dict:
     out_dir.mkdir(parents=True, exist_ok=True)
     sc, part, files = result.scene, result.report, {}
     md = [*part["head"]]
+    repeated = mode_shapes.repeated_frequencies(list(result.runs.values()))
+    if repeated:
+        md += ["", "Repeated frequencies:", "", *repeated]
     if sc.mode_shape_3d:
         drawn = mode_shapes.write(out_dir, sc, result.params, list(result.runs.values()))
         if drawn:
@@ -31,6 +36,18 @@ def write_modes_folder(out_dir: Path, result) -> dict:
         campbell_plot.png(out_dir / "campbell.png", sc, values, shown, entries, result.params,
                           events, frame, growing)
         files["recording"] = campbell_plot.rrd(out_dir / "campbell.rrd", sc, values, lines)
+    if not files:        # neither Campbell diagram nor mode shapes: the frequency table drawn
+        runs = list(result.runs.values())
+        png = frequency_plot.write_figure(out_dir / "frequencies.png", sc, result.params, runs,
+                                          result.comparisons)
+        if png:
+            files["frequencies_figure"] = out_dir / png
+            files["recording"] = frequency_plot.write_recording(
+                out_dir / "frequencies.rrd", runs, f"frequencies-{out_dir.name}")
+            md += ["", "## Frequencies", "", "Each solver's frequencies with its own error "
+                   "bar, and |Δf| of every compared pair against the bound its verdict used; "
+                   "`frequencies.rrd` holds them per solver on the `mode` timeline.", "",
+                   f"![frequencies]({png})"]
     md += part["campbell"] + part.get("threshold", []) + part["identify"]
     md[1:1] = ["", f"**{result.summary}**"]
     files["report"] = out_dir / "report.md"

@@ -20,7 +20,7 @@ import rerun.blueprint as rrb
 
 from ..analysis.verdict import Verdict
 from ..atomic import atomic_path
-from .report import analytic_curve
+from .report import analytic_curve, source_line
 from .tables import VERDICT_HEADER, markdown, verdict_rows
 
 PALETTE = [(31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189),
@@ -142,7 +142,7 @@ def summary_markdown(result):
 
 def params_markdown(result):
     sc = result.scene
-    lines = [f"# {sc.title}", "", f"Source: {sc.source}", "", "| parameter | value | unit |",
+    lines = [f"# {sc.title}", "", source_line(sc), "", "| parameter | value | unit |",
              "|---|---|---|"]
     for p in sc.params:
         v = result.params[p.name]

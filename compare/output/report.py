@@ -12,7 +12,7 @@ import numpy as np
 from ..analysis import metrics
 from ..analysis.verdict import MARGINAL
 from ..atomic import atomic_path, write_text
-from .citations import cite_short, papers_in
+from .citations import cite, cite_short, papers_in
 from .tables import VERDICT_HEADER, markdown, verdict_rows
 
 
@@ -23,6 +23,54 @@ def channel_unit(scene, ch):
 def channel_label(scene, ch):
     unit = channel_unit(scene, ch)
     return f"{ch} [{unit}]" if unit else f"{ch} [–]"
+
+
+def changed_params(scene, params, skip=()) -> list[str]:
+    """`name = value unit` for each parameter of `params` that differs from the scene's
+    default (what a title and a report header name: the defaults are the scene's own),
+    except those in `skip`."""
+    def value(p):                      # a --set string (a map's `set`) read as the parameter
+        v = params[p.name]
+        if isinstance(v, str):
+            try:
+                return p.parse(v)
+            except Exception:          # shown as given
+                return v
+        return v
+    return [f"{p.name} = {fmt_value(value(p))}" + (f" {p.unit}" if p.unit else "")
+            for p in scene.params if p.name in (params or {}) and p.name not in skip
+            and not np.array_equal(np.asarray(value(p)), np.asarray(p.default))]
+
+
+def params_title(scene, params) -> str:
+    """` (torque = 3.2 N·m)` for a figure title, or "" at the defaults."""
+    changed = changed_params(scene, params)
+    return f" ({', '.join(changed)})" if changed else ""
+
+
+def source_line(scene) -> str:
+    """`Source: <the papers, cited as papers>.` (never the scene data's "seed NNN")."""
+    refs = papers_in(scene.source) or [cite(scene.source)]
+    return "Source: " + "; ".join(refs) + "."
+
+
+def header_lines(scene, params, inputs: dict | None = None) -> list[str]:
+    """A report's header: the source papers, the parameters that differ from the scene's
+    defaults, and the inputs a study adds (`inputs`: {name: value} the study sets on top of the
+    defaults, e.g. the unbalance response's eccentricity and external damping), said to be the
+    study's, not the scene's defaults."""
+    inputs = inputs or {}
+    units = {p.name: p.unit for p in scene.params}
+    changed = changed_params(scene, params, skip=inputs)
+    out = [source_line(scene), "",
+           f"Parameters: defaults{'; ' + ', '.join(changed) if changed else ''}."]
+    if inputs:
+        given = ", ".join(f"{k} = {fmt_value((params or {}).get(k, v))}"
+                          + (f" {units[k]}" if units.get(k) else "") for k, v in inputs.items())
+        out += ["", f"Inputs this study adds: {given} — the study's own values, not the "
+                f"scene's defaults (`xval show {scene.name}` lists those); `--set` overrides "
+                "them."]
+    return out + [""]
 
 
 def fmt_value(x, digits=6):
@@ -151,7 +199,9 @@ def _channels_figure(result, chs):
         ref0 = next((tr.channels[ch][0] for tr in result.trajectories
                      if np.isfinite(tr.channels[ch][0])), 0.0) if flat else 0.0
         for tr in result.trajectories:
-            ax.plot(tr.t, tr.channels[ch] - ref0, lw=1, label=tr.solver)
+            v = tr.channels[ch] - ref0
+            line, = ax.plot(tr.t, v, lw=1, label=tr.solver)
+            _error_band(ax, tr.t, v, tr.errors.get(ch), line.get_color())
         curve = analytic_curve(result, ch)
         if curve is not None:
             ax.plot(curve[0], curve[1] - ref0, "k--", lw=1, label=curve[2])
@@ -169,9 +219,40 @@ def _channels_figure(result, chs):
     axes.flat[0].legend(fontsize=8)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
-    fig.suptitle(f"{result.scene.name}: channels per solver", y=1 - 0.12 / fig.get_figheight())
+    fig.suptitle(f"{result.scene.name}: channels per solver"
+                 f"{params_title(result.scene, result.params)}", y=1 - 0.12 / fig.get_figheight())
     fixed_margins(fig)
     return fig
+
+
+# An error band is drawn where it is wider than the line: a 1 px line on an axes ~250 px tall
+# spans ~1/250 of the data range
+_BAND_VISIBLE = 1 / 250
+
+
+def _error_band(ax, t, v, err, color):
+    """The solver's own error estimate (its tighter rerun) as a band ±err about its curve,
+    where the band is wider than the line; nothing where no estimate was made."""
+    if err is None or len(err) != len(t):
+        return
+    err = np.asarray(err, float)
+    span = np.ptp(v[np.isfinite(v)]) if np.isfinite(v).any() else 0.0
+    wide = np.isfinite(err) & (err > _BAND_VISIBLE * max(span, 1e-300))
+    if wide.any():
+        ax.fill_between(t, v - err, v + err, where=wide, color=color, alpha=0.25, lw=0)
+
+
+def comparison_of(comparisons, a, b, channel):
+    """The comparison of the pair (a, b) on `channel`, in either order, or None."""
+    return next((c for c in comparisons or () if c.channel == channel
+                 and {c.a, c.b} == {a, b}), None)
+
+
+def bound_of(c) -> float | None:
+    """The bound the verdict of comparison `c` used (error estimates + allowance, SI), as the
+    comparison stored it; None where it was not compared."""
+    b = c.tolerance * c.scale if c is not None else np.nan
+    return float(b) if np.isfinite(b) and b > 0 else None
 
 
 def plot_deviation(result, path):
@@ -179,7 +260,9 @@ def plot_deviation(result, path):
 
 
 def deviation_figure(result):
-    """|Δ| of the key channel per solver pair, and each solver's energy-balance drift."""
+    """|Δ| of the key channel per solver pair with the bound its verdict was judged against
+    (dashed, the comparison's error estimates + allowance; the verdict in the legend), and
+    each solver's energy-balance drift."""
     from matplotlib.ticker import NullLocator
     plt = _plt()
     sc, trs = result.scene, [t for t in result.trajectories if t.status == "ok"]
@@ -187,11 +270,21 @@ def deviation_figure(result):
     for i, a in enumerate(trs):
         for b in trs[i + 1:]:
             d = np.abs(a.channels[sc.key_channel] - b.channels[sc.key_channel])
-            a1.semilogy(a.t, np.maximum(d, 1e-17), lw=1, label=f"{a.solver} − {b.solver}")
+            c = comparison_of(getattr(result, "comparisons", None), a.solver, b.solver,
+                              sc.key_channel)
+            bound = bound_of(c)
+            label = f"{a.solver} − {b.solver}" + (
+                f": {c.shown} (Δ/bound {metrics.ratio_text(c.ratio)})" if c is not None else "")
+            line, = a1.semilogy(a.t, np.maximum(d, 1e-17), lw=1, label=label)
+            if bound is not None:
+                a1.axhline(bound, color=line.get_color(), ls="--", lw=1)
         if sc.energy_channel:
             e = a.channels[sc.energy_channel]
             a2.semilogy(a.t, np.maximum(np.abs(e - e[0]), 1e-17), lw=1, label=a.solver)
-    a1.set_title(f"|Δ {sc.key_channel}| between solvers")
+    a1.set_title(f"|Δ {sc.key_channel}| between solvers; dashed: the bound (error "
+                 "estimates + allowance)", fontsize=8)
+    fig.suptitle(f"{sc.name}: deviation{params_title(sc, result.params)}", fontsize=9,
+                 y=1 - 0.08 / fig.get_figheight())
     a1.set_ylabel(f"|Δ {channel_label(sc, sc.key_channel)}|")
     a2.set_title("drift of the energy balance")
     a2.set_ylabel("|E(t) − E(0)| [J]")
@@ -205,7 +298,7 @@ def deviation_figure(result):
         ax.grid(alpha=0.3, which="both")
         if ax.lines:
             ax.legend(fontsize=7)
-    fixed_margins(fig, top=0.4)
+    fixed_margins(fig, top=0.55)
     return fig
 
 
@@ -217,15 +310,10 @@ def _fmt(x, spec=".4g"):
 
 def run_markdown(result, figures):
     sc, trs = result.scene, result.trajectories
-    refs = papers_in(sc.source) or [sc.source]
-    out = [f"# {sc.name}: {sc.title}", "", "Source: " + "; ".join(refs) + ".", ""]
+    out = [f"# {sc.name}: {sc.title}", "", source_line(sc), ""]
     if sc.notes:
         out += [cite_short(sc.notes), ""]
-    changed = ", ".join(f"{p.name} = {fmt_value(result.params[p.name])}"
-                        + (f" {p.unit}" if p.unit else "") for p in sc.params
-                        if not np.array_equal(np.asarray(result.params[p.name]),
-                                              np.asarray(p.default)))
-    out += [f"Parameters: defaults{'; ' + changed if changed else ''}.", "", "## Runs", "",
+    out += [*header_lines(sc, result.params)[2:], "## Runs", "",
             "| solver | status | wall [s] | compile [s] | steps | settings | "
             f"final {sc.key_channel} | energy residual [J] | invariants |",
             "|---|---|---|---|---|---|---|---|---|"]
@@ -279,6 +367,8 @@ def write_run_report(out_dir, result):
         plot_style()
         fig = plt.figure(figsize=(11, 4))
         result.scene.plots(result.params, result.trajectories, fig)
+        fig.suptitle(f"{result.scene.name}{params_title(result.scene, result.params)}",
+                     fontsize=9)
         fig.tight_layout()
         figures.append(save_figure(fig, out_dir / "scene.png"))
         plt.close(fig)

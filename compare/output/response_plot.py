@@ -35,7 +35,11 @@ def _draw(result, bode: Path, polar: Path):
         ax.grid(alpha=0.3)
     ax_a.set_ylabel("|a|")
     ax_a.set_yscale("log")
-    ax_a.set_title(f"{d['scene']}: unbalance response ({d['amplitude']})", fontsize=9)
+    from ..scenes import get_scene
+    from .report import params_title
+    given = params_title(get_scene(d["scene"]), d.get("params"))[2:-1]   # e, c_ext among them
+    ax_a.set_title(f"{d['scene']}: unbalance response ({d['amplitude']})"
+                   + (f"\n{given}" if given else ""), fontsize=9)
     ax_p.set_ylabel("phase lag [deg]")
     ax_p.set_xlabel("spin [rad/s] (dotted: first critical)")
     ax_a.legend(fontsize=8)

@@ -24,5 +24,7 @@ def write_run_files(result, record: bool = True, report: bool = True) -> dict:
     if report:
         from .report import write_run_report
         files["report"] = write_run_report(out_dir, result)
+        from .html_report import write_run_html
+        write_run_html(out_dir, result)          # report.html beside report.md
     write_json(out_dir / "result.json", result.to_json())
     return files

@@ -29,6 +29,13 @@ def store_sensitivity(store: Path, key: str, obj: dict) -> Path:
     return path
 
 
+def store_calibration(store: Path, key: str, obj: dict) -> Path:
+    """A campaign's calibration job (`xval calibrate`'s JSON, with its input digest)."""
+    path = Path(store) / f"{key}.calibration.json"
+    write_json(path, obj)
+    return path
+
+
 def store_point(store: Path, key: str, row: dict) -> None:
     """A map point's result, under its key."""
     write_json(Path(store) / f"{key}.json", row)

@@ -54,3 +54,26 @@ def verdict_rows(comparisons) -> list[list[str]]:
     return [[c.a, c.b, c.channel, num(c.deviation), num(c.error_estimate),
              num(c.allowance), num(c.tolerance * c.scale), ratio_text(c.ratio), c.shown,
              c.decided_by] for c in cs]
+
+
+def _g(x, fmt=".3g"):
+    return "—" if x is None else format(x, fmt)
+
+
+CALIBRATION_HEADER = ["scene", "samples", "comparisons", "disagree", "coverage", "sharpness",
+                      "widest window", "skipped"]
+
+
+def calibration_tables(d: dict) -> list:
+    """`xval calibrate`'s JSON as its two tables: the scene's row, and one row per solver."""
+    at = d.get("widest_at") or {}
+    rows = [[d["scene"], str(d["samples"]), str(d["comparisons"]), str(len(d["disagree"])),
+             _g(d["coverage"]), _g(d["sharpness"]),
+             _g(d["widest_window"]) + (f" ({' vs '.join(at['pair'])} {at['channel']}, "
+                                       f"set {at['set']})" if at else ""),
+             str(len(d["skipped"]))]]
+    per = [[s, str(o["pairs"]), _g(o["coverage"]), _g(o["sharpness"]),
+            "; ".join(f"{n}× {why}" for why, n in o["left_out"].items()) or "—"]
+           for s, o in d.get("by_solver", {}).items()]
+    return [(CALIBRATION_HEADER, rows),
+            (["solver", "pairs", "coverage", "sharpness", "left out"], per)]

@@ -74,3 +74,14 @@ def order_seen(order: int, src: str, dst: str, whirl) -> int:
     if (src == "fixed") == (whirl == "forward"):
         return abs(order - 1)
     return order + 1
+
+
+def shown_label(label: str, whirl: str | None) -> str:
+    """A mode's label as printed: without "forward"/"backward" where the mode has no whirl
+    sense ("—": at rest, where the pair is degenerate)."""
+    if whirl != "—":
+        return label
+    for sense in ("forward ", "backward "):
+        if label.startswith(sense):
+            return label[len(sense):]
+    return label

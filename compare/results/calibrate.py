@@ -3,11 +3,8 @@ comparisons and those that disagree, the error bars' coverage and sharpness, the
 the solvers skipped (compare/workflows/calibrate.py). Held in memory; `save` writes its JSON."""
 from __future__ import annotations
 
+from ..output.tables import calibration_tables
 from .studies import StudyResult
-
-
-def _g(x, fmt=".3g"):
-    return "—" if x is None else format(x, fmt)
 
 
 class CalibrationResult(StudyResult):
@@ -17,19 +14,7 @@ class CalibrationResult(StudyResult):
         return f"calibration of {self.data['scene']}"
 
     def tables(self):
-        d = self.data
-        at = d.get("widest_at") or {}
-        rows = [[d["scene"], str(d["samples"]), str(d["comparisons"]), str(len(d["disagree"])),
-                 _g(d["coverage"]), _g(d["sharpness"]),
-                 _g(d["widest_window"]) + (f" ({' vs '.join(at['pair'])} {at['channel']}, "
-                                           f"set {at['set']})" if at else ""),
-                 str(len(d["skipped"]))]]
-        head = ["scene", "samples", "comparisons", "disagree", "coverage", "sharpness",
-                "widest window", "skipped"]
-        per = [[s, str(o["pairs"]), _g(o["coverage"]), _g(o["sharpness"]),
-                "; ".join(f"{n}× {why}" for why, n in o["left_out"].items()) or "—"]
-               for s, o in d.get("by_solver", {}).items()]
-        return [(head, rows), (["solver", "pairs", "coverage", "sharpness", "left out"], per)]
+        return calibration_tables(self.data)
 
     def summary_lines(self):
         d = self.data

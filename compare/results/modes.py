@@ -9,6 +9,7 @@ import numpy as np
 from ..analysis.trajectory import Modes
 from ..analysis.verdict import Verdict
 from ..errors import BadInput
+from ..physics.whirl import shown_label
 from . import tables
 from .base import ComparedResult, comparisons_from_json
 from .records import Side, modes_case
@@ -23,8 +24,14 @@ def _run_json(r: Modes) -> dict:
             "frequencies_hz": list(r.frequencies_hz), "labels": r.labels,
             "versions": r.versions, **damped_json(r),
             **({"notes": r.notes} if r.notes else {}),
-            **({k: list(np.ravel(v)) for k, v in r.extra.items()}),
+            **({k: _extra_json(v) for k, v in r.extra.items()}),
             **({"reason": r.reason} if r.reason else {})}
+
+
+def _extra_json(v):
+    """An extra array as JSON: a flat list, or nested rows where it has two axes or more (every
+    root as [Re, Im])."""
+    return np.asarray(v).tolist() if np.ndim(v) > 1 else list(np.ravel(v))
 
 
 DAMPED_HEADER = ["solver", "mode", "whirl", "f_d [Hz]", "ω_d [rad/s]", "ω_d [rpm]", "ζ",
@@ -59,7 +66,7 @@ def damped_rows(results: list[Modes]) -> list[list[str]]:
         whirl = m.whirl or ["—"] * len(m.labels)
         for f, lb, wh, z, d in zip(m.frequencies_hz, m.labels, whirl, m.damping,
                                    log_dec(m.damping)):
-            rows.append([m.solver, lb, wh, f"{f:.10g}", f"{2 * np.pi * f:.10g}",
+            rows.append([m.solver, shown_label(lb, wh), wh, f"{f:.10g}", f"{2 * np.pi * f:.10g}",
                          f"{60 * f:.8g}", f"{z + 0.0:.8g}", f"{d + 0.0:.6g}"])   # no −0
     return rows
 
@@ -149,7 +156,8 @@ class ModesResult(ComparedResult):
                       extra={k: np.asarray(v) for k, v in r.items() if k not in _RUN_KEYS},
                       status=r["status"], reason=r.get("reason"), wall_s=r.get("wall_s", 0.0),
                       versions=r.get("versions", {})) for r in obj["runs"]]
-        files = ("report", "recording", "mode_shapes_recording", "mode_shapes_figure")
+        files = ("report", "recording", "mode_shapes_recording", "mode_shapes_figure",
+                 "frequencies_figure")
         known = {"result", "scene", "params", "runs", "comparisons", "unpaired_modes",
                  "incomplete", "critical_speeds", "campbell", "status", "summary", *files}
         return cls(obj["scene"], obj["params"], runs, comparisons_from_json(obj["comparisons"]),

@@ -86,7 +86,8 @@ class ResponseResult(StudyResult):
             out.append(f"{n}: peak {pk['peak_rad_s']:.6g} rad/s ({pk['peak_rad_s'] * RPM:.2f} "
                        f"rpm), |a| {pk['peak_amplitude']:.6g}; Q = {pk['Q']:.4g}, half-power "
                        f"ζ = {pk['zeta_half_power']:.4g}"
-                       + (f", modal ζ (forward whirl there) = {modal:.4g}" if modal else ""))
+                       + (f", modal ζ (forward whirl there) = {modal:.4g}" if modal else "")
+                       + (f" (located on the {pk['located']})" if pk.get("located") else ""))
         for kind in ("frequency", "frequency-time"):
             vs = [v for v in d["verdicts"] if v["kind"] == kind]
             if not vs:
@@ -114,7 +115,11 @@ class ResponseResult(StudyResult):
 
     def markdown(self) -> list[str]:
         d = self.data
+        from ..output.report import header_lines
+        from ..scenes import get_scene
+        scene = get_scene(d["scene"])
         md = [f"# Unbalance response: {d['scene']}", "",
+              *header_lines(scene, d.get("params"), inputs=scene.response.set),
               f"{d['amplitude']}; phase: lag of the high spot behind the heavy spot. Time "
               f"domain: {d['drive']}.", "", "```", *self.summary_lines(), "```", ""]
         rows = [v for v in d["verdicts"] if v["kind"] == "frequency-time"]

@@ -31,8 +31,10 @@ class StudyResult(Result):
             weakref.finalize(self, shutil.rmtree, str(temporary), True)
 
     out_dir = property(lambda self: None if self._temporary else self._dir)
+    # None while the files are in the temporary folder that goes with the result: a path into
+    # it would name nothing once the result is gone (`save` gives the report its place)
     report = property(lambda self: Path(self.data["report"]) if self.data.get("report")
-                      else None)
+                      and not self._temporary else None)
 
     def __getitem__(self, key):
         return self.data[key]
@@ -50,7 +52,14 @@ class StudyResult(Result):
     def summary_lines(self) -> list[str]:
         return []
 
+    def markdown(self) -> list[str] | None:
+        """The report of a study held in memory (None: its JSON alone)."""
+        return self.report_md
+
     def lines(self):
+        if self._temporary and self.data.get("report"):
+            return self.summary_lines() + ["report: not kept (made in a temporary folder); "
+                                           "result.save(FOLDER) writes it"]
         return self.summary_lines() + ([f"report: {self.report}"] if self.report else [])
 
     def save(self, path) -> Path:
@@ -62,10 +71,11 @@ class StudyResult(Result):
             dest, self.data = copy_folder(self._dir, path, self.data)
             self._dir, self._temporary = dest, None
             return dest
-        if self.report_md is not None:
+        md = self.markdown()
+        if md is not None:
             from ..output.folders import make_out
             make_out(str(path))
-            write_study(Path(path), self.report_md, self.data, self.JSON)
+            write_study(Path(path), md, self.data, self.JSON)
         else:
             write_result_json(path, self.JSON, self.data)
         self._dir = Path(path)
@@ -104,6 +114,10 @@ class ExtremesResult(StudyResult):
     def summary_lines(self):
         return [f"{r['case']:32s} {r['solver']:26s} {r['outcome']:18s} {r['detail']}"
                 for r in self.data["results"]]
+
+    def markdown(self):
+        from ..output.study import extremes_markdown
+        return extremes_markdown(self.data)
 
     def problems(self, channels=None):
         return [f"{x['case']} {x['solver']}: {x['outcome']}"
@@ -149,6 +163,20 @@ class MapResult(StudyResult):
         return Side(self._dir, "map", {}, read_maps(self._dir))
 
 
+def _calibration_line(d):
+    """The false-alarm rate over the campaign's calibration jobs (none: no line)."""
+    cal = d.get("calibration") or []
+    if not cal:
+        return []
+    done = [c for c in cal if "error" not in c]
+    cover = [c["coverage"] for c in done if c.get("coverage") is not None]
+    return [f"calibration: {sum(len(c['disagree']) for c in done)} of "
+            f"{sum(c['comparisons'] for c in done)} comparisons disagree over "
+            f"{sum(c['samples'] for c in done)} parameter sets off the defaults "
+            f"({len(done)} of {len(cal)} scenes"
+            + (f"; error-bar coverage ≥ {min(cover):.2g}" if cover else "") + ")"]
+
+
 class CampaignResult(StudyResult):
     """`xval.campaign(...)`: the campaign's summary — jobs run and reused, every case's
     result, the maps."""
@@ -162,10 +190,11 @@ class CampaignResult(StudyResult):
                 f"{d['n_reused']} reused), {d['n_failed']} cases with a failed solver, "
                 f"{d['n_crashed']} crashed jobs; {d['wall_s']:.1f} s",
                 agree_text(verdicts) + (f"; maps: {maps.count(Verdict.AGREE)} of {len(maps)} "
-                                        "agree" if maps else "")]
+                                        "agree" if maps else "")] + _calibration_line(d)
 
     def problems(self, channels=None):
-        """Every case's error, failed solvers and refused verdicts, and every map's."""
+        """Every case's error, failed solvers and refused verdicts, every map's, and every
+        calibration's error or disagreement."""
         out = []
         for c in self.data.get("cases", []):
             if "error" in c:
@@ -177,6 +206,12 @@ class CampaignResult(StudyResult):
                      for x in c.get("comparisons", [])])]
         for m in self.data.get("maps", []):
             out += [f"map {m.get('map')}: {p}" for p in map_problems(m)]
+        for c in self.data.get("calibration", []):
+            if "error" in c:
+                out.append(f"calibration of {c['scene']}: {c['error']}")
+            else:
+                out += [f"calibration of {c['scene']}: {p}"
+                        for p in Result.TYPES["calibration"](dict(c)).problems()]
         return out
 
     def side(self) -> Side:

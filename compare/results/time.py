@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from ..analysis import metrics
 from ..analysis.trajectory import Trajectory
 from ..analysis.verdict import Verdict, agree_text
@@ -63,6 +65,9 @@ class TimeResult(ComparedResult):
                  "settings": tr.settings,
                  "stats": {k: v for k, v in tr.stats.items() if k != "traceback"},
                  "final": tr.final(),
+                 # the run's own error bar at t_end, per channel (null: no estimate)
+                 "final_error": ({c: float(np.asarray(e)[-1]) if np.ndim(e) else float(e)
+                                  for c, e in tr.errors.items()} if tr.errors else None),
                  "energy_residual": metrics.energy_residual(tr, energy) if energy else None,
                  "invariants": tr.invariants,
                  "trajectory": str(self.files.get(tr.solver, ""))}

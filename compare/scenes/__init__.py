@@ -26,6 +26,8 @@ from .base import (  # noqa: F401  (the scene types, for plug-ins)
     Threshold,
     TimeScene,
 )
+from .benchmarks_andrews import ANDREWS
+from .benchmarks_bicycle import BICYCLE
 
 GROUP = "xval.scenes"
 
@@ -33,6 +35,8 @@ SCENES = {s.name: s for s in (rotor.SPINUP, rotor.WHIRL, bearing.BEARING_ROTOR, 
                                press.PRESS_CYCLE, sail.SAIL, mstmm.ROTATING_BEAM,
                                mstmm.SPINNING_SHAFT, mstmm.HELICOPTER_CLAMPED,
                                mstmm.HELICOPTER_HOVER)}
+SCENES[BICYCLE.name] = BICYCLE
+SCENES[ANDREWS.name] = ANDREWS
 ORIGIN = {}          # plug-in scene name -> (distribution or entry point, module)
 PLUGIN_SOLVERS = []  # solvers plug-ins add, as dicts (compare.solvers puts them in REGISTRY)
 

@@ -17,10 +17,13 @@ from .params import Param
 @dataclass(frozen=True)
 class Excitation:
     """An excitation line of a Campbell diagram: `order` × the rotation frequency as seen in
-    `frame` ("fixed": from the ground, "rotating": from the rotor), `name` what excites it."""
+    `frame` ("fixed": from the ground, "rotating": from the rotor), `name` what excites it;
+    `present(params) -> bool`: whether the system has it at these parameters (None: always) —
+    a line it lacks is neither drawn nor crossed."""
     order: int
     frame: str
     name: str
+    present: Callable | None = None
 
     def __post_init__(self):
         if self.frame not in FRAMES or self.order < 1:
@@ -71,6 +74,10 @@ class Campbell:
         if not self.whirls and any(e.frame != self.frame for e in self.excitations):
             raise ValueError("Campbell: an excitation in another frame than the lines' needs "
                              "whirling modes (whirls=True) to map them")
+
+    def active(self, params) -> tuple:
+        """The excitations the system has at `params` (`Excitation.present`)."""
+        return tuple(e for e in self.excitations if e.present is None or e.present(params))
 
     @property
     def frames(self) -> tuple:
@@ -255,12 +262,41 @@ class Calibration:
     `outside` (solver, "*" any -> why): where in the region that solver leaves its domain and
     stops (a set it stops at is skipped with this reason, never counted as agreement);
     `truth` (solver -> another): whose run is that solver's true answer where it has no
-    tighter discretisation of its own (a closed form of the same model)."""
+    tighter discretisation of its own (a closed form of the same model); `campaign`: the sets
+    the default campaign draws (0: none — the scene's runs are too long for its budget)."""
     region: dict = field(default_factory=dict)
     fixed: dict = field(default_factory=dict)
     log: tuple = ()
     outside: dict = field(default_factory=dict)
     truth: dict = field(default_factory=dict)
+    campaign: int = 0
+
+
+@dataclass(frozen=True)
+class Fit:
+    """What `xval identify` fits (compare/workflows/identify.py): the default `unknowns`;
+    `scale` (name -> typical size: the fit's unit, and a CI half-width above it — or above a
+    quarter `period` — marks the unknown unidentified); `periodic` (name -> period: started
+    from `starts` points across it, the estimate wrapped into [−period/2, period/2));
+    `revolution` the channel of an angle the record must turn through by one period at least
+    (2π); `noise` (channel -> σ) the default synthesis noise; `through` (name -> another): an
+    unknown the data see only through the other's size (a defect's shape through its height),
+    undetermined wherever the other's interval holds zero; `section` (angle, x, y channels):
+    `--poincare PHASE` fits x, y once per revolution, where the angle passes PHASE + 2πk;
+    `--detection` (the smallest `size` told from none): over `speeds` of the parameter `speed`,
+    for each of the `channel_sets` (label -> channels)."""
+    unknowns: tuple
+    scale: dict = field(default_factory=dict)
+    periodic: dict = field(default_factory=dict)
+    starts: int = 32
+    revolution: str | None = None
+    noise: dict = field(default_factory=dict)
+    through: dict = field(default_factory=dict)
+    section: tuple = ()
+    size: str | None = None
+    speed: str | None = None
+    speeds: tuple = ()
+    channel_sets: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -342,12 +378,15 @@ class Scene:
     map_observables: dict = field(default_factory=dict)
     maps: tuple = ()
     notes: str = ""
+    group: str = ""    # `xval list`'s group ("benchmarks": the field's refereed problems)
     # a time scene's answer to `xval modes` (Linearisation; `modal()`), and a frequency scene's
     # parameters held at fixed values (name -> value: its leaves get them, `--set` refuses them)
     linearisation: "Linearisation | None" = None
     held: dict = field(default_factory=dict)
     # `xval calibrate`'s sampling region (None: the default region, `Calibration`)
     calibration: Calibration | None = None
+    # `xval identify`'s unknowns and their scales (None: the scene cannot be identified)
+    fit: Fit | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "channels", tuple(

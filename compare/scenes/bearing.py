@@ -7,7 +7,7 @@ from ..analysis.identify import pencil_poles
 from ..contract import Channel
 from ..errors import BadInput
 from ..physics import bearing_rotor as physics
-from .base import Extreme, Finding, Linearisation, MapSpec, TimeScene
+from .base import Calibration, Extreme, Finding, Fit, Linearisation, MapSpec, TimeScene
 from .params import Param, positive
 
 LEAVES = {"quaternion": "custom_models.bearing.quaternion",
@@ -117,6 +117,7 @@ def plots(params, trajectories, fig):
                     ms=1.5, label=tr.solver)
     orbit.set(xlabel="journal a x [µm]", ylabel="journal a y [µm]",
               title="orbit of journal a, last 5 revolutions")
+    orbit.set_aspect("equal", adjustable="datalim")     # an orbit's shape: one µm each way
     ripple.set(xlabel="spin angle mod 360 [deg]", ylabel="spin rate [rad/s]",
                title="spin rate against spin angle, last 5 revolutions")
     orbit.legend(fontsize=7)
@@ -306,13 +307,27 @@ BEARING_ROTOR = TimeScene(
     draw_3d=draw_shaft,
     plots=plots,
     extremes=BEARING_EXTREMES,
-    campaign_cases=({"name": "bearing-rotor"},),
+    campaign_cases=({"name": "bearing-rotor"},), calibration=Calibration(campaign=2),
     map_observables={"spin_ripple": (spin_ripple, "rad/s", "peak-to-peak spin rate over the "
                                      "last five revolutions")},
     # the diagnostic curve: ripple against defect height, every solver at every point (the
     # engines' runs are the curve's check; its slope near zero defect from each of them)
     maps=(MapSpec("ripple-vs-defect", x="defect_height=0:4e-5", resolution=0.05, coarse=(5, 1),
                   observable="spin_ripple", engines="everywhere"),),
+    # `xval identify`: the defect from a measured record (the angle started across its circle,
+    # 32 starts: 0.2 rad apart, twice the default half width); noise of the issue's sensor
+    fit=Fit(unknowns=("defect_height", "defect_width", "defect_angle"),
+            scale={"defect_height": 1e-5, "defect_width": 0.1, "defect_angle": 0.1,
+                   "mu": 0.01, "c_b": 100.0},
+            periodic={"defect_angle": 2 * np.pi}, starts=32, revolution="spin_angle",
+            noise={"spin_rate": 0.01, "spin_angle": 1e-4, "journal_a_x": 1e-6,
+                   "journal_a_y": 1e-6, "journal_b_x": 1e-6, "journal_b_y": 1e-6},
+            through={"defect_width": "defect_height", "defect_angle": "defect_height"},
+            section=("spin_angle", "journal_a_x", "journal_a_y"),
+            size="defect_height", speed="motor_no_load_speed", speeds=(40.0, 80.0, 160.0),
+            channel_sets={"speed only": ("spin_rate",),
+                          "orbit at a": ("journal_a_x", "journal_a_y"),
+                          "both": ("spin_rate", "journal_a_x", "journal_a_y")}),
     linearisation=Linearisation(
         "the steady spin (motor/friction balance) at the defect-free static sag",
         held={"defect_height": 0.0, **dict.fromkeys((

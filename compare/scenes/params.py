@@ -46,21 +46,44 @@ class Param:
                 and self.name not in RUN_PARAMS)
 
     def parse(self, text):
-        """Value from a `--set` string (or a campaign file's value), validated."""
+        """Value from a `--set` string (or a campaign file's value), validated. A number may
+        carry a unit (`400rpm`, `60 cm`): converted to the declared unit; a plain number is in
+        the declared unit."""
         try:
             if self.kind == "vector":
                 parts = text.split(",") if isinstance(text, str) else list(text)
-                value = np.array([float(x) for x in parts])
+                value = np.array([self._number(x) for x in parts])
             elif self.kind == "int":
-                value = int(text)
+                value = self._whole(text)
             elif self.kind == "choice":
                 value = type(self.choices[0])(text)
             else:
-                value = float(text)
+                value = self._number(text)
+        except BadInput:
+            raise
         except (TypeError, ValueError):
             raise BadInput(f"{self.name}: cannot read {text!r} as {self.kind}"
                            f"{f' ({self.unit})' if self.unit else ''}") from None
         return self.check(value)
+
+    def _number(self, text) -> float:
+        try:
+            return float(text)
+        except ValueError:
+            if not isinstance(text, str) or not any(ch.isalpha() for ch in text):
+                raise
+        # pint only for a value with a unit
+        from .units import convert
+        return convert(text, self.unit, self.name)
+
+    def _whole(self, text) -> int:
+        try:
+            return int(text)
+        except ValueError:
+            value = self._number(text)
+            if not math.isfinite(value) or value != int(value):
+                raise BadInput(f"{self.name}: {text!r} is not a whole number") from None
+            return int(value)
 
     def check(self, value):
         if self.kind == "choice":

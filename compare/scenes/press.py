@@ -238,7 +238,7 @@ CALIBRATION = Calibration(
             "phi0": (-70.0, -58.0), "psi0": (-51.0, -42.0)},
     fixed={"t_end": 0.02}, outside={"*": _VERTICAL},
     # Exudyn's own finer runs grow noisier in crank_accel (tests/verdicts/test_coverage.py)
-    truth={"exudyn": "lagrange-exact"})
+    truth={"exudyn": "lagrange-exact"}, campaign=2)
 
 
 PRESS = TimeScene(
@@ -280,7 +280,7 @@ PRESS_CYCLE = TimeScene(
                 why="stiff slider through lock and release (as press's: every solver but "
                     "lagrange-exact at the step that resolves it)"),
     ),
-    campaign_cases=({"name": "press-cycle"},),
+    campaign_cases=({"name": "press-cycle"},), calibration=Calibration(campaign=2),
     map_observables={"lock_time": (lambda p, tr: lock_time(p, tr), "s",
                                    "the instant the rocker locks onto the slider")},
     # lock instant over the slider's stiffness; where the rocker stops locking (between 1e6

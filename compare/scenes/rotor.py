@@ -239,6 +239,7 @@ SPINUP = TimeScene(
     findings=spinup_findings,
     draw_3d=draw_rotor,
     extremes=SPINUP_EXTREMES,
+    calibration=Calibration(campaign=2),
     campaign_cases=({"name": "rotor-spinup-1.5Nm"},
                     {"name": "rotor-spinup-3.2Nm", "set": {"torque": "3.2", "t_end": "5"}}),
     regime=spinup_regime,
@@ -409,5 +410,5 @@ WHIRL = ModesScene(
     calibration=Calibration(region={"spin": (0.0, 150.0), "c_ext": (0.0, 5.0),
                                     "c_int": (0.0, 5.0)},
                             truth=dict.fromkeys(("euler-vector", "exudyn", "mujoco"),
-                                                "closed-form")),
+                                                "closed-form"), campaign=2),
 )

@@ -23,6 +23,7 @@ from .. import solvers as adapter
 from ..analysis.metrics import frequency_errors, match_modes
 from ..analysis.verdict import Verdict
 from ..errors import BadInput
+from ..output import progress
 from ..results.calibrate import CalibrationResult
 from ..scenes import Calibration, Scene, get_scene
 from ..scenes.params import RUN_PARAMS
@@ -240,8 +241,10 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
     rows, skipped, disagree, n_cmp, verdicts = [], [], [], 0, {}
     left_out = {s.name: {} for s in chosen}
     widest = None
+    bar = progress.task(f"calibrate {scene.name}", samples, "parameter sets")
     for k, (over, params) in enumerate(sample(scene, samples, seed)):
         one = evaluate(scene, chosen, params, first=(k == 0))
+        bar.advance()
         changed = {n: _plain(params[n]) for n in over if n not in fixed
                    and not np.array_equal(params[n], defaults[n])}
         stopped = [{"set": k, "solver": s, "status": r.status, "reason": r.reason,
@@ -283,6 +286,7 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
             "fixed": {n: _plain(v) for n, v in fixed.items()},
             "floor": f"a deviation below {FLOOR:g}·eps·scale opens no window",
             "wall_s": time.perf_counter() - t0}
+    bar.close()
     return CalibrationResult(data)
 
 

@@ -42,13 +42,14 @@ import numpy as np
 from .. import solvers
 from ..analysis.trajectory import Trajectory
 from ..errors import BadInput
-from ..output import guard
+from ..output import guard, progress
 from ..output.joblog import captured, distinct_lines
 from ..output.progress import PlainProgress
 from ..output.store import (
     case_failed,
     link,
     mark_case,
+    store_calibration,
     store_modes,
     store_sensitivity,
     store_trajectory,
@@ -57,7 +58,7 @@ from ..results import ModesResult, TimeResult
 from ..scenes import get_scene
 from . import plan as planner
 from . import power, runner
-from .digest import _scene_module, job_code
+from .digest import _scene_module, code_digest, job_code, job_digest
 from .executors import (  # noqa: F401  (connect: the API's check)
     Interrupted,
     connect,
@@ -67,7 +68,7 @@ from .executors import (  # noqa: F401  (connect: the API's check)
     worker_pool,
 )
 
-TOP_KEYS = ("name", "cases", "maps", "max_output_gib", "max_steps", "max_jobs")
+TOP_KEYS = ("name", "cases", "maps", "calibrate", "max_output_gib", "max_steps", "max_jobs")
 MAP_KEYS = ("name", "scene", "x", "y", "set", "solvers", "resolution", "coarse", "observable",
             "level", "engines", "y_resolution")
 MAX_JOBS = 10_000          # jobs (cases × solvers) a campaign may plan before it is refused
@@ -75,13 +76,14 @@ CASE_KEYS = ("name", "scene", "set", "sweep", "solvers", "dt", "rtol", "integrat
              "settings", "timeout_s", "power")
 
 
-BUILT_IN = ("default", "long")
+BUILT_IN = ("default", "long", "benchmarks")   # benchmarks: the `benchmarks` group's
 
 
 def default_campaign(name: str = "default") -> dict:
     """A built-in campaign from the scenes' own cases (`Scene.campaign_cases`): "default" (every
     scene, every solver, minutes) or "long" (the cases a scene marks `"campaign": "long"`, e.g.
-    the engines' full sail deployment, tens of minutes)."""
+    the engines' full sail deployment, tens of minutes) or "benchmarks" (the cases marked
+    `"campaign": "benchmarks"` and the maps of the `benchmarks` group's scenes)."""
     from ..scenes import SCENES
     # the default campaign's time cases report their detection power (`power`: one
     # sensitivity run per physical parameter of the case's first solver)
@@ -91,7 +93,7 @@ def default_campaign(name: str = "default") -> dict:
                        **{k: v for k, v in case.items() if k != "campaign"}}
                       for sc in SCENES.values() for case in sc.campaign_cases
                       if case.get("campaign", "default") == name]}
-    if name == "default":              # each scene's default maps
+    if name in ("default", "benchmarks"):   # each scene's default maps (of the group)
         camp["maps"] = [{"name": f"{sc.name}-{m.name}", "scene": sc.name, "x": m.x,
                          **({"y": m.y} if m.y else {}), "set": dict(m.set),
                          "resolution": m.resolution, "coarse": list(m.coarse),
@@ -100,7 +102,14 @@ def default_campaign(name: str = "default") -> dict:
                          **({"observable": m.observable} if m.observable else {}),
                          **({"level": m.level} if m.level is not None else {}),
                          "engines": m.engines}
-                        for sc in SCENES.values() for m in sc.maps]
+                        for sc in SCENES.values() for m in sc.maps
+                        if name == "default" or sc.group == name]
+        # the other error rate: false alarms over sets drawn off the defaults (`xval
+        # calibrate`), for each scene whose runs fit the budget
+        camp["calibrate"] = [{"scene": sc.name, "samples": sc.calibration.campaign}
+                             for sc in SCENES.values()
+                             if name == "default" and sc.calibration
+                             and sc.calibration.campaign]
     return camp
 
 
@@ -168,6 +177,17 @@ def check_shape(camp, src):
                 bad(f"maps[{i}].{k}", "missing or not a string")
         if "name" in m and not _safe_name(m["name"]):
             bad(f"maps[{i}].name", f"{m['name']!r} must be a non-empty string without '/'")
+    cals = camp.get("calibrate", [])
+    if not isinstance(cals, list):
+        bad("calibrate", "must be a list of {scene, samples, seed} ([[calibrate]] in TOML)")
+    for i, c in enumerate(cals):
+        if not (isinstance(c, dict) and isinstance(c.get("scene"), str)
+                and set(c) <= {"scene", "samples", "seed"}):
+            bad(f"calibrate[{i}]", "must be a table with `scene` and optionally `samples`, "
+                                   "`seed`")
+        for k, lo in (("samples", 1), ("seed", 0)):
+            if k in c and not (isinstance(c[k], int) and c[k] >= lo):
+                bad(f"calibrate[{i}].{k}", f"must be a whole number ≥ {lo}, got {c[k]!r}")
     cases = camp.get("cases")
     if (not isinstance(cases, list) or not cases) and not maps:
         bad("cases", "missing or empty: a list of cases ([[cases]] in TOML)")
@@ -255,12 +275,17 @@ class Job:
     settings: dict
     timeout_s: float | None
     digest: str
-    # "run", or "sensitivity": the solver's response to each physical parameter, from which
-    # the case's detection power is estimated (`power.sensitivities`)
+    # "run", "sensitivity": the solver's response to each physical parameter, from which
+    # the case's detection power is estimated (`power.sensitivities`), or "calibration": the
+    # scene's `xval calibrate` over `samples` sets drawn with `seed`
     task: str = "run"
+    samples: int = 0
+    seed: int = 0
 
     @property
     def label(self):
+        if self.task == "calibration":
+            return self.case
         return f"{self.case}/{self.solver or 'modes'}" + (
             "" if self.task == "run" else f" {self.task}")
 
@@ -298,6 +323,7 @@ def plan(camp, src="built-in campaign", timeout_s=None, max_output_gib=None, max
                        f"budget of {max_jobs}: shorten the sweeps or set max_jobs "
                        f"(or --max-jobs)")
     cases, jobs, names = [], [], set()
+    bar = progress.task("planning", len(camp.get("cases", [])), "cases")
     for i, c in enumerate(camp.get("cases", [])):
         at = f"{src}: cases[{i}]"
         sc = _prefixed(f"{at}.scene", get_scene, c["scene"])
@@ -342,6 +368,17 @@ def plan(camp, src="built-in campaign", timeout_s=None, max_output_gib=None, max
                 jobs.append(Job(pname, sc.name, pl.params, overrides, s.name, (s.name,),
                                 pl.settings[s.name], pl.timeout_s, d.hexdigest(),
                                 "sensitivity"))
+        bar.advance()
+    bar.close()
+    for i, c in enumerate(camp.get("calibrate", [])):
+        sc = _prefixed(f"{src}: calibrate[{i}].scene", get_scene, c["scene"])
+        n, seed = c.get("samples", 2), c.get("seed", 0)
+        chosen = [solvers.get_solver(s) for s in sc.leaves]
+        code = code_digest({"compare.workflows.calibrate"})
+        d = hashlib.sha256(f"calibration|{n}|{seed}|{code}|"
+                           f"{job_digest(sc, sc.resolve({}), chosen, {})}".encode())
+        jobs.append(Job(f"calibration/{sc.name}", sc.name, {}, {}, None, tuple(sc.leaves), {},
+                        timeout_s, d.hexdigest(), "calibration", n, seed))
     return cases, jobs
 
 
@@ -372,7 +409,12 @@ def run_job(job: Job, store: str):
     store = Path(store)
     t0 = time.perf_counter()
     with captured(store / f"{job.key}.log") as text:
-        if job.task == "sensitivity":
+        if job.task == "calibration":
+            from .calibrate import calibrate
+            res = calibrate(job.scene, job.samples, job.seed)
+            store_calibration(store, job.key, {"input_digest": job.digest, **res.to_json()})
+            status = "ok"
+        elif job.task == "sensitivity":
             sc = get_scene(job.scene)
             sens = power.sensitivities(sc, solvers.get_solver(job.solver), job.params,
                                        job.settings, sc.output_grid(job.params), job.timeout_s)
@@ -407,8 +449,8 @@ def _stored_meta(path):
 
 def is_done(job, store):
     """Stored with this digest and not stopped by its wall-clock limit."""
-    if job.task == "sensitivity":
-        f = store / f"{job.key}.sensitivity.json"
+    if job.task in ("sensitivity", "calibration"):
+        f = store / f"{job.key}.{job.task}.json"
         return f.exists() and json.loads(f.read_text()).get("input_digest") == job.digest
     if job.solver is None:
         f = store / job.key / "modes.json"
@@ -452,14 +494,14 @@ def prepare(source, timeout_s=None, max_output_gib=None, max_steps=None, max_job
 
 def run_campaign(path, out, executor="local", scheduler=None, workers=None, timeout_s=None,
                  verbose=False, max_output_gib=None, max_steps=None, view=None, max_jobs=None,
-                 prepared=None):
+                 prepared=None, folder=None):
     """Plan (everything validated; `prepared`: planned already), run what is not stored yet,
-    report each case as its jobs come in, then the campaign report. Returns the summary (also
-    in summary.json)."""
+    report each case as its jobs come in, then the campaign report, in `folder` (default
+    out/campaign/<name>). Returns the summary (also in summary.json)."""
     p = prepared or prepare(path, timeout_s, max_output_gib, max_steps, max_jobs)
     camp, cases, jobs, maps = p.camp, p.cases, p.jobs, p.maps
     view = view or PlainProgress()
-    out_dir = Path(out) / "campaign" / camp.get("name", "campaign")
+    out_dir = Path(folder) if folder else Path(out) / "campaign" / camp.get("name", "campaign")
     with terminated_as_interrupt(), guard.folder_lock(out_dir, "xval campaign", view.log):
         try:
             return _run_locked(camp, cases, jobs, out_dir, view, executor, scheduler, workers,
@@ -480,6 +522,7 @@ def _run_locked(camp, cases, jobs, out_dir, view, executor, scheduler, workers, 
     reused = {j.label for j in jobs if is_done(j, store)}
     todo = dispatch_order([j for j in jobs if j.label not in reused])
     pending = {c.name: {j.label for j in todo if j.case == c.name} for c in cases}
+    pending.update({j.case: {j.label} for j in todo if j.task == "calibration"})
     outcome, crashed = {}, {}
     t0 = time.perf_counter()
     view.log(f"campaign {camp.get('name')}: {len(jobs)} jobs in {len(cases)} cases, "
@@ -507,7 +550,7 @@ def _run_locked(camp, cases, jobs, out_dir, view, executor, scheduler, workers, 
                     for line in distinct_lines(text):
                         view.log(f"    {line}")
                 pending[j.case].discard(j.label)
-                if not pending[j.case]:
+                if not pending[j.case] and j.task != "calibration":
                     case = next(c for c in cases if c.name == j.case)
                     view.note(f"writing the report of {case.name}")
                     outcome[case.name] = _finish_safely(case, jobs, store, out_dir,
@@ -516,7 +559,18 @@ def _run_locked(camp, cases, jobs, out_dir, view, executor, scheduler, workers, 
                    for name, pl in maps]
     from ..output.campaign_report import write_campaign_report
     return write_campaign_report(camp, cases, jobs, outcome, out_dir, reused, crashed,
-                                 time.perf_counter() - t0, map_results)
+                                 time.perf_counter() - t0, map_results,
+                                 [_calibration(j, store, crashed) for j in jobs
+                                  if j.task == "calibration"])
+
+
+def _calibration(job, store, crashed):
+    """A calibration job's result (`xval calibrate`'s JSON), or why there is none."""
+    f = store / f"{job.key}.calibration.json"
+    if job.label in crashed or not f.exists():
+        return {"scene": job.scene, "samples": job.samples,
+                "error": crashed.get(job.label, "no result file")}
+    return {k: v for k, v in json.loads(f.read_text()).items() if k != "input_digest"}
 
 
 def _run_map(name, pl, out_dir, executor, scheduler, workers, view):
@@ -525,9 +579,10 @@ def _run_map(name, pl, out_dir, executor, scheduler, workers, view):
     them as it reuses cases."""
     from .maps import map_to_folder
     view.note(f"map {name}: ~{pl['estimate']['runs']} runs")
-    res = map_to_folder(pl, None, executor=executor, scheduler=scheduler, workers=workers,
-                        store=out_dir / "jobs" / "map-points", log=view.log,
-                        out_dir=out_dir / "maps" / name)
+    with progress.reporting(view=view):         # the map's run counter, through the view
+        res = map_to_folder(pl, None, executor=executor, scheduler=scheduler, workers=workers,
+                            store=out_dir / "jobs" / "map-points", log=view.log,
+                            out_dir=out_dir / "maps" / name)
     res["name"] = name
     view.log(f"map {name}: {sum(res['runs'].values())} runs, {res['reused']} reused")
     return res
@@ -649,7 +704,8 @@ def _finish_modes(case, job, store, case_dir, crashed):
             link(f, case_dir / f.name)
     obj = json.loads((case_dir / "modes.json").read_text())
     obj["report"] = str(case_dir / "report.md")
-    for key in ("recording", "mode_shapes_recording", "mode_shapes_figure"):
+    for key in ("recording", "mode_shapes_recording", "mode_shapes_figure",
+                "frequencies_figure"):
         if obj.get(key):
             obj[key] = str(case_dir / Path(obj[key]).name)
     obj.setdefault("findings", [])

@@ -160,10 +160,6 @@ def _declared(row: dict, known: str | None):
                    detail=f"declared a known failure ({known}), yet {row['detail']}")
 
 
-def _num(v):
-    return "" if v is None else f"{v:.3g}"
-
-
 def extremes_dir(out, scene_name) -> Path:
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
     return Path(out) / "extremes" / f"{scene_name}-{stamp}"
@@ -195,13 +191,4 @@ def run_extremes(scene_name: str, solver_names, include_slow=False, timeout_s=No
                            for r in rows),
            "n_known": sum(r["outcome"] == KNOWN for r in rows),
            "n_stale": sum(r["outcome"].startswith("stale") for r in rows)}
-    md = [f"# Extremes: {sc.name}", "", "| case | solver | outcome | number | detail |",
-          "|---|---|---|---|---|"]
-    md += [f"| {r['case']} | {r['solver']} | **{r['outcome']}"
-           f"{' (marginal)' if r.get('marginal') else ''}** | {_num(r.get('value'))} | "
-           f"{r['detail']} |" for r in rows]
-    md += ["", "Cases:", ""] + [f"- **{c.name}** ({', '.join(f'{k}={v}' for k, v in c.set.items())}"
-                                 f"{'; ' if c.settings else ''}"
-                                 f"{', '.join(f'{k}={v}' for k, v in c.settings.items())}): "
-                                 f"{c.why}" for c in cases]
-    return ExtremesResult(obj, report_md=md)
+    return ExtremesResult(obj)

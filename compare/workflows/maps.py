@@ -34,6 +34,7 @@ import numpy as np
 from .. import solvers
 from ..analysis.verdict import Verdict
 from ..errors import BadInput
+from ..output import progress
 from ..output.store import store_point
 from ..results import MapResult
 from ..scenes import get_scene
@@ -159,6 +160,7 @@ class Runner:
         self.memo, self.log = {}, log or (lambda m: None)
         self.tight = {}                  # point key → "regime holds/flips at <settings>"
         self.runs, self.wall = {}, {}
+        self.counter = None              # a compare.output.progress counter of the runs
 
     def _keys(self, tasks):
         """Each task's digest of {scene, base, solver, settings, point, what, salt}: the JSON
@@ -194,6 +196,9 @@ class Runner:
                 self.memo[k] = {**json.loads(stored.read_text()), "reused": True}
                 continue
             todo[k] = (solver, settings, pt)
+        if self.counter is not None:         # the plan's estimate, raised where it falls short
+            c = self.counter
+            c.advance(0, total=max(c.total or 0, c.done + len(todo)))
         groups, texts = {}, {}
         for k, (solver, settings, pt) in todo.items():
             if id(settings) not in texts:          # one settings object serves a whole batch
@@ -221,6 +226,8 @@ class Runner:
             # one core's time in the solver per point (compile time apart, as `simulate` has it)
             self.wall[solver] = self.wall.get(solver, 0.0) + sum(r["wall_s"] for r in o.value)
             self.runs[solver] = self.runs.get(solver, 0) + len(o.value)
+            if self.counter is not None:
+                self.counter.advance(len(o.value))
             for (k, _), row in zip(chunk, o.value):
                 self.memo[k] = row
                 if self.store:
@@ -732,6 +739,7 @@ def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=N
     ys = np.linspace(ya.lo, ya.hi, ny) if ya else [None]
     coarse_step = xs[1] - xs[0]
     runner = Runner(sc, plan["overrides"], what, executor, workers, store, log, salt)
+    runner.counter = progress.task(f"map {sc.name}", plan["estimate"]["runs"], "runs")
     settings = {s.name: (settings_for(s) if settings_for else plan["settings"][s.name])
                 for s in plan["chosen"]}
     customs = [s for s in plan["chosen"] if not is_engine(s)]
@@ -831,6 +839,7 @@ def run_map(plan, settings_for=None, executor=None, workers=2, store=None, log=N
         p.setdefault("regime", None)
         p.setdefault("value", None)
     per_solver = {s: runner.runs[s] / runner.wall[s] for s in runner.runs if runner.wall.get(s)}
+    runner.counter.close()
     return {"scene": sc.name, "x": xa.as_dict(), "y": ya.as_dict() if ya else None,
             "set": plan["overrides"], "observable": what, "level": level,
             "resolution": plan["resolution"], "bracket_width": width,

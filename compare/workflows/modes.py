@@ -19,6 +19,9 @@ from ..analysis.campbell import mac
 from ..analysis.trajectory import Modes
 from ..analysis.verdict import Verdict, agree_text
 from ..errors import BadInput
+from ..output.campbell_plot import critical_table
+from ..output.report import header_lines
+from ..physics.whirl import shown_label
 from ..results import ModesResult
 from ..results.modes import (
     DAMPED_HEADER,
@@ -120,7 +123,7 @@ def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: 
     if cb.excitation_hz is None:
         return []
     out = []
-    for exc in cb.excitations:
+    for exc in cb.active(params):                  # a 2× line only where a 2× load exists
         def seen(m, v, exc=exc):
             return campbell.in_frame(m, cb.excitation_hz(params, v), cb.frame, exc.frame)
         lines = track([seen(m, v) for m, v in zip(results, values)])
@@ -365,7 +368,7 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
            "events": {s: [e.as_dict() for e in ev] for s, ev in events.items()},
            "min_mac_unmarked": {s: d.min_mac_unmarked() for s, d in diagrams.items()},
            "excitations": [{"order": e.order, "frame": e.frame, "name": e.name}
-                           for e in cb.excitations],
+                           for e in cb.active(params)],
            "critical_speeds": entries,
            "zeta_lines": {s: {k: none(v) for k, v in z.items()} for s, z in zeta.items()},
            "growing_from": {s: o for s, o in onsets.items() if o},
@@ -415,21 +418,6 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
         [c for c in sweep if c.verdict != Verdict.AGREE]
 
 
-def critical_table(cb, entries: dict) -> list[str]:
-    """The critical speeds as ROSS tabulates them: speed in rad/s and rpm side by side, the
-    frequency met in Hz and rad/s, the excitation, whirl and frame of each crossing."""
-    p = f"{cb.parameter} [{cb.unit}]" if cb.unit else cb.parameter
-    md = [f"Critical speeds (a mode line crosses an excitation line, both seen in the frame "
-          f"given; the solvers' lines are in the {cb.frame} frame):", "",
-          f"| solver | crossing | excitation | whirl | frame | {p} | rad/s | rpm | Hz | rad/s |",
-          "|---|---|---|---|---|---|---|---|---|---|"]
-    md += [f"| {s} | {e['name']} | {e['order']}× {e['excitation']} | {e['whirl'] or '—'} | "
-           f"{e['frame']} | {e['value']:.6f} | {e['speed_rad_s']:.6g} | {e['speed_rpm']:.6g} | "
-           f"{e['frequency_hz']:.6g} | {e['frequency_rad_s']:.6g} |"
-           for s, es in entries.items() for e in es]
-    return md
-
-
 def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float,
               tighter: bool = False):
     """A time-domain run for an identification hook: the solver's accurate defaults, its fixed
@@ -450,6 +438,17 @@ def _run_time(scene: Scene, solver_name: str, params: dict, max_dt: float,
     return tr
 
 
+def _at_rest(sc, params, m):
+    """At rest (the Campbell's rotation frequency 0) a forward and a backward whirl are one
+    degenerate pair with no sense of whirl: their whirl is "—" (the labels stay the keys
+    the solvers are paired by; `shown_label` drops the sense where the whirl is "—")."""
+    cb = sc.campbell
+    if m.whirl is None or cb is None or cb.excitation_hz is None \
+            or cb.parameter not in params or cb.excitation_hz(params, params[cb.parameter]) != 0:
+        return m
+    return replace(m, whirl=["—"] * len(m.whirl))
+
+
 def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=True,
               identify=True, campbell_frame=None, threshold=True) -> ModesResult:
     """Every chosen solver's modes, compared; the Campbell diagram (its figure in
@@ -467,7 +466,7 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
     results = []
     for s in chosen:
         log(f"{sc.name}: {s.name} …")
-        results.append(solvers.modes(sc, s, params))
+        results.append(_at_rest(sc, params, solvers.modes(sc, s, params)))
     comparisons = sc.verdicts(params, results)
     unpaired = metrics.unpaired_modes(results)
     incomplete = [{"solver": r.solver, "status": r.status, "reason": r.reason}
@@ -476,10 +475,11 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
     growing = growing_modes(results, sc.tolerances_for(params).get("damping", 0.0))
     if growing:                                  # only then: undamped answers stay as they were
         extra["unstable"] = growing
-    md = [f"# {sc.name}: {sc.title}", "", f"Source: {sc.source}", "",
+    md = [f"# {sc.name}: {sc.title}", "", *header_lines(sc, params),
           "| solver | status | frequencies [Hz] | labels | notes |", "|---|---|---|---|---|"]
     md += [f"| {r.solver} | {r.status} | {', '.join(f'{f:.8g}' for f in r.frequencies_hz)} | "
-           f"{', '.join(r.labels)} | {'; '.join(r.notes) or r.reason or ''} |" for r in results]
+           f"{', '.join(map(shown_label, r.labels, r.whirl or [None] * len(r.labels)))} | "
+           f"{'; '.join(r.notes) or r.reason or ''} |" for r in results]
     if any(r.damping is not None for r in results):
         md += ["", "Damped modes (ζ: damping ratio, log dec δ = 2πζ/√(1 − ζ²); whirl about the "
                "spin as ROSS names it):", "",

@@ -22,6 +22,7 @@ import numpy as np
 from .. import solvers
 from ..analysis.verdict import Verdict
 from ..errors import BadInput
+from ..output import progress
 from ..results import PowerResult
 from .plan import plan
 
@@ -280,13 +281,18 @@ def run_power(scene_name: str, overrides: dict, names: list[str],
                            f"(those are: {', '.join(physical)})")
     study = _Study(pl)
     rows = []
-    for name in parameters or physical:
+    names_ = parameters or physical
+    bar = progress.task(f"power {sc.name}", len(names_) * len(chosen),
+                        "perturbed parameter × solver")
+    for name in names_:
         for s in chosen:
             rows.append(_one(study, s, name))
+            bar.advance()
             r = rows[-1]
             log(f"{sc.name}: {name} in {s.name}: "
                 + (f"ε* = {r.epsilon:.2g} ({' vs '.join(r.pair)}, {r.channel}; {r.how})"
                    if r.epsilon is not None else f"none ({r.how})"))
+    bar.close()
     return PowerResult({"scene": sc.name, "params": {k: overrides[k] for k in overrides},
                         "solvers": [s.name for s in chosen],
                         "nominal": {Verdict.AGREE: Verdict.tally(

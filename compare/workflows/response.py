@@ -16,8 +16,10 @@ from .. import solvers
 from ..analysis import response as resp
 from ..analysis.verdict import Verdict
 from ..errors import BadInput
+from ..output import progress
 from ..results.response import ResponseResult, time_label
 from ..scenes import SCENES, get_scene
+from .executors import execute_many, worker_pool
 from .plan import plan
 
 SETTLE = 1e-12       # the transient left when the fit windows start (of its initial size)
@@ -92,6 +94,31 @@ def _time_point(scene, spec, params, solver, spin) -> dict:
             "error_by": tighter, "wall_s": wall}
 
 
+def time_point(scene_name: str, params: dict, solver: str, spin: float) -> dict:
+    """`_time_point` in a worker (a scene travels by name)."""
+    scene = get_scene(scene_name)
+    return _time_point(scene, scene.response, params, solver, spin)
+
+
+def _time_points(scene, params, timed, spins, log) -> dict:
+    """Every time solver at every speed, the points spread over the study's workers (each
+    point is independent: its own run to steady state and its tighter rerun); a point whose
+    worker failed is an `error` row, never dropped."""
+    calls = {(name, i): (time_point, (scene.name, params, name, float(w)))
+             for name in timed for i, w in enumerate(spins)}
+    rows = {}
+    log(f"{scene.name}: {', '.join(timed)} at {len(spins)} speeds in the time domain …")
+    with progress.task(f"response {', '.join(timed)} (time)", len(calls), "speeds") as bar, \
+            worker_pool(in_process_if_unguarded=True) as ex:
+        for o in execute_many(calls, ex):
+            name, i = o.key
+            rows[o.key] = o.value if o.error is None else {
+                "speed_rad_s": float(spins[i]), "status": "error",
+                "reason": f"{type(o.error).__name__}: {o.error}".splitlines()[0]}
+            bar.advance()
+    return {name: [rows[(name, i)] for i in range(len(spins))] for name in timed}
+
+
 def _frequency(scene, name, params, spins) -> dict:
     fn = solvers.get_solver(name).info(scene).unbalance_response
     t0 = time.perf_counter()
@@ -141,12 +168,8 @@ def run_response(scene_name: str, solver_names=None, overrides: dict | None = No
     for name in freq:
         log(f"{scene.name}: {name} frequency response at {len(spins)} speeds …")
         data["frequency"][name] = _frequency(scene, name, params, spins)
-    for name in timed:
-        rows = []
-        for w in spins:
-            log(f"{scene.name}: {name} at {w:.6g} rad/s …")
-            rows.append(_time_point(scene, spec, params, name, float(w)))
-        data["time"][name] = rows
+    if timed:
+        data["time"] = _time_points(scene, params, timed, spins, log)
     _judge(scene, data, params, freq, timed)
     _peaks(scene, data, params, freq, timed)
     return ResponseResult(data)
@@ -190,7 +213,9 @@ def _judge(scene, data, params, freq, timed):
 
 def _peaks(scene, data, params, freq, timed):
     """Per curve: peak speed and amplitude, half-power band, Q, ζ ≈ Δω/(2ω_c) — and the
-    modal ζ of the forward whirl at the peak speed from each frequency solver's own modes."""
+    modal ζ of the forward whirl at the peak speed from each frequency solver's own modes.
+    A frequency solver's peak is located on its own response (any speed), a time-domain
+    curve's on a spline through its samples."""
     spins = np.array(data["speeds_rad_s"])
     curves = {n: np.array(data["frequency"][n]["re"]) + 1j * np.array(data["frequency"][n]["im"])
               for n in freq}
@@ -199,7 +224,11 @@ def _peaks(scene, data, params, freq, timed):
         if len(ok) == len(spins):
             curves[time_label(n)] = np.array([_complex(r) for r in ok])
     for n, a in curves.items():
-        pk = resp.peak(spins, a)
+        if n in freq:
+            fn = solvers.get_solver(n).info(scene).unbalance_response
+            pk = resp.peak_on_model(lambda x, fn=fn: fn(params, x)[0], spins, a)
+        else:
+            pk = resp.peak(spins, a)
         if pk is not None and n in freq:
             pk["zeta_modal_forward"] = _modal_zeta(scene, n, params, pk["peak_rad_s"])
         data["peaks"][n] = pk

@@ -33,6 +33,8 @@ ends (second order, like the method). `accel_from_mass_force` builds `acc` from 
 Output layout matches the explicit drivers: rows [q, q', z] on the output grid, NaN after a
 failure, plus (steps, rhs_evals, t_fail, code).
 """
+import math
+
 import numba as nb
 import numpy as np
 from numba import types as nt
@@ -45,6 +47,9 @@ ACC = nt.FunctionType(_VEC(nt.float64, nt.float64[:], nt.float64[:], _VEC))
 
 FAIL_NO_CONVERGENCE = 4
 MODE_NEWTON, MODE_FIXED_POINT, MODE_PC = 0, 1, 2
+# the variants a leaf offers by name: (θ, or None = the leaf's `theta` setting; iteration mode)
+LA_INTEGRATORS = {"linacc": (1.0, MODE_NEWTON), "wilson": (None, MODE_NEWTON),
+                  "linacc-pc": (1.0, MODE_PC), "linacc-fp": (1.0, MODE_FIXED_POINT)}
 LA_REASONS = {FAIL_NO_CONVERGENCE: "implicit linear-acceleration step did not converge "
                                    "(iteration diverged: step too large for the iteration)"}
 
@@ -260,3 +265,18 @@ def integrate_wilson(acc, guard, y0, n, p, t_out, substeps, theta, mode, tol, ma
         Y[i + 1, n:2 * n] = qd
         Y[i + 1, 2 * n:] = z
     return Y, steps, evals, np.nan, FAIL_OK
+
+
+def steps_per_output(t_out: np.ndarray, dt: float) -> int:
+    """Whole steps per output interval: dt rounded down onto a divisor of the output step."""
+    dt_out = t_out[1] - t_out[0]
+    if not dt or not dt > 0.0:
+        raise ValueError(f"dt must be > 0, got {dt!r}")
+    n = dt_out / dt
+    return max(1, int(round(n)) if abs(n - round(n)) < 1e-6 * n else int(math.ceil(n)))
+
+
+def la_args(s: dict) -> tuple:
+    """(θ, iteration mode) of the settings' linear-acceleration variant."""
+    theta, mode = LA_INTEGRATORS[s["integrator"]]
+    return (float(s["theta"]) if theta is None else theta), mode

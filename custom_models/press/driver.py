@@ -3,11 +3,10 @@
 lock/release cycle (`press-cycle`: segments of the shared event-capable driver, the lock located
 as a state event). Runge–Kutta methods take the allocation-free right-hand side `f_any_into`.
 """
-import math
 
 import numpy as np
 
-from ..integrators import FIXED_TABLEAUS, MODE_FIXED_POINT, MODE_NEWTON, MODE_PC, integrate_wilson
+from ..integrators import FIXED_TABLEAUS, integrate_wilson
 from ..integrators.dense import DENSE_TABLEAUS, RHS_INTO, first_class, solve
 from ..integrators.events import (
     C_EVENT_ON,
@@ -20,26 +19,14 @@ from ..integrators.events import (
     integrate_segment,
 )
 from ..integrators.explicit import GUARD
-from ..integrators.linear_acceleration import ACC
+from ..integrators.linear_acceleration import (  # noqa: F401  (LA_INTEGRATORS: press.lagrange)
+    ACC,
+    LA_INTEGRATORS,
+    la_args,
+    steps_per_output,
+)
 from .equations import acc_any, energy_terms, f_any_into, guard_any, lock_event, mass_matrix_any
 from .model import E_LOST, MODE
-
-# linear-acceleration variants: (θ or None = the `theta` setting, iteration mode)
-LA_INTEGRATORS = {"linacc": (1.0, MODE_NEWTON), "wilson": (None, MODE_NEWTON),
-                  "linacc-pc": (1.0, MODE_PC), "linacc-fp": (1.0, MODE_FIXED_POINT)}
-
-
-def steps_per_output(t_out: np.ndarray, dt: float) -> int:
-    dt_out = t_out[1] - t_out[0]
-    if not dt or not dt > 0.0:
-        raise ValueError(f"dt must be > 0, got {dt!r}")
-    n = dt_out / dt
-    return max(1, int(round(n)) if abs(n - round(n)) < 1e-6 * n else int(math.ceil(n)))
-
-
-def la_args(s: dict) -> tuple:
-    theta, mode = LA_INTEGRATORS[s["integrator"]]
-    return (float(s["theta"]) if theta is None else theta), mode
 
 
 def integrate_idle(y0: np.ndarray, p: np.ndarray, t_out: np.ndarray, s: dict):

@@ -25,11 +25,14 @@
 # entry-point group `xval.scenes`: nothing inside xval is edited. The package has three
 # modules: the scene (parameters, channels, allowances, regimes) and one *leaf* per solver.
 # This page is a notebook kept as text ([own_system.py](own_system.py), jupytext's
-# py:percent format: `jupytext --to notebook own_system.py`, or open it in Jupyter with
-# jupytext installed); the tests run it as a script, in an empty folder. The first cells
-# write the package's files.
+# py:percent format); the tests run it as a script, in an empty folder. To run it as a
+# notebook, with the docs extra (`pip install -e '.[docs]'`), in an empty folder:
+# `jupytext --to ipynb -o own_system.ipynb PATH/TO/own_system.py` then
+# `jupyter execute --inplace own_system.ipynb` (nbclient; or open it in Jupyter). The first
+# cells write the package's files.
 
 # %%
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -237,6 +240,9 @@ pendulum = "my_pendulum.scene"
 subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--target", "site",
                 "./my_pendulum"], check=True)
 sys.path.insert(0, str(Path("site").resolve()))
+# and for the worker processes a map starts (a fresh interpreter each, run in a notebook)
+os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [sys.path[0],
+                                                         os.environ.get("PYTHONPATH")]))
 
 import xval  # noqa: E402
 

@@ -79,7 +79,7 @@ def test_disk_full_during_run_one_line_no_partial_file_folder_marked(tmp_path, m
     lines = [ln for ln in err.splitlines() if ln.startswith("xval: error:")]
     assert len(lines) == 1 and "Traceback" not in err
     assert "quaternion.npz" in lines[0] and os.strerror(errno.ENOSPC) in lines[0]
-    (run,) = (out / "runs").iterdir()
+    run = out                                 # --out names the run's own folder
     names = sorted(p.name for p in run.iterdir())
     assert names == ["INCOMPLETE", "euler-vector.npz"]     # no partial, no temporary file
     assert guard.is_incomplete(run)
@@ -95,7 +95,7 @@ def test_second_campaign_on_the_same_folder_is_refused_naming_the_owner(tmp_path
     f.write_text(TWO_QUICK)
     out = tmp_path / "out"
     first = popen(["campaign", str(f), "--out", str(out), "--workers", "1"])
-    lock = out / "campaign" / "slow" / ".lock"
+    lock = out / ".lock"
     # its job store exists (a campaign folder to `xval diff`) once the first job has begun
     wait_for(lambda: (_owner(lock) and (lock.parent / "jobs").is_dir())
              or first.poll() is not None)
@@ -114,7 +114,7 @@ def test_second_campaign_on_the_same_folder_is_refused_naming_the_owner(tmp_path
     so1, se1 = first.communicate(timeout=300)
     assert first.returncode == 0, se1
     assert "2 jobs (2 run, 0 reused)" in so1            # each job ran once, by the first
-    assert len(list((out / "campaign" / "slow" / "jobs").glob("*.npz"))) == 2
+    assert len(list((out / "jobs").glob("*.npz"))) == 2
     assert not lock.exists()
 
 
@@ -130,7 +130,7 @@ def test_stale_lock_of_a_dead_process_is_taken_over_a_foreign_one_is_not(tmp_pat
     f = tmp_path / "tiny.toml"
     f.write_text('name = "tiny"\n[[cases]]\nscene = "rotor-spinup"\nsolvers = ["quaternion"]\n'
                  'set = { t_end = 0.2 }\n')
-    folder = tmp_path / "out" / "campaign" / "tiny"
+    folder = tmp_path / "out"
     folder.mkdir(parents=True)
     dead = subprocess.Popen(["true"])
     dead.wait()
@@ -164,10 +164,13 @@ def test_ctrl_c_stops_the_workers_keeps_finished_jobs_and_says_how_to_resume(tmp
     f = tmp_path / "slow.toml"
     f.write_text(QUICK_AND_SLOW)
     out = tmp_path / "out"
-    store = out / "campaign" / "slow" / "jobs"
+    store = out / "jobs"
     p = popen(["campaign", str(f), "--out", str(out)])
-    # every job started (a worker opens its log first) and one finished: the two slow ones run
-    wait_for(lambda: (len(list(store.glob("*.npz"))) >= 1 and len(list(store.glob("*.log"))) == n)
+    # every job started (a worker opens its log first; a finished job's log goes when it stayed
+    # empty, its .npz stays) and one finished: the two slow ones run
+    wait_for(lambda: (len(list(store.glob("*.npz"))) >= 1
+                      and len({f.stem for f in store.glob("*.log")}
+                              | {f.stem for f in store.glob("*.npz")}) == n)
              or p.poll() is not None)
     assert p.poll() is None
     workers = _children_of(p.pid)
@@ -227,7 +230,7 @@ def test_disk_full_on_a_real_300k_tmpfs(tmp_path):
         assert rc == 2
         (line,) = [ln for ln in se.splitlines() if ln.startswith("xval: error:")]
         assert os.strerror(errno.ENOSPC) in line and ".npz" in line and "Traceback" not in se
-        (run,) = (small / "runs").iterdir()
+        run = small                                               # --out is the run's folder
         written = {p.name for p in run.iterdir()}
         assert "INCOMPLETE" in written and "result.json" not in written
         assert not [n for n in written if n.startswith(".")]     # no temporary left

@@ -46,7 +46,7 @@ def test_a_killed_run_leaves_no_process_and_the_rerun_resumes(tmp_path, what, si
         f = tmp_path / "slow.toml"
         f.write_text(CAMPAIGN)
         args = ["campaign", str(f), "--out", str(out)]
-        store, pattern = out / "campaign" / "slow" / "jobs", "*.npz"
+        store, pattern = out / "jobs", "*.npz"
     else:
         args = [*MAP, "--out", str(out)]
         store, pattern = out / "maps" / "points", "*.json"

@@ -80,7 +80,7 @@ def test_resume_reruns_a_job_whose_inputs_changed_and_reuses_it_when_they_come_b
     assert finals[2][1] == finals[0][1]
     case = next(c for c in s["cases"] if c["case"] == "spin")
     assert sorted(case["reused"]) == ["euler-vector", "quaternion"]
-    assert "Reused stored results for spin" in (tmp_path / "logs" / "campaign" / "t" /
+    assert "Reused stored results for spin" in (tmp_path / "logs" /
                                                  "report.md").read_text()
 
 

@@ -54,7 +54,7 @@ def test_dask_local_cluster_gives_the_process_pools_results(tmp_path):
         assert rc == 0, se
         s = json.loads(so)
         assert s["n_jobs"] == 2 and s["n_run"] == 2 and s["n_crashed"] == 0
-        runs[executor] = _trajectories(out / "campaign" / "c")
+        runs[executor] = _trajectories(out)
     # the campaign's LocalCluster ended with it: its worker processes are gone (a Client
     # closes only a cluster it made: one passed in kept running in this process)
     wait_for(lambda: not (_children() - before), timeout=10, poll=0.05,
@@ -65,7 +65,7 @@ def test_dask_local_cluster_gives_the_process_pools_results(tmp_path):
         assert a.status == b.status == "ok"
         for ch in a.channels:
             np.testing.assert_array_equal(a.channels[ch], b.channels[ch], err_msg=name)
-    assert (tmp_path / "dask" / "campaign" / "c" / "spin" / "sweep.png").stat().st_size > 0
+    assert (tmp_path / "dask" / "spin" / "sweep.png").stat().st_size > 0
 
 
 def test_two_local_clusters_at_once_warn_nothing():
@@ -138,7 +138,7 @@ def test_killed_while_running_jobs_resumes_without_loss(tmp_path):
             "solvers": ["mujoco"]}
     camp = _write(tmp_path, [SPIN, slow])
     out = tmp_path / "logs"
-    camp_dir = out / "campaign" / "c"
+    camp_dir = out
     p = _start(camp, str(out))
     stored = lambda: len(list((camp_dir / "jobs").glob("[!.]*.npz"))) >= 1   # noqa: E731
     assert _wait_for(stored, p, poll=0.01), "no job finished before the campaign ended"
@@ -165,7 +165,7 @@ def test_killed_while_writing_a_recording_leaves_no_cut_file(tmp_path):
     case = {**SPIN, "set": {"t_end": 10}}              # 1001 samples: a write worth catching
     camp = _write(tmp_path, [case])
     out = tmp_path / "logs"
-    case_dir = out / "campaign" / "c" / "spin"
+    case_dir = out / "spin"
     for _attempt in range(3):                           # the write lasts a fraction of a second
         p = _start(camp, str(out))
         writing = lambda: case_dir.is_dir() and any(     # noqa: E731
@@ -178,9 +178,9 @@ def test_killed_while_writing_a_recording_leaves_no_cut_file(tmp_path):
         (case_dir / "case.json").unlink(missing_ok=True)    # report again on the next try
         (case_dir / "run.rrd").unlink(missing_ok=True)
     assert caught, "never caught the recording being written"
-    _check_intact(out / "campaign" / "c")
+    _check_intact(out)
     rc, so, se = xval("campaign", camp, "--out", str(out), "--json")
     assert rc == 0, se
     assert json.loads(so)["n_reused"] == 2
-    _check_intact(out / "campaign" / "c")
-    assert _case_complete(out / "campaign" / "c", "spin")
+    _check_intact(out)
+    assert _case_complete(out, "spin")

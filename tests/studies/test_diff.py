@@ -44,7 +44,7 @@ def folders(tmp_path_factory):
                       "--workers", "1")
     assert rc == 0, se
     assert "2 run, 2 reused" in so            # only the changed case ran again
-    return {k: root / k / "campaign" / "tiny" for k in "ABC"} | {"root": root}
+    return {k: root / k for k in "ABC"} | {"root": root}
 
 
 def _diff(old, new, out):
@@ -245,7 +245,7 @@ def test_campaign_with_baseline_exits_1_when_results_moved(folders, tmp_path):
                       str(tmp_path / "C"), "--baseline", str(base), "--workers", "1")
     assert rc == 1, se
     assert "torque 2 → 2.000002: drive euler-vector" in so
-    assert (tmp_path / "C" / "campaign" / "tiny" / "diff" / "report.md").exists()
+    assert (tmp_path / "C" / "diff" / "report.md").exists()
 
 
 def test_pytest_helper_fails_with_the_diff_table(folders, tmp_path):
@@ -324,7 +324,7 @@ def test_two_run_folders(tmp_path):
         rc, so, se = xval("run", "rotor-spinup", "--solver", "quaternion", "--set", "t_end=0.3",
                           "--no-record", "--out", str(tmp_path / f"r{k}"), "--json")
         assert rc == 0, se
-        runs.append(next((tmp_path / f"r{k}" / "runs").iterdir()))
+        runs.append(tmp_path / f"r{k}")                 # --out names the run's folder
     rc, obj, se = _diff(runs[0], runs[1], tmp_path / "o")
     assert rc == 0 and obj["summary"]["unchanged"] == 1, se
     assert obj["old_kind"] == obj["new_kind"] == "run"
@@ -347,7 +347,7 @@ def test_a_frequency_case_moved_by_1e_6_in_stiffness(tmp_path):
                      f'solvers = ["closed-form"]\nset = {{ k = {stiff!r} }}\n')
         rc, so, se = xval("campaign", str(f), "--out", str(tmp_path / f"o{k}"))
         assert rc == 0, se
-        outs.append(tmp_path / f"o{k}" / "campaign" / "w")
+        outs.append(tmp_path / f"o{k}")
     rc, obj, se = _diff(outs[0], outs[1], tmp_path / "d")
     assert rc == 1, se
     rows = _channels(obj, "whirl", "closed-form")

@@ -116,7 +116,7 @@ def test_campaign_map_takes_coarse_as_the_command_does(tmp_path):
     rc, so, se = xval("campaign", str(f), "--out", str(tmp_path / "o"), "--json")
     assert rc == 0, se
     xs = {p["params"]["torque"] for p in json.loads(
-        (tmp_path / "o" / "campaign" / "m" / "maps" / "m" / "map.json").read_text())["points"]}
+        (tmp_path / "o" / "maps" / "m" / "map.json").read_text())["points"]}
     assert {2.5, 3.0, 3.5} <= xs
     f.write_text(body % '"3"')
     rc, so, se = xval("campaign", str(f), "--out", str(tmp_path / "bad"))

@@ -62,7 +62,7 @@ def test_a_campaign_case_estimates_its_power_as_xval_power_confirms_it(tmp_path)
             "solvers": ["euler-vector", "quaternion"]}
     f = tmp_path / "camp.json"
     f.write_text(json.dumps({"name": "p", "cases": [{"name": "c", "power": True, **case}]}))
-    s = xval.campaign(str(f), out=str(tmp_path))
+    s = xval.campaign(str(f), out=str(tmp_path / "c"))
     (c,) = s["cases"]
     estimate = {(r["parameter"], r["solver"]): r["bracket"] for r in c["power"]}
     confirmed = xval.power("rotor-spinup", case["solvers"], params=case["set"],
@@ -71,7 +71,7 @@ def test_a_campaign_case_estimates_its_power_as_xval_power_confirms_it(tmp_path)
         lo, hi = estimate[(r["parameter"], r["solver"])]
         assert r["epsilon"] is not None, r
         assert lo / 1.01 <= r["epsilon"] <= hi * 1.5, (r, lo, hi)
-    report = (tmp_path / "campaign" / "p" / "report.md").read_text()
+    report = (tmp_path / "c" / "report.md").read_text()
     assert "worst ε*" in report and "Detection power" in report
 
 

@@ -20,12 +20,15 @@ CHEAP = {"rotor-spinup": "1.5Nm-1s", "rotor-whirl": "spin0", "bearing-rotor": "0
          "press": "default", "press-cycle": "default", "sail-deploy": "0.2s",
          "rotating-beam": "speed0", "spinning-shaft": "spin0",
          "helicopter-clamped": "speed0", "helicopter-hover": "speed0"}
+CHEAP["bicycle"] = "speed5"
 
 
 def test_the_allowance_table(capsys):
     with capsys.disabled():
         print("\n" + allowances.markdown(ROWS))
-    assert {r["scene"] for r in ROWS} == {n for n in SCENES if n not in ORIGIN}
+    # a scene served by one solver has no pair to allow for
+    assert {r["scene"] for r in ROWS} == {n for n in SCENES
+                                          if n not in ORIGIN and len(SCENES[n].leaves) > 1}
 
 
 @pytest.mark.parametrize("row", ROWS, ids=lambda r: f"{r['scene']}:{r['regime']}:{r['pair']}:"

@@ -126,6 +126,8 @@ POWER = {"rotor-spinup": "m", "rotor-whirl": "k", "press": "J1", "press-cycle": 
          "sail-deploy": "J_hub", "bearing-rotor": "J_p", "rotating-beam": "rho",
          "spinning-shaft": "m", "helicopter-clamped": "blade_rho",
          "helicopter-hover": "fuselage_rho"}
+POWER["bicycle"] = "m_B"             # the rear body's (rider's) mass: in M, K0 and C1
+POWER["andrews-squeezer"] = "m2"     # the rod K2: in M(q) and the velocity terms f
 
 
 @pytest.mark.parametrize("scene_name, solver_name", CASES, ids=lambda x: x)

@@ -210,8 +210,9 @@ class CampaignResult(StudyResult):
             if "error" in c:
                 out.append(f"calibration of {c['scene']}: {c['error']}")
             else:
+                from .calibrate import CalibrationResult
                 out += [f"calibration of {c['scene']}: {p}"
-                        for p in Result.TYPES["calibration"](dict(c)).problems()]
+                        for p in CalibrationResult(dict(c)).problems()]
         return out
 
     def side(self) -> Side:

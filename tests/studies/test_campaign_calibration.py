@@ -63,3 +63,24 @@ def test_a_bad_calibrate_entry_is_one_line_exit_2(tmp_path, entry, words):
     rc, so, se = xval("campaign", str(camp), "--out", str(tmp_path / "o"))
     assert rc == 2 and len(se.strip().splitlines()) == 1 and words in se, se
     assert not (tmp_path / "o").exists()
+
+
+def test_a_fresh_process_judges_a_campaign_with_calibrations(tmp_path):
+    """The Result types load on first use: a fresh interpreter (as `xval campaign` is) must
+    find the calibration's type when it judges the campaign (it crashed there once: the
+    in-process tests had every type loaded already)."""
+    import subprocess
+    import sys
+    (tmp_path / "summary.json").write_text(json.dumps({
+        "result": "campaign", "name": "c", "n_jobs": 1, "n_run": 1, "n_reused": 0,
+        "n_failed": 0, "n_crashed": 0, "wall_s": 1.0, "cases": [], "maps": [],
+        "calibration": [{"scene": "press", "samples": 1, "comparisons": 4, "disagree": [],
+                         "coverage": 1.0, "sharpness": 0.5, "widest_window": 2.0,
+                         "skipped": []}]}))
+    code = ("import sys; from compare.results.studies import CampaignResult; "
+            "import json; r = CampaignResult(json.load(open(sys.argv[1]))); "
+            "print(len(r.problems()), r.summary_lines()[-1])")
+    out = subprocess.run([sys.executable, "-c", code, str(tmp_path / "summary.json")],
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.startswith("0 calibration: 0 of 4 comparisons disagree")

@@ -89,7 +89,8 @@ class Result:
         if guard.is_incomplete(p):
             raise BadInput(f"{p}: incomplete run folder ({guard.MARKER} marker, no result.json: "
                            f"the run was stopped before it finished); run it again")
-        for name in ("result.json", "map.json", "bench.json", "diff.json", "response.json"):
+        # each registered type's file (result.json first: a run's, a modes result's)
+        for name in dict.fromkeys(["result.json"] + [t.JSON for t in Result.TYPES.values()]):
             if (p / name).exists():
                 return _typed(read_json(p / name), name, p, p / name)
         raise BadInput(f"{path}: not a campaign folder (summary.json), run folder (result.json) "

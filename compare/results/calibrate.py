@@ -4,7 +4,7 @@ the solvers skipped (compare/workflows/calibrate.py). Held in memory; `save` wri
 from __future__ import annotations
 
 from ..output.tables import calibration_tables
-from .studies import StudyResult
+from .studies import StudyResult, calibration_problems
 
 
 class CalibrationResult(StudyResult):
@@ -26,10 +26,4 @@ class CalibrationResult(StudyResult):
         return out + [f"{d['wall_s']:.1f} s"]
 
     def problems(self, channels=None):
-        """Each comparison that disagrees, and each solver that stopped where the scene
-        does not say it may."""
-        d = self.data
-        return ([f"set {x['set']} {' vs '.join(x['pair'])} {x['channel']}: disagree "
-                 f"(Δ/bound {x['ratio']:.2g})" for x in d["disagree"]]
-                + [f"set {x['set']} {x['solver']} {x['status']}: {x['reason']} (not declared "
-                   f"outside its domain)" for x in d["skipped"] if not x.get("declared")])
+        return calibration_problems(self.data)

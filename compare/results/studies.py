@@ -163,6 +163,15 @@ class MapResult(StudyResult):
         return Side(self._dir, "map", {}, read_maps(self._dir))
 
 
+def calibration_problems(d: dict) -> list[str]:
+    """A calibration's refusals: each comparison that disagrees, and each solver that stopped
+    where the scene does not say it may."""
+    return ([f"set {x['set']} {' vs '.join(x['pair'])} {x['channel']}: disagree "
+             f"(Δ/bound {x['ratio']:.2g})" for x in d["disagree"]]
+            + [f"set {x['set']} {x['solver']} {x['status']}: {x['reason']} (not declared "
+               f"outside its domain)" for x in d["skipped"] if not x.get("declared")])
+
+
 def _calibration_line(d):
     """The false-alarm rate over the campaign's calibration jobs (none: no line)."""
     cal = d.get("calibration") or []
@@ -210,9 +219,7 @@ class CampaignResult(StudyResult):
             if "error" in c:
                 out.append(f"calibration of {c['scene']}: {c['error']}")
             else:
-                from .calibrate import CalibrationResult
-                out += [f"calibration of {c['scene']}: {p}"
-                        for p in CalibrationResult(dict(c)).problems()]
+                out += [f"calibration of {c['scene']}: {p}" for p in calibration_problems(c)]
         return out
 
     def side(self) -> Side:

@@ -5,14 +5,14 @@ from collections.abc import Callable
 from pathlib import Path
 
 from ..errors import BadInput
-from ..output.folders import check_out, make_out
+from ..output.folders import claim_out, make_out
 from ..results import BenchResult
 from ..workflows.inputs import positive, positive_int
 from ..workflows.plan import names
 from . import Command, arg
 from .common import (
     BUDGET,
-    OUT,
+    RESULT_OUT,
     STUDY,
     answer,
     log,
@@ -28,14 +28,18 @@ from .common import positive_int as positive_int_arg
 
 def bench(scene: str, solvers=None, *, repeats: int = 3, vary=None, out=None,
           max_output_gib=None, max_steps=None, params: dict | None = None,
-          log: Callable | None = None, points: int | None = None, **kw) -> BenchResult:
+          log: Callable | None = None, points: int | None = None, force: bool = False,
+          **kw) -> BenchResult:
     """Work-precision sweep (`xval bench`): each solver along its accuracy knob, error of the
     key channel against a tight reference, median wall time of `repeats` runs. `vary`: trade a
     model parameter instead, as `"stiffness=1e5,1e6"` or `{"stiffness": [1e5, 1e6]}`.
     `points=N`: throughput instead — each solver's points per second over N points of the
-    scene's first default map."""
+    scene's first default map. `out`: the bench's folder (default: a temporary one that goes
+    with the result); an existing one must be empty or hold an earlier bench, unless `force`."""
     from ..workflows.bench import run_bench, run_throughput
     positive_int("--repeats", repeats)
+    if out is not None:
+        claim_out(str(out), "bench", force)
     if points is not None:              # throughput: points per second over the default map
         positive_int("--points", points)
         out, temporary = out_or_temporary(out)
@@ -60,11 +64,15 @@ def bench(scene: str, solvers=None, *, repeats: int = 3, vary=None, out=None,
 
 
 def main(args) -> int:
-    check_out(args.out)
+    from ..scenes import get_scene
+    from ..workflows.work_precision import new_bench_dir
+    # without --out a new folder under logs/bench/ (the default place since the first release)
+    out = args.out or new_bench_dir("logs", get_scene(args.scene).name
+                                    + ("-points" if args.points else ""))
     with stdout_to_stderr():
-        r = bench(args.scene, args.solver, repeats=args.repeats, vary=args.vary, out=args.out,
+        r = bench(args.scene, args.solver, repeats=args.repeats, vary=args.vary, out=out,
                   max_output_gib=args.max_output_gib, max_steps=args.max_steps,
-                  params=parse_sets(args.set), log=log, points=args.points)
+                  params=parse_sets(args.set), log=log, points=args.points, force=args.force)
     answer(args, r)
     return 0
 
@@ -87,4 +95,4 @@ COMMAND = Command(
               help="trade a model parameter instead of the step: each solver's default "
                    "settings at each value, errors against the reference at the --set value "
                    "(e.g. --vary stiffness=1e5,1e6)"),
-          OUT, *BUDGET))
+          *RESULT_OUT, *BUDGET))

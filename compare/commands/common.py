@@ -62,7 +62,8 @@ JSON = arg("--json", action="store_true",
 # a scene, its solvers and parameters, JSON: what every study of one scene takes
 STUDY = (SCENE, SOLVERS, SETS, JSON)
 OUT = arg("--out", default="logs", metavar="DIR", help=OUT_HELP)
-# run, modes, response, campaign: --out names the result's own folder (folders.claim_out)
+# every command that writes a result (run, modes, response, campaign, bench, map, extremes,
+# diff): --out names the result's own folder (folders.claim_out)
 RESULT_OUT = (arg("--out", default=None, metavar="DIR",
                   help="the result's folder, made if missing; an existing one must be empty or "
                        "hold this command's earlier result (default: a new folder under logs/)"),

@@ -1,29 +1,30 @@
 """`xval diff`: which results moved between two campaigns, runs or baselines."""
 from __future__ import annotations
 
-from ..output.folders import check_out, make_out
+from ..output.folders import claim_out
 from ..results import DiffResult
 from . import Command, arg
-from .common import answer
+from .common import RESULT_OUT, answer
 
 
-def diff(old, new, *, out=None) -> DiffResult:
+def diff(old, new, *, out=None, force: bool = False) -> DiffResult:
     """`xval diff`: which results moved between two results — each a `Result` (a run held in
     memory too) or a path: a campaign, run or map folder, or a baseline — against their own
-    error bars. With `out` the report goes to out/diff/<time>-<pid>/; `s["any_change"]`,
-    `s["lines"]`."""
-    from ..workflows.diff import new_diff_dir, run_diff
+    error bars; `s["any_change"]`, `s["lines"]`. With `out` the report and diff.json go into
+    that folder (an existing one must be empty or hold an earlier diff, unless `force`)."""
+    from ..workflows.diff import run_diff
     if out is not None:
-        check_out(str(out))
+        claim_out(str(out), "diff", force)
     res = run_diff(old, new)                          # bad input before anything is written
     if out is not None:
-        make_out(str(out))
-        res.save(new_diff_dir(out))
+        res.save(out)
     return res
 
 
 def main(args) -> int:
-    r = diff(args.old, args.new, out=args.out)
+    from ..workflows.diff import new_diff_dir
+    # without --out a new folder under logs/diff/ (the default place since the first release)
+    r = diff(args.old, args.new, out=args.out or new_diff_dir("logs"), force=args.force)
     answer(args, r, r.data)                           # the counts, the changes, notes, report
     return 1 if r["any_change"] else 0
 
@@ -38,6 +39,5 @@ COMMAND = Command(
                 "changes found, 2 bad input.",
     args=(arg("old", help="campaign folder, run folder or baseline file"),
           arg("new", help="campaign folder, run folder or baseline file"),
-          arg("--out", default="logs", metavar="DIR",
-              help="the report goes to DIR/diff/<time>-<pid>/ (default: logs)"),
+          *RESULT_OUT,
           arg("--json", action="store_true", help="print the diff as one JSON object")))

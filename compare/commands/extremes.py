@@ -3,14 +3,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..output.folders import check_out
+from ..output.folders import claim_out
 from ..results import ExtremesResult
 from ..workflows.inputs import positive
 from ..workflows.plan import names
 from . import Command, arg
 from .common import (
     JSON,
-    OUT,
+    RESULT_OUT,
     SCENE,
     TIMEOUT,
     answered,
@@ -21,25 +21,29 @@ from .common import (
 
 
 def extremes(scene: str, solvers=None, *, include_slow: bool = False, timeout=None, out=None,
-             log: Callable | None = None) -> ExtremesResult:
+             log: Callable | None = None, force: bool = False) -> ExtremesResult:
     """Every extreme case of the scene's spec with every solver (`xval extremes`; the long
-    cases with `include_slow=True`, the command's `--all`)."""
-    from ..workflows.extremes import extremes_dir, run_extremes
+    cases with `include_slow=True`, the command's `--all`). `out`: the folder its report and
+    result.json are written into (default: held in memory); an existing one must be empty or
+    hold an earlier extremes result, unless `force`."""
+    from ..workflows.extremes import run_extremes
     timeout = positive("--timeout", timeout)
     if out is not None:
-        check_out(str(out))
+        claim_out(str(out), "extremes", force)
     res = run_extremes(scene, names(solvers), include_slow=include_slow, timeout_s=timeout,
                        log=log or quiet)
     if out is not None:
-        res.save(extremes_dir(out, scene))
+        res.save(out)
     return res
 
 
 def main(args) -> int:
-    check_out(args.out)
+    from ..workflows.extremes import extremes_dir
+    # without --out a new folder under logs/extremes/ (the default place since the first release)
+    out = args.out or extremes_dir("logs", args.scene)
     with stdout_to_stderr():
         r = extremes(args.scene, args.solver, include_slow=args.all, timeout=args.timeout,
-                     out=args.out, log=log)
+                     out=out, log=log, force=args.force)
     return answered(args, r)
 
 
@@ -60,4 +64,4 @@ COMMAND = Command(
               help="exit 1 on any FAILED, error or stale declaration (a case declaring a "
                    "solver's known failure whose run now passes); a declared FAILED (known), "
                    "explained in the scene file, does not count"),
-          TIMEOUT, OUT, JSON))
+          TIMEOUT, *RESULT_OUT, JSON))

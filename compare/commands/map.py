@@ -7,14 +7,14 @@ from collections.abc import Callable
 from pathlib import Path
 
 from ..errors import BadInput
-from ..output.folders import check_out, make_out
+from ..output.folders import claim_out, make_out
 from ..results import MapResult
 from ..workflows.inputs import positive, positive_int
 from ..workflows.plan import names
 from . import Command, arg
 from .common import (
     NO_RECORD,
-    OUT,
+    RESULT_OUT,
     STRICT,
     STUDY,
     answered,
@@ -37,17 +37,22 @@ def map(scene: str, x: str, y: str | None = None, solvers=None, *,  # noqa: A001
         engines: str = "boundary", executor: str = "local", scheduler: str | None = None,
         workers: int | None = None, max_jobs=None, record: bool = True, out=None,
         params: dict | None = None, log: Callable | None = None, y_resolution=None,
-        adaptive: bool = True, **kw) -> MapResult:
+        adaptive: bool = True, force: bool = False, store=None, **kw) -> MapResult:
     """A map (`xval map`): the scene's regimes, or `observable`, over `x` (and `y`), each
     "NAME=LO:HI"; every solver's crossings with brackets ≤ resolution × the x range, their
     error estimates and the pairwise verdicts (`s["boundaries"]`, `s["verdicts"]`); a 2-D
     map traces its boundary in y down to `y_resolution` × the y range (default 1/64, or the
     resolution where coarser).
     `adaptive=False`: every coarse point at the accurate setting (not only those next to a
-    regime change)."""
+    regime change). `out`: the map's folder (default: a temporary one that goes with the
+    result); an existing one must be empty or hold an earlier map, unless `force`. `store`:
+    where the points are kept by the digest of their inputs, for a rerun to reuse (default:
+    the folder's points/)."""
     from ..workflows.maps import map_to_folder, plan_map
     if executor not in ("local", "dask"):
         raise BadInput(f"--executor: {executor!r} is not local or dask")
+    if out is not None:
+        claim_out(str(out), "map", force)
     if scheduler and executor != "dask":
         raise BadInput("--scheduler needs --executor dask")
     positive_int("--workers", workers)
@@ -61,10 +66,10 @@ def map(scene: str, x: str, y: str | None = None, solvers=None, *,  # noqa: A001
     out, temporary = out_or_temporary(out)
     make_out(str(out))
     with removed_on_error(temporary):
-        # points stored under the folder by the digest of their inputs: a stopped map resumes
+        # points stored by the digest of their inputs: a stopped map resumes
         obj = map_to_folder(plan, out, executor=executor, scheduler=scheduler,
                             workers=workers, record=record, log=log or quiet,
-                            store=Path(out) / "maps" / "points")
+                            store=Path(store) if store else Path(out) / "points")
     obj["report"] = obj["files"]["report"]
     return MapResult(obj, Path(obj["folder"]), temporary)
 
@@ -80,8 +85,12 @@ def _coarse(text):
 
 
 def main(args) -> int:
+    from ..scenes import get_scene
     from ..workflows.executors import Interrupted
-    check_out(args.out)
+    from ..workflows.maps import map_dir
+    out, store = args.out, None
+    if out is None:      # a new folder under logs/maps/, the points shared in logs/maps/points/
+        out, store = map_dir("logs", get_scene(args.scene).name), Path("logs", "maps", "points")
     coarse = _coarse(args.coarse) if args.coarse else None
     if coarse and not args.y:
         coarse = (coarse[0], 1)
@@ -92,8 +101,9 @@ def main(args) -> int:
                     coarse=coarse, observable=args.observable, level=args.level,
                     engines=args.engines, executor=args.executor, scheduler=args.scheduler,
                     workers=args.workers, max_jobs=args.max_jobs, record=not args.no_record,
-                    out=args.out, params=parse_sets(args.set), log=log,
-                    y_resolution=args.y_resolution, adaptive=not args.accurate_everywhere)
+                    out=out, params=parse_sets(args.set), log=log,
+                    y_resolution=args.y_resolution, adaptive=not args.accurate_everywhere,
+                    force=args.force, store=store)
     except Interrupted as e:             # Ctrl-C / SIGTERM: workers stopped, points kept
         print(f"xval: interrupted: {e}; resume with: {shlex.join(['xval', *args.argv])}",
               file=sys.stderr)
@@ -131,4 +141,4 @@ COMMAND = Command(
           *executor_args("workers"),
           arg("--max-jobs", type=positive_int_arg("--max-jobs"), default=None, metavar="N",
               help="refuse to start a map estimated above N runs (default 100000)"),
-          NO_RECORD, OUT, STRICT))
+          NO_RECORD, *RESULT_OUT, STRICT))

@@ -28,12 +28,14 @@ def check_out(path):
 
 def result_kind(folder) -> str | None:
     """The kind of xval result `folder` holds (the "result" field its JSON names: "time" for
-    `xval run`, "modes", "response", "campaign", …), None where it holds none."""
+    `xval run`, "modes", "response", "campaign", "bench", "map", "extremes", "diff", …), None
+    where it holds none."""
     from .guard import LOCK, MARKER
     p = Path(folder)
     if (p / "summary.json").exists() or (p / "jobs").is_dir() or (p / LOCK).exists():
         return "campaign"
-    for name, kind in (("response.json", "response"), ("result.json", None)):
+    for name, kind in (("response.json", "response"), ("bench.json", "bench"),
+                       ("map.json", "map"), ("diff.json", "diff"), ("result.json", None)):
         if (p / name).exists():
             try:
                 return kind or json.loads((p / name).read_text()).get("result") or "time"
@@ -46,6 +48,10 @@ def result_kind(folder) -> str | None:
             return None
         what = words[1] if len(words) > 1 and words[0] == "xval" else None
         return "time" if what == "run" else what
+    if (p / "points").is_dir():                      # a stopped map: its stored points alone
+        return "map"
+    if any(p.glob("reference-*.npz")):               # a stopped bench: its first trajectories
+        return "bench"
     return None
 
 
@@ -60,10 +66,12 @@ def claim_out(path, kind: str, force: bool = False):
     if force or not p.is_dir() or not any(p.iterdir()) or result_kind(p) == kind:
         return
     found = result_kind(p)
-    what = (f"an xval {found} result (this command writes a {kind} result)" if found else
-            "earlier xval results under runs/ or campaign/ (--out now names the result's own "
-            "folder: give a new one, e.g. DIR/NAME)"
-            if (p / "runs").is_dir() or (p / "campaign").is_dir() else "other files")
+    roots = [f"{d}/" for d in ("runs", "campaign", "bench", "maps", "extremes", "diff")
+             if (p / d).is_dir()]                # the old layout: --out was a root of these
+    a = "an" if kind[:1] in "aeiou" else "a"
+    what = (f"an xval {found} result (this command writes {a} {kind} result)" if found else
+            f"earlier xval results under {', '.join(roots)} (--out now names the result's own "
+            "folder: give a new one, e.g. DIR/NAME)" if roots else "other files")
     raise BadInput(f"--out {path}: is not empty and holds {what}; name a new or empty folder, "
                    f"or add --force to write into it anyway")
 

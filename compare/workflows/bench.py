@@ -123,7 +123,7 @@ def run_throughput(scene_name, solver_names, overrides, out, n_points, log=print
     lines = [f"{r['solver']}: {r['points']} points in {r['wall_s']:.3g} s — "
              f"{r['points_per_second']:.1f} points/s ({r['points_per_core_second']:.1f} per "
              f"core-second, {obj['workers']} workers{more(r)})" for r in obj["rows"]]
-    out_dir = bench_dir(out, f"{scene_name}-points")
+    out_dir = bench_dir(out)
     md = [f"# Throughput: {scene_name}", "", f"{obj['rows'][0]['points'] if obj['rows'] else 0}"
           f" points over the default map `{obj['map']}` ({obj['x']['name']}"
           + (f" × {obj['y']['name']}" if obj["y"] else "") + f"), set {obj['set']}, after a "
@@ -182,7 +182,7 @@ def _bench_time(sc, solver_names, overrides, out, repeats, log, vary, max_output
     # same way
     refs = ([solvers.get_solver(n) for n in sc.reference_solvers]
             or solvers.solvers_for(sc.name)[:2])
-    out_dir = bench_dir(out, sc.name)
+    out_dir = bench_dir(out)
     ref_runs, done = [], {}
     for s in refs:
         st = _tightest(s, s.info(sc), dt_out)

@@ -209,7 +209,7 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
     timing_params = [[sc.resolve(case) for case in pt.cases] for pt in sc.published_timings]
     if make_out:
         make_out(out)
-    out_dir = bench_dir(out, sc.name)
+    out_dir = bench_dir(out)
 
     def call(s, st, p=params):
         return solvers.modes(sc, s, p, st)

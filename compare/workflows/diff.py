@@ -365,9 +365,10 @@ def run_diff(old, new) -> DiffResult:
     return DiffResult(obj, plots=plots)
 
 
-def new_diff_dir(out):
+def new_diff_dir(root):
+    """The default diff folder (no --out): ROOT/diff/<time>-<pid>, not made here."""
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-    return Path(out) / "diff" / f"{stamp}-{os.getpid()}"
+    return Path(root) / "diff" / f"{stamp}-{os.getpid()}"
 
 
 def check_baseline(result, baseline):

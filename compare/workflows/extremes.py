@@ -160,9 +160,10 @@ def _declared(row: dict, known: str | None):
                    detail=f"declared a known failure ({known}), yet {row['detail']}")
 
 
-def extremes_dir(out, scene_name) -> Path:
+def extremes_dir(root, scene_name) -> Path:
+    """The default extremes folder (no --out): ROOT/extremes/SCENE-YYYYmmdd-HHMMSS."""
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-    return Path(out) / "extremes" / f"{scene_name}-{stamp}"
+    return Path(root) / "extremes" / f"{scene_name}-{stamp}"
 
 
 def run_extremes(scene_name: str, solver_names, include_slow=False, timeout_s=None,

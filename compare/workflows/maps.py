@@ -893,17 +893,18 @@ def _observable_at(runner, solver, settings, ref_found, xa, y_name):
     return lines
 
 
-def map_dir(out, scene_name):
+def map_dir(root, scene_name):
+    """The default map folder (no --out): ROOT/maps/<scene>-<stamp>-<pid>, not made here."""
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-    return Path(out) / "maps" / f"{scene_name}-{stamp}-{os.getpid()}"
+    return Path(root) / "maps" / f"{scene_name}-{stamp}-{os.getpid()}"
 
 
 def map_to_folder(plan, out, settings_for=None, executor="local", scheduler=None, workers=None,
                   store=None, record=True, log=None, out_dir=None, salt=None):
-    """Run a planned map with the campaign's executors (process pool or Dask) into
-    OUT/maps/<scene>-<stamp>-<pid>/ (or `out_dir`): map.json, map.png, report.md, map.rrd."""
+    """Run a planned map with the campaign's executors (process pool or Dask) into the folder
+    `out` (or `out_dir`): map.json, map.png, report.md, map.rrd."""
     from ..output.map_plot import write_map_outputs
-    out_dir = Path(out_dir) if out_dir else map_dir(out, plan["scene"].name)
+    out_dir = Path(out_dir or out)
     out_dir.mkdir(parents=True, exist_ok=True)
     workers = workers or 2
     if store is not None and salt is None:       # stored points are valid while these hold

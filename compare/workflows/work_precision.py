@@ -136,10 +136,15 @@ def order_lines(orders, step_name, unit):
             + (" — FLAG: below the method's order" if o["flag"] else "") for o in orders]
 
 
-def bench_dir(out, scene_name):
-    """A new bench folder: OUT/bench/SCENE-YYYYmmdd-HHMMSS."""
+def new_bench_dir(root, scene_name):
+    """The default bench folder (no --out): ROOT/bench/SCENE-YYYYmmdd-HHMMSS, not made here."""
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-    out_dir = Path(out) / "bench" / f"{scene_name}-{stamp}"
+    return Path(root) / "bench" / f"{scene_name}-{stamp}"
+
+
+def bench_dir(out):
+    """The bench's folder: `out` itself (--out names the result's folder), made if missing."""
+    out_dir = Path(out)
     out_dir.mkdir(parents=True, exist_ok=True)
     return out_dir
 

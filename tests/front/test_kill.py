@@ -49,7 +49,7 @@ def test_a_killed_run_leaves_no_process_and_the_rerun_resumes(tmp_path, what, si
         store, pattern = out / "jobs", "*.npz"
     else:
         args = [*MAP, "--out", str(out)]
-        store, pattern = out / "maps" / "points", "*.json"
+        store, pattern = out / "points", "*.json"
     p = subprocess.Popen([sys.executable, "-m", "compare", *args], stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:

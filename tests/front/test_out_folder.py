@@ -78,3 +78,68 @@ def test_a_campaign_lands_in_the_folder_named(tmp_path):
     rc, so, se = xval("campaign", str(f), "--out", str(out), "--json")     # resumed in place
     assert rc == 0, se
     assert json.loads(so)["n_reused"] == 1
+
+
+# bench, map, extremes, diff: --out DIR is their result's folder too; without it they keep
+# their places under logs/ (logs/bench/<scene>-<stamp>/, logs/maps/…, logs/extremes/…,
+# logs/diff/<time>-<pid>/)
+STUDIES = {
+    "bench": (("bench", "rotor-spinup", "--solver", "quaternion", "--repeats", "1", "--set",
+               "t_end=0.1"), "bench.json", "bench"),
+    "map": (("map", "rotor-spinup", "--x", "torque=2.5:3.5", "--solver", "quaternion",
+             "--resolution", "0.2", "--coarse", "3", "--no-record", "--set", "t_end=0.5"),
+            "map.json", "maps"),
+    "extremes": (("extremes", "rotor-spinup", "--solver", "quaternion"), "result.json",
+                 "extremes"),
+    "diff": (("diff", "A", "A"), "diff.json", "diff"),
+}
+
+
+@pytest.mark.parametrize("name", STUDIES)
+def test_each_study_lands_in_the_folder_named(tmp_path, name):
+    args, json_name, old = STUDIES[name]
+    if name == "diff":                   # two folders the user named: one run, diffed with itself
+        assert xval(*RUN, "--out", str(tmp_path / "A"))[0] == 0
+        args = ("diff", str(tmp_path / "A"), str(tmp_path / "A"))
+    rc, so, se = xval(*args, "--json", cwd=tmp_path)              # no --out: under logs/
+    assert rc == 0, se
+    (folder,) = (tmp_path / "logs" / old).glob(f"*/{json_name}")
+    assert json.loads((folder).read_text())["result"] == name
+    out = tmp_path / "o"
+    for _ in range(2):                   # the second writes over (a map reuses its points)
+        rc, so, se = xval(*args, "--out", str(out), "--json")
+        assert rc == 0, se
+        obj = json.loads(so)
+        assert obj["result"] == name and (out / json_name).exists()
+        assert json.loads((out / json_name).read_text())["result"] == name
+        assert obj["report"] == str(out / "report.md") and (out / "report.md").exists()
+        assert not (out / old).exists()
+    if name == "map":
+        assert obj["reused"] > 0 and sum(obj["runs"].values()) == 0
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("mine")
+    rc, so, se = xval(*args, "--out", str(mine))
+    assert rc == 2 and not so
+    (line,) = se.strip().splitlines()
+    assert "holds other files" in line and "--force" in line
+    assert [p.name for p in mine.iterdir()] == ["notes.txt"]      # nothing written
+
+
+def test_a_stopped_study_and_an_old_root_are_told_apart(tmp_path):
+    """A map stopped before its map.json (its points/ alone) and a bench before its bench.json
+    (its reference trajectories) are that command's: the rerun resumes or writes over. An old
+    `--out` root (DIR/bench/, DIR/maps/, …) is refused, naming what it holds."""
+    from compare.errors import BadInput
+    from compare.output.folders import claim_out
+    (tmp_path / "m" / "points").mkdir(parents=True)
+    (tmp_path / "b").mkdir()
+    (tmp_path / "b" / "reference-quaternion.npz").write_bytes(b"")
+    claim_out(tmp_path / "m", "map")
+    claim_out(tmp_path / "b", "bench")
+    with pytest.raises(BadInput, match="an xval map result .this command writes a bench"):
+        claim_out(tmp_path / "m", "bench")
+    (tmp_path / "root" / "maps" / "x").mkdir(parents=True)
+    (tmp_path / "root" / "extremes").mkdir()
+    with pytest.raises(BadInput, match="earlier xval results under maps/, extremes/ "):
+        claim_out(tmp_path / "root", "map")

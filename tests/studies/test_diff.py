@@ -97,8 +97,8 @@ def test_torque_moved_by_1e_6_only_that_case_changed(folders, tmp_path):
             assert ch[name]["max_abs"] == pytest.approx(np.abs(d).max(), rel=1e-12)
             assert ch[name]["bound"] == pytest.approx(bound[k], rel=1e-12)
             assert ch[name]["t"] == pytest.approx(a["t"][k])
-    assert (tmp_path / "diff").exists()
-    (report,) = (tmp_path / "diff").glob("*/report.md")
+    report = tmp_path / "report.md"                  # --out is the report's own folder
+    assert (tmp_path / "diff.json").exists() and not (tmp_path / "diff").exists()
     text = report.read_text()
     assert text.index("| runs (case × solver) | changed | unchanged | new | gone |") \
         < text.index("## spin")

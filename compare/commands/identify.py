@@ -12,11 +12,11 @@ from collections.abc import Callable
 import numpy as np
 
 from ..errors import BadInput
-from ..output.folders import check_out
+from ..output.folders import claim_out
 from ..results.identify import DetectionResult, IdentifyResult
 from . import Command, arg
 from .common import (
-    OUT,
+    RESULT_OUT,
     STRICT,
     STUDY,
     answered,
@@ -42,19 +42,18 @@ def _sigmas(items) -> dict:
 
 def identify(scene: str, data, unknowns=None, solvers=None, *, noise: dict | None = None,
              profile: bool = True, poincare: float | None = None, out=None,
-             params: dict | None = None, log: Callable | None = None,
+             force: bool = False, params: dict | None = None, log: Callable | None = None,
              **kw) -> IdentifyResult:
     """Fit `unknowns` (default: the scene's, e.g. the bearing defect's height, width and angle)
     to the record `data` — a CSV/.npz path or a dict {"t": …, channel: …} — with each solver's
     model (`xval identify`); σ per channel from `noise` or estimated; `poincare`: a shaft
     angle where the orbit is fitted once per revolution (its section) instead. Returns an
-    `IdentifyResult` (saved under `out` when given)."""
+    `IdentifyResult` (saved in the folder `out` when given: `claim_out`'s rule)."""
     from ..workflows.identify import identify as run
     from ..workflows.identify import read_record
-    from ..workflows.runner import new_run_dir
     from .common import overrides
     if out is not None:
-        check_out(str(out))
+        claim_out(str(out), "identify", force)
     if isinstance(data, dict):
         rec, label = {k: np.asarray(v, float) for k, v in data.items()}, "(in memory)"
     else:
@@ -62,7 +61,7 @@ def identify(scene: str, data, unknowns=None, solvers=None, *, noise: dict | Non
     res = run(scene, rec, unknowns, solvers, overrides(params, kw), noise, profile, label,
               poincare, log or quiet)
     if out is not None:
-        res.save(new_run_dir(out, scene + "-identify"))
+        res.save(out)
     return res
 
 
@@ -78,20 +77,19 @@ def synthesise(scene: str, path, solver: str, *, noise: dict | None = None, seed
 
 
 def detection(scene: str, solvers=None, *, alpha: float = 0.01, beta: float = 0.05,
-              out=None, params: dict | None = None, log: Callable | None = None,
-              **kw) -> DetectionResult:
+              out=None, force: bool = False, params: dict | None = None,
+              log: Callable | None = None, **kw) -> DetectionResult:
     """The smallest defect (the scene's `Fit.size`) told from none at false-alarm rate
     `alpha` and miss rate `beta`, per solver, speed and channel set, against the noise level
     (`xval identify SCENE --detection`); the solvers' limits judged pair by pair."""
     from ..workflows.identify import detection as run
-    from ..workflows.runner import new_run_dir
     from .common import overrides
     if out is not None:
-        check_out(str(out))
+        claim_out(str(out), "detection", force)
     res = DetectionResult(run(scene, solvers, overrides(params, kw), alpha, beta,
                               log=log or quiet))
     if out is not None:
-        res.save(new_run_dir(out, scene + "-detection"))
+        res.save(out)
     return res
 
 
@@ -100,10 +98,10 @@ def main(args) -> int:
     if args.detection:
         if args.data or args.synthesise:
             raise BadInput("--detection maps the detection limits; it takes no record")
-        check_out(args.out)
         with stdout_to_stderr():
             r = detection(args.scene, args.solver or None, alpha=args.alpha, beta=args.beta,
-                          out=args.out, params=parse_sets(args.set), log=log)
+                          out=args.out, force=args.force, params=parse_sets(args.set),
+                          log=log)
         return answered(args, r)
     if args.synthesise:
         if len(args.solver) != 1:
@@ -123,11 +121,10 @@ def main(args) -> int:
         return 0
     if not args.data:
         raise BadInput("--data FILE: the record to fit (or --synthesise FILE to make one)")
-    check_out(args.out)
     with stdout_to_stderr():
         r = identify(args.scene, args.data, args.unknown or None, args.solver or None,
                      noise=noise, profile=not args.no_profile, poincare=args.poincare,
-                     out=args.out,
+                     out=args.out, force=args.force,
                      params=parse_sets(args.set), log=log)
     return answered(args, r)
 
@@ -175,4 +172,4 @@ COMMAND = Command(
           arg("--channel", action="append", default=[], metavar="NAME",
               help="with --synthesise: a channel to record (repeatable; default the scene's "
                    "measured set)"),
-          OUT, STRICT))
+          *RESULT_OUT, STRICT))

@@ -35,7 +35,9 @@ def result_kind(folder) -> str | None:
     if (p / "summary.json").exists() or (p / "jobs").is_dir() or (p / LOCK).exists():
         return "campaign"
     for name, kind in (("response.json", "response"), ("bench.json", "bench"),
-                       ("map.json", "map"), ("diff.json", "diff"), ("result.json", None)):
+                       ("map.json", "map"), ("diff.json", "diff"),
+                       ("identify.json", "identify"), ("detection.json", "detection"),
+                       ("result.json", None)):
         if (p / name).exists():
             try:
                 return kind or json.loads((p / name).read_text()).get("result") or "time"

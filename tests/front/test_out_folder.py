@@ -143,3 +143,19 @@ def test_a_stopped_study_and_an_old_root_are_told_apart(tmp_path):
     (tmp_path / "root" / "extremes").mkdir()
     with pytest.raises(BadInput, match="earlier xval results under maps/, extremes/ "):
         claim_out(tmp_path / "root", "map")
+
+
+def test_an_identification_lands_in_the_folder_named(tmp_path):
+    rec = tmp_path / "rec.csv"
+    rc, so, se = xval("identify", "bearing-rotor", "--synthesise", str(rec), "--solver",
+                      "quaternion", "--set", "t_end=0.5")
+    assert rc == 0, se
+    fit = ("identify", "bearing-rotor", "--data", str(rec), "--solver", "quaternion",
+           "--unknown", "defect_height", "--no-profile", "--set", "t_end=0.5")
+    for _ in range(2):                  # again into its own earlier result: written over
+        rc, so, se = xval(*fit, "--out", str(tmp_path / "o"))
+        assert rc == 0, se
+    assert (tmp_path / "o" / "identify.json").exists()
+    assert not (tmp_path / "o" / "runs").exists()
+    rc, so, se = xval(*fit, "--out", str(tmp_path))           # holds rec.csv and o/
+    assert rc == 2 and len(se.strip().splitlines()) == 1 and "--force" in se

@@ -266,6 +266,9 @@ def checked_segments(settings: dict) -> int:
 
 
 SPREAD_NOTE = 5e-3   # Richardson spread above this: the chain is too coarse at this speed
+# the order of the term the 1/N² extrapolation leaves, at least (the chain's error has odd
+# terms where the segments' ends break the symmetry): 2^3 − 1 = 7
+EXTRAPOLATED_ORDER = 3
 FD_VARY = 10.0       # the engines' finite-difference step × this: the linearisation's own error
 
 
@@ -312,13 +315,19 @@ def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) 
         f = np.abs(signed)
         f_low = richardson(models[2], models[1], want + 6)
         low = dict(zip([models[1]["labels"][i] for i in range(len(f_low))], f_low))
-        spread = max((abs(low[fine["labels"][i]] / f_all[i] - 1) for i in idx
-                      if fine["labels"][i] in low), default=0.0)
+        # per mode: the two extrapolates' difference (N/4–N/2 against N/2–N), the error of
+        # the coarser one; the finer's is (2^p − 1)× smaller where the extrapolation leaves
+        # an order-p ≥ EXTRAPOLATED_ORDER term. A mode the N/4 chain lacks: the extrapolation's
+        # own change (the N chain's error, an upper bound of the extrapolate's)
+        change = np.abs(signed - signed_hz(fine)[idx])
+        diff = np.array([abs(low[fine["labels"][i]] - f_all[i]) if fine["labels"][i] in low
+                         else np.inf for i in idx])
+        spread = max((d / abs(f_all[i]) for d, i in zip(diff, idx) if np.isfinite(d)),
+                     default=0.0)
         extra = {"unextrapolated_hz": fine["frequencies_hz"][idx],
                  "richardson_spread_rel": float(spread),
-                 # the extrapolation's change: the error of the N chain, an upper bound of
-                 # the extrapolated one's in the 1/N² regime
-                 "frequency_error_hz": np.abs(signed - signed_hz(fine)[idx])}
+                 "frequency_error_hz": np.minimum(diff / (2 ** EXTRAPOLATED_ORDER - 1),
+                                                  change)}
         if spread > SPREAD_NOTE:
             notes.append(f"discretisation: extrapolations from N/4–N/2 and N/2–N differ by "
                          f"{spread:.1e} here; raise n_segments")

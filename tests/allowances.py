@@ -48,6 +48,7 @@ CASES = {
            ("speed0", {"speed": 0.0}, None)] for h in ("helicopter-clamped", "helicopter-hover")},
 }
 CASES["andrews-squeezer"] = [("default", {}, None)]     # the test set's run to t = 0.03 s
+CASES["bricard"] = [("default", {}, None)]     # the library's run to t = 10 s
 CASES["bicycle"] = [(f"speed{v:g}", {"speed": v}, None) for v in (2.0, 5.0, 8.0)]
 LONG = {"sail-deploy": [("full-engines", {}, ["thread-spool-conservative", "exudyn",
                                                "mujoco"])]}

@@ -28,6 +28,7 @@ from .base import (  # noqa: F401  (the scene types, for plug-ins)
 )
 from .benchmarks_andrews import ANDREWS
 from .benchmarks_bicycle import BICYCLE
+from .benchmarks_bricard import BRICARD
 
 GROUP = "xval.scenes"
 
@@ -37,6 +38,7 @@ SCENES = {s.name: s for s in (rotor.SPINUP, rotor.WHIRL, bearing.BEARING_ROTOR, 
                                mstmm.HELICOPTER_HOVER)}
 SCENES[BICYCLE.name] = BICYCLE
 SCENES[ANDREWS.name] = ANDREWS
+SCENES[BRICARD.name] = BRICARD
 ORIGIN = {}          # plug-in scene name -> (distribution or entry point, module)
 PLUGIN_SOLVERS = []  # solvers plug-ins add, as dicts (compare.solvers puts them in REGISTRY)
 

@@ -1,0 +1,152 @@
+"""Exudyn model of Bricard's mechanism (scene `bricard`).
+
+Five `CreateRigidBody` rods (Euler-parameter nodes at the rods' centres, body axes = space axes
+at the start; thin rods: m L²/12 about the two transverse axes, nothing about their own) under
+gravity −g ŷ, and six revolute joints at the library's points and axes
+(compare.physics.bricard.POINTS, AXES): five `CreateRevoluteJoint` (ground–rod 1, rod–rod) and
+the loop's last, rod 5 to ground, a `CreateGenericJoint` that keeps the three positions and
+only one of the two rotations a revolute joint fixes — the other is the redundant constraint
+(Grübler's zero against the one degree of freedom): with it the constraint Jacobian is
+singular and Exudyn's default solver stops ("matrix is not factorized"). Which one is
+redundant is the one whose removal leaves `ComputeSystemDegreeOfFreedom` at one degree of
+freedom and no redundancy (measured in tests/engines/test_bricard_engines.py). An index-3 DAE
+solved by generalized-α (position-level constraints: no drift) output interval by output
+interval; the joint angles and rates are read back from the bodies' rotations.
+"""
+from __future__ import annotations
+
+import math
+
+import exudyn as exu
+import numpy as np
+from exudyn.rigidBodyUtilities import RigidBodyInertia
+
+from compare.contract import LeafResult, merge_settings
+from compare.physics import bricard as phys
+
+DEFAULT_SETTINGS = {"integrator": "generalized_alpha", "dt": 1e-3, "spectral_radius": 1.0,
+                    "newton_tol": 1e-10, "newton_abs_tol": 1e-12}
+INTEGRATORS = ("generalized_alpha", "trapezoidal")
+# the loop's last joint (axis x at P5): constrained axes (x, y, z, rot x, rot y, rot z) in the
+# space frame — rotation about x free (the joint), about z kept, about y the redundant one
+CLOSING_AXES = [1, 1, 1, 0, 0, 1]
+
+
+def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
+    """The settings merged and checked before anything runs (ValueError with one line)."""
+    s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
+    s["dt"] = float(s["dt"])
+    if not s["dt"] > 0:
+        raise ValueError(f"dt must be > 0, got {s['dt']!r}")
+    rho = float(s["spectral_radius"])
+    if not 0.0 <= rho <= 1.0:
+        raise ValueError(f"spectral_radius must be in [0, 1], got {rho!r}")
+    s["spectral_radius"] = rho
+    return s
+
+
+def build(params: dict, s: dict, closing_axes=None):
+    """(SystemContainer, mbs, [node per rod], simulation settings) at the library's start."""
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    m, L, g = (float(params[n]) for n in phys.NAMES)
+    ground = mbs.CreateGround(show=False)
+    bodies, nodes = [], []
+    for k in range(5):
+        d = phys.POINTS[k + 1] - phys.POINTS[k]
+        inertia = m * L * L / 12.0 * (np.eye(3) - np.outer(d, d))
+        b = mbs.CreateRigidBody(
+            inertia=RigidBodyInertia(mass=m, inertiaTensor=inertia),
+            referencePosition=list(0.5 * (phys.POINTS[k] + phys.POINTS[k + 1]) * L),
+            nodeType=exu.NodeType.RotationEulerParameters, gravity=[0.0, -g, 0.0])
+        bodies.append(b)
+        nodes.append(mbs.GetObject(b)["nodeNumber"])
+    pairs = [ground] + bodies + [ground]
+    for j in range(5):
+        mbs.CreateRevoluteJoint(itemNumbers=[pairs[j], pairs[j + 1]],
+                                position=list(phys.POINTS[j] * L), axis=list(phys.AXES[j]),
+                                useGlobalFrame=True, show=False)
+    mbs.CreateGenericJoint(itemNumbers=[bodies[4], ground], position=list(phys.POINTS[5] * L),
+                           constrainedAxes=list(closing_axes or CLOSING_AXES),
+                           useGlobalFrame=True, show=False)
+    mbs.Assemble()
+
+    ss = exu.SimulationSettings()
+    ss.solution.file.write = False
+    ss.timeIntegration.verboseMode = 0
+    ss.timeIntegration.adaptiveStep = False
+    ss.timeIntegration.newton.relativeTolerance = float(s["newton_tol"])
+    ss.timeIntegration.newton.absoluteTolerance = float(s["newton_abs_tol"])
+    ss.timeIntegration.newton.useModifiedNewton = False
+    ss.linearSolver.solverType = exu.LinearSolverType.EXUdense
+    ga = ss.timeIntegration.generalizedAlpha
+    if s["integrator"] == "generalized_alpha":
+        ga.spectralRadius, ga.useIndex2Constraints, ga.useNewmark = s["spectral_radius"], False, \
+            False
+    else:
+        ga.spectralRadius, ga.useIndex2Constraints, ga.useNewmark = 1.0, True, True
+    return SC, mbs, nodes, ss
+
+
+def joint_state(Rs, ws):
+    """Joint angles q0…q4 and rates from the rods' rotations Rs (5, 3, 3) and angular velocities
+    ws (5, 3) in space: R_{k+1} = R_k Rot(s_k, q_k) (R_0 = I, the ground), and
+    q'_k = (R_k s_k)·(ω_{k+1} − ω_k)."""
+    q, qd = np.zeros(6), np.zeros(6)
+    R_prev, w_prev = np.eye(3), np.zeros(3)
+    for k in range(5):
+        rel = R_prev.T @ Rs[k]
+        sin = 0.5 * np.array([rel[2, 1] - rel[1, 2], rel[0, 2] - rel[2, 0], rel[1, 0] - rel[0, 1]])
+        q[k] = math.atan2(float(sin @ phys.AXES[k]), 0.5 * (np.trace(rel) - 1.0))
+        qd[k] = float((R_prev @ phys.AXES[k]) @ (ws[k] - w_prev))
+        R_prev, w_prev = Rs[k], ws[k]
+    return q, qd
+
+
+def _state(mbs, nodes):
+    Rs = np.array([np.asarray(mbs.GetNodeOutput(n, exu.OutputVariableType.RotationMatrix))
+                   .reshape(3, 3) for n in nodes])
+    ws = np.array([mbs.GetNodeOutput(n, exu.OutputVariableType.AngularVelocity) for n in nodes])
+    return joint_state(Rs, ws)
+
+
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> LeafResult:
+    s = check_settings(settings)
+    t_out = np.asarray(t_out, float)
+    prev = exu.config.printToConsole
+    exu.config.printToConsole = False
+    n = len(t_out)
+    Q, QD = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
+    steps, status, t_fail, reason = 0, "ok", None, None
+    try:
+        SC, mbs, nodes, ss = build(params, s)
+        Q[0], QD[0] = _state(mbs, nodes)
+        for i in range(1, n):
+            t0, t1 = float(t_out[i - 1]), float(t_out[i])
+            nst = max(1, int(math.ceil((t1 - t0) / s["dt"] - 1e-9)))
+            ss.timeIntegration.startTime, ss.timeIntegration.endTime = t0, t1
+            ss.timeIntegration.numberOfSteps = nst
+            try:
+                ok = mbs.SolveDynamic(ss, solverType=exu.DynamicSolverType.GeneralizedAlpha,
+                                      updateInitialValues=True)
+            except Exception as exc:      # exudyn.SolverError, RuntimeError
+                why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+                ok, reason = False, f"exudyn solver failed in [{t0:.6g}, {t1:.6g}]: {why}"
+            if not ok:
+                status, t_fail = "diverged", t0
+                reason = reason or f"exudyn SolveDynamic returned False in [{t0:.6g}, {t1:.6g}]"
+                break
+            steps += nst
+            Q[i], QD[i] = _state(mbs, nodes)
+            if not (np.all(np.isfinite(Q[i])) and np.all(np.isfinite(QD[i]))):
+                status, t_fail, reason = "diverged", t1, "non-finite state"
+                Q[i], QD[i] = np.nan, np.nan
+                break
+    finally:
+        exu.config.printToConsole = prev
+    Q[:, :5] = np.unwrap(Q[:, :5], axis=0) if status == "ok" else Q[:, :5]
+    used = {**s, "dt": float((t_out[1] - t_out[0]) / max(1, int(math.ceil(
+        (t_out[1] - t_out[0]) / s["dt"] - 1e-9))))}
+    return LeafResult(channels=phys.channels(Q, QD, phys.pack(params)), status=status,
+                      t_fail=t_fail, reason=reason, stats={"steps": steps, "rhs_evals": -1},
+                      settings=used)

@@ -1,0 +1,125 @@
+"""MuJoCo model of Bricard's mechanism (scene `bricard`).
+
+Model: one kinematic tree of five hinges, world → rod 1 (hinge s0 at P0) → rod 2 (s1 at P1) →
+… → rod 5 (s4 at P4), each body's frame at its joint with the space axes at the start, so the
+hinge angles are the joint angles q0…q4 of compare.physics.bricard themselves; thin rods (m
+L²/12 about the two transverse axes, AXIAL·m L² about their own: MuJoCo needs it positive).
+The loop's last joint, rod 5 to the ground about x at P5, is two `connect`s on its axis (at
+P5 and P5 + L/2 x̂): six equations where a hinge is five, and five where the mechanism needs
+four (Grübler's zero against the one degree of freedom) — MuJoCo's soft constraints take the
+redundant rows as they are (its solver regularises them), solref (solref_factor·dt, 1) and
+solimp (0.9999, 0.9999, 0.001, 0.5, 2). Gravity −g ŷ. RK4.
+"""
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from compare.contract import LeafResult, merge_settings
+from compare.physics import bricard as phys
+
+DEFAULT_SETTINGS = {"integrator": "rk4", "dt": 1e-4, "solref_factor": 4.0,
+                    "solimp": (0.9999, 0.9999, 0.001, 0.5, 2.0)}
+INTEGRATORS = ("rk4", "euler", "implicitfast", "implicit")
+# the soft loop moves the motion off the rigid mechanism by an amount ∝ tc² (tc = the
+# constraint's time constant, solref_factor·dt; measured in tests/engines/test_bricard_engines.py);
+# the knob varies the ratio on its own (order 2)
+KNOBS = {"solref_factor": 2}
+# MuJoCo refuses a moving body with a zero principal inertia (mjMINVAL): each rod gets
+# AXIAL·m L² about its own axis, 1.2e-9 of its transverse inertia (its effect: well below the
+# soft loop's, measured in tests/engines/test_bricard_engines.py)
+AXIAL = 1e-10
+
+
+def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
+    """The settings merged and checked before anything runs (ValueError with one line)."""
+    s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
+    s["dt"] = float(s["dt"])
+    if not s["dt"] > 0:
+        raise ValueError(f"dt must be > 0, got {s['dt']!r}")
+    s["solref_factor"] = float(s["solref_factor"])
+    if not s["solref_factor"] > 0:
+        raise ValueError("solref_factor must be > 0")
+    s["solimp"] = tuple(float(x) for x in s["solimp"])
+    if len(s["solimp"]) != 5:
+        raise ValueError("solimp must have 5 numbers")
+    return s
+
+
+def _f(x):
+    return f"{float(x):.17g}"
+
+
+def _v(x):
+    return " ".join(_f(c) for c in x)
+
+
+def xml(params: dict, s: dict) -> str:
+    m, L, g = (float(params[n]) for n in phys.NAMES)
+    tc = s["solref_factor"] * s["dt"]
+    solref, solimp = f"{_f(tc)} 1", " ".join(_f(x) for x in s["solimp"])
+    integ = {"rk4": "RK4", "euler": "Euler", "implicitfast": "implicitfast",
+             "implicit": "implicit"}[s["integrator"]]
+    P = phys.POINTS * L
+    tree = ""
+    for k in reversed(range(5)):
+        d = phys.POINTS[k + 1] - phys.POINTS[k]
+        I_t = m * L * L / 12.0
+        diag = [AXIAL * m * L * L if abs(c) > 0.5 else I_t for c in d]
+        pos = P[k] - (P[k - 1] if k else 0.0)
+        tree = (f'<body name="rod{k + 1}" pos="{_v(pos)}">'
+                f'<joint name="q{k}" type="hinge" axis="{_v(phys.AXES[k])}"/>'
+                f'<inertial pos="{_v(0.5 * d * L)}" mass="{_f(m)}" diaginertia="{_v(diag)}"/>'
+                f'{tree}</body>')
+    a1 = P[5] - P[4]
+    a2 = a1 + 0.5 * L * phys.AXES[5]
+    connects = "".join(f'<connect body1="rod5" body2="world" anchor="{_v(a)}" '
+                       f'solref="{solref}" solimp="{solimp}"/>' for a in (a1, a2))
+    return f"""
+<mujoco model="bricard">
+  <option timestep="{_f(s['dt'])}" integrator="{integ}" gravity="0 {_f(-g)} 0"
+          jacobian="dense">
+    <flag contact="disable" autoreset="disable"/>
+  </option>
+  <worldbody>{tree}</worldbody>
+  <equality>{connects}</equality>
+</mujoco>
+"""
+
+
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> LeafResult:
+    s = check_settings(settings)
+    t_out = np.asarray(t_out, float)
+    m = mujoco.MjModel.from_xml_string(xml(params, s))
+    d = mujoco.MjData(m)
+    n = len(t_out)
+    Q, QD = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
+    Q[0, :5], QD[0, :5] = d.qpos, d.qvel
+    n_sub = max(1, int(math.ceil((t_out[1] - t_out[0]) / s["dt"] - 1e-9)))
+    h = (t_out[1] - t_out[0]) / n_sub
+    m.opt.timestep = h
+    steps, status, t_fail, reason = 0, "ok", None, None
+    L = float(params["L"])
+    end = phys.POINTS[5] * L
+    viol = 0.0
+    for i in range(1, n):
+        mujoco.mj_step(m, d, nstep=n_sub)
+        steps += n_sub
+        if (not np.all(np.isfinite(d.qpos)) or not np.all(np.isfinite(d.qvel))
+                or d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0):
+            status, t_fail, reason = "diverged", float(t_out[i]), "non-finite state (bad qacc)"
+            break
+        Q[i, :5], QD[i, :5] = d.qpos, d.qvel
+        mujoco.mj_kinematics(m, d)
+        b = d.body("rod5")
+        tip = b.xpos + b.xmat.reshape(3, 3) @ (phys.POINTS[5] - phys.POINTS[4]) * L
+        viol = max(viol, float(np.linalg.norm(tip - end)))
+    Q[:, 5] = 0.0
+    QD[:, 5] = 0.0
+    evals = 4 * steps if s["integrator"] == "rk4" else steps
+    return LeafResult(channels=phys.channels(Q, QD, phys.pack(params)), status=status,
+                      t_fail=t_fail, reason=reason, stats={"steps": steps, "rhs_evals": evals},
+                      settings={**s, "dt": float(h)},
+                      extra={"loop_violation": np.array([viol])})

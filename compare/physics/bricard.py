@@ -21,6 +21,7 @@ import numba as nb
 import numpy as np
 
 from ..contract import Channel
+from .rotation import axis_rotation
 
 # the library's values: rod mass (kg), rod length (m), gravity (m/s², along −y)
 PARAMS = (("m", 1.0), ("L", 1.0), ("g", 9.81))
@@ -37,23 +38,6 @@ AXES = np.array([[0, 1, 0], [0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 0
 
 def pack(params: dict) -> np.ndarray:
     return np.array([float(params[n]) for n in NAMES])
-
-
-@nb.njit(cache=True)
-def _rot(s, a):
-    """Rotation by a about the unit axis s (Rodrigues)."""
-    c, sn = math.cos(a), math.sin(a)
-    R = np.empty((3, 3))
-    for i in range(3):
-        for j in range(3):
-            R[i, j] = (1 - c) * s[i] * s[j] + (c if i == j else 0.0)
-    R[0, 1] -= sn * s[2]
-    R[0, 2] += sn * s[1]
-    R[1, 0] += sn * s[2]
-    R[1, 2] -= sn * s[0]
-    R[2, 0] -= sn * s[1]
-    R[2, 1] += sn * s[0]
-    return R
 
 
 @nb.njit(cache=True)
@@ -75,7 +59,7 @@ def forward(q, p):
         x = R @ pj + t
         X[j, :3] = w
         X[j, 3:] = np.cross(x, w)
-        Rj = _rot(s, q[j])
+        Rj = axis_rotation(s, q[j])
         t = R @ (pj - Rj @ pj) + t
         R = R @ Rj
         Rs[j + 1] = R

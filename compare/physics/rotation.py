@@ -6,6 +6,8 @@ Euler-vector tensors follow the paper (seed 000) and Zhilin's notation:
 written here in the equivalent Rodrigues form E + a θ× + b (θ×)², with series near θ = 0 so no
 0/0 is ever formed. Quaternions are (w, x, y, z) and rotate body vectors into the fixed frame.
 """
+import math
+
 import numba as nb
 import numpy as np
 
@@ -47,6 +49,23 @@ def _rodrigues(t, c1, c2):
     out[1, 2] -= c1 * t[0]
     out[2, 1] += c1 * t[0]
     return out
+
+
+@nb.njit(cache=True)
+def axis_rotation(s, a):
+    """Rotation by a about the unit axis s: (1 − cos a) s⊗s + cos a E + sin a s× (Rodrigues)."""
+    c, sn = math.cos(a), math.sin(a)
+    R = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            R[i, j] = (1 - c) * s[i] * s[j] + (c if i == j else 0.0)
+    R[0, 1] -= sn * s[2]
+    R[0, 2] += sn * s[1]
+    R[1, 0] += sn * s[2]
+    R[1, 2] -= sn * s[0]
+    R[2, 0] -= sn * s[1]
+    R[2, 1] += sn * s[0]
+    return R
 
 
 @nb.njit(cache=True)

@@ -15,7 +15,18 @@ def _num(v, unit=""):
     return "—" if v is None else f"{v:.6g}{(' ' + unit) if unit else ''}"
 
 
-class IdentifyResult(StudyResult):
+class _TablesReport:
+    """report.md of a result made of `title()`, `tables()` and `summary_lines()`."""
+
+    def markdown(self) -> list[str]:
+        from ..output.tables import markdown
+        md = [f"# {self.title()}", ""]
+        for h, r in self.tables():
+            md += [markdown(h, r), ""]
+        return md + ["```", *self.summary_lines(), "```"]
+
+
+class IdentifyResult(_TablesReport, StudyResult):
     TYPE, JSON = "identify", "identify.json"
 
     def __init__(self, data: dict, out_dir=None, temporary=None, report_md=None, record=None,
@@ -101,13 +112,6 @@ class IdentifyResult(StudyResult):
                        f"{d['poincare']['points']} points per solver")
         return out
 
-    def markdown(self) -> list[str]:
-        from ..output.tables import markdown
-        md = [f"# {self.title()}", ""]
-        for h, r in self.tables():
-            md += [markdown(h, r), ""]
-        return md + ["```", *self.summary_lines(), "```"]
-
     def save(self, path) -> Path:
         """report.md, identify.json, fit.png (and poincare.png) in the folder `path`."""
         from ..output.identify_plot import write_identify
@@ -115,7 +119,7 @@ class IdentifyResult(StudyResult):
         return self._dir
 
 
-class DetectionResult(StudyResult):
+class DetectionResult(_TablesReport, StudyResult):
     """`xval identify SCENE --detection`: the smallest defect told from none, per solver, speed
     and channel set, against the noise level; the solvers' limits judged pair by pair.
     `save(path)` writes report.md, detection.json and detection.png."""
@@ -162,13 +166,6 @@ class DetectionResult(StudyResult):
         noise = ", ".join(f"{k} {v:g}" for k, v in d["noise"].items()
                           if any(k in s for s in d["channel_sets"].values()))
         return [f"limits of {d['size']} [SI] at σ × factor (σ: {noise})", d["summary"]]
-
-    def markdown(self) -> list[str]:
-        from ..output.tables import markdown
-        md = [f"# {self.title()}", ""]
-        for h, r in self.tables():
-            md += [markdown(h, r), ""]
-        return md + ["```", *self.summary_lines(), "```"]
 
     def save(self, path) -> Path:
         from ..output.identify_plot import write_detection

@@ -18,6 +18,7 @@ import numpy as np
 
 from compare.physics import andrews as phys
 
+from .. import loops
 from ..integrators.linear_acceleration import solve_small
 
 NP = len(phys.NAMES)
@@ -64,8 +65,7 @@ def analogues(beta, p):
     q0, ok0 = close(beta, p[WARM:WARM + 6], p)
     qp, okp = close(beta + h, q0[1:], p)
     qm, okm = close(beta - h, q0[1:], p)
-    J = (qp - qm) / (2.0 * h)
-    J2 = (qp - 2.0 * q0 + qm) / (h * h)
+    J, J2 = loops.partial_systems(q0, qp, qm, h)
     return q0, J, J2, ok0 and okp and okm
 
 
@@ -96,12 +96,4 @@ def guard(t, y, p):
 
 def full_state(Y: np.ndarray, p: np.ndarray):
     """The seven angles and rates (q = q(β), q' = J β') of each row of [β, β'] (NaN rows kept)."""
-    n = len(Y)
-    Q, QD = np.full((n, 7), np.nan), np.full((n, 7), np.nan)
-    for i in range(n):
-        if np.isfinite(Y[i, 0]) and np.isfinite(Y[i, 1]):
-            qf, J, _, ok = analogues(Y[i, 0], p)
-            if ok:
-                p[WARM:WARM + 6] = qf[1:]
-                Q[i], QD[i] = qf, J * Y[i, 1]
-    return Q, QD
+    return loops.full_state(Y, p, analogues, 7, WARM)

@@ -6,17 +6,14 @@ Settings: integrator (linacc, wilson [theta], linacc-pc, linacc-fp), dt, dbeta (
 step of the partial systems, rad), newton_tol (the implicit step, relative to the
 accelerations), closure_tol (the loop closure's Newton, rad), max_iter.
 """
-import time
-
 import numpy as np
 
-from compare.contract import LeafResult, merge_settings, require_positive
+from compare.contract import LeafResult
 from compare.physics import andrews as phys
 
-from ..integrators import FAIL_REASONS, LA_REASONS, integrate_wilson
-from ..integrators.dense import first_class
-from ..integrators.explicit import GUARD
-from ..integrators.linear_acceleration import ACC, LA_INTEGRATORS, la_args, steps_per_output
+from .. import loops
+from ..integrators import FAIL_REASONS, LA_REASONS
+from ..integrators.linear_acceleration import LA_INTEGRATORS
 from . import model
 
 CHANNELS = phys.CHANNELS
@@ -32,11 +29,7 @@ REASONS = {**FAIL_REASONS, **LA_REASONS,
 
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
-    s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
-    require_positive(s, ("dt", "dbeta", "newton_tol", "closure_tol", "max_iter"))
-    if s["integrator"] == "wilson" and not float(s["theta"]) >= 1.0:
-        raise ValueError(f"theta must be >= 1, got {s['theta']!r}")
-    return s
+    return loops.partial_settings(settings, DEFAULT_SETTINGS, INTEGRATORS, "dbeta")
 
 
 def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> LeafResult:
@@ -45,22 +38,4 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> L
     q0 = phys.initial_angles(params)
     p = model.pack(params, float(s["dbeta"]), float(s["closure_tol"]), q0[1:])
     y0 = np.array([q0[0], 0.0])
-    n_sub = steps_per_output(t_out, float(s["dt"]))
-    theta, mode = la_args(s)
-    t0 = time.perf_counter()
-    Y, steps, evals, t_fail, code = integrate_wilson(
-        first_class(model.acc, ACC), first_class(model.guard, GUARD), y0, 1, p, t_out, n_sub,
-        theta, mode, float(s["newton_tol"]), int(s["max_iter"]))
-    wall = time.perf_counter() - t0
-    p[model.WARM:model.WARM + 6] = q0[1:]
-    Q, QD = model.full_state(Y, p)
-    ch = phys.channels(Q, QD, p[:model.NP])
-    ok = code == 0
-    used = {"integrator": s["integrator"], "dt": float((t_out[1] - t_out[0]) / n_sub),
-            "theta": theta, "dbeta": float(s["dbeta"]), "newton_tol": float(s["newton_tol"]),
-            "closure_tol": float(s["closure_tol"]), "max_iter": int(s["max_iter"])}
-    return LeafResult(channels=ch, status="ok" if ok else "diverged",
-                      t_fail=None if ok else float(t_fail),
-                      reason=None if ok else REASONS.get(int(code), f"failure code {code}"),
-                      stats={"steps": int(steps), "rhs_evals": int(evals), "integrate_s": wall},
-                      settings=used, extra={"beta_rate": Y[:, 1].copy()})
+    return loops.run_partial(model, phys, p, y0, q0[1:], t_out, s, "dbeta", "beta_rate", REASONS)

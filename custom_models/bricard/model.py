@@ -16,6 +16,8 @@ import numpy as np
 
 from compare.physics import bricard as phys
 
+from .. import loops
+
 NP = len(phys.NAMES)
 DTHETA, CLOSURE_TOL, FLAG, WARM = NP, NP + 1, NP + 2, NP + 3     # WARM: 5 slots
 P_LEN = WARM + 5
@@ -37,8 +39,7 @@ def analogues(theta, p):
     q0, ok0 = phys.close(theta, p[WARM:WARM + 5], p, tol, MAX_NEWTON)
     qp, okp = phys.close(theta + h, q0[1:], p, tol, MAX_NEWTON)
     qm, okm = phys.close(theta - h, q0[1:], p, tol, MAX_NEWTON)
-    J = (qp - qm) / (2.0 * h)
-    J2 = (qp - 2.0 * q0 + qm) / (h * h)
+    J, J2 = loops.partial_systems(q0, qp, qm, h)
     return q0, J, J2, ok0 and okp and okm
 
 
@@ -63,12 +64,4 @@ def guard(t, y, p):
 
 def full_state(Y: np.ndarray, p: np.ndarray):
     """The six joint angles and rates (q(θ), J θ') of each row of [θ, θ'] (NaN rows kept)."""
-    n = len(Y)
-    Q, QD = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
-    for i in range(n):
-        if np.isfinite(Y[i, 0]) and np.isfinite(Y[i, 1]):
-            qf, J, _, ok = analogues(Y[i, 0], p)
-            if ok:
-                p[WARM:WARM + 5] = qf[1:]
-                Q[i], QD[i] = qf, J * Y[i, 1]
-    return Q, QD
+    return loops.full_state(Y, p, analogues, 6, WARM)

@@ -21,8 +21,10 @@ import exudyn as exu
 import numpy as np
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
-from compare.contract import LeafResult, merge_settings
+from compare.contract import LeafResult
 from compare.physics import bricard as phys
+
+from .. import loop_common as lc
 
 DEFAULT_SETTINGS = {"integrator": "generalized_alpha", "dt": 1e-3, "spectral_radius": 1.0,
                     "newton_tol": 1e-10, "newton_abs_tol": 1e-12}
@@ -34,15 +36,7 @@ CLOSING_AXES = [1, 1, 1, 0, 0, 1]
 
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
-    s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
-    s["dt"] = float(s["dt"])
-    if not s["dt"] > 0:
-        raise ValueError(f"dt must be > 0, got {s['dt']!r}")
-    rho = float(s["spectral_radius"])
-    if not 0.0 <= rho <= 1.0:
-        raise ValueError(f"spectral_radius must be in [0, 1], got {rho!r}")
-    s["spectral_radius"] = rho
-    return s
+    return lc.exudyn_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
 
 
 def build(params: dict, s: dict, closing_axes=None):
@@ -71,21 +65,7 @@ def build(params: dict, s: dict, closing_axes=None):
                            useGlobalFrame=True, show=False)
     mbs.Assemble()
 
-    ss = exu.SimulationSettings()
-    ss.solution.file.write = False
-    ss.timeIntegration.verboseMode = 0
-    ss.timeIntegration.adaptiveStep = False
-    ss.timeIntegration.newton.relativeTolerance = float(s["newton_tol"])
-    ss.timeIntegration.newton.absoluteTolerance = float(s["newton_abs_tol"])
-    ss.timeIntegration.newton.useModifiedNewton = False
-    ss.linearSolver.solverType = exu.LinearSolverType.EXUdense
-    ga = ss.timeIntegration.generalizedAlpha
-    if s["integrator"] == "generalized_alpha":
-        ga.spectralRadius, ga.useIndex2Constraints, ga.useNewmark = s["spectral_radius"], False, \
-            False
-    else:
-        ga.spectralRadius, ga.useIndex2Constraints, ga.useNewmark = 1.0, True, True
-    return SC, mbs, nodes, ss
+    return SC, mbs, nodes, lc.ga_simulation_settings(s)
 
 
 def joint_state(Rs, ws):
@@ -113,40 +93,10 @@ def _state(mbs, nodes):
 def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> LeafResult:
     s = check_settings(settings)
     t_out = np.asarray(t_out, float)
-    prev = exu.config.printToConsole
-    exu.config.printToConsole = False
-    n = len(t_out)
-    Q, QD = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
-    steps, status, t_fail, reason = 0, "ok", None, None
-    try:
-        SC, mbs, nodes, ss = build(params, s)
-        Q[0], QD[0] = _state(mbs, nodes)
-        for i in range(1, n):
-            t0, t1 = float(t_out[i - 1]), float(t_out[i])
-            nst = max(1, int(math.ceil((t1 - t0) / s["dt"] - 1e-9)))
-            ss.timeIntegration.startTime, ss.timeIntegration.endTime = t0, t1
-            ss.timeIntegration.numberOfSteps = nst
-            try:
-                ok = mbs.SolveDynamic(ss, solverType=exu.DynamicSolverType.GeneralizedAlpha,
-                                      updateInitialValues=True)
-            except Exception as exc:      # exudyn.SolverError, RuntimeError
-                why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-                ok, reason = False, f"exudyn solver failed in [{t0:.6g}, {t1:.6g}]: {why}"
-            if not ok:
-                status, t_fail = "diverged", t0
-                reason = reason or f"exudyn SolveDynamic returned False in [{t0:.6g}, {t1:.6g}]"
-                break
-            steps += nst
-            Q[i], QD[i] = _state(mbs, nodes)
-            if not (np.all(np.isfinite(Q[i])) and np.all(np.isfinite(QD[i]))):
-                status, t_fail, reason = "diverged", t1, "non-finite state"
-                Q[i], QD[i] = np.nan, np.nan
-                break
-    finally:
-        exu.config.printToConsole = prev
+    Q, QD, steps, status, t_fail, reason, dt = lc.exudyn_solve(
+        lambda: build(params, s), _state, t_out, s, 6)
     Q[:, :5] = np.unwrap(Q[:, :5], axis=0) if status == "ok" else Q[:, :5]
-    used = {**s, "dt": float((t_out[1] - t_out[0]) / max(1, int(math.ceil(
-        (t_out[1] - t_out[0]) / s["dt"] - 1e-9))))}
+    used = {**s, "dt": dt}
     return LeafResult(channels=phys.channels(Q, QD, phys.pack(params)), status=status,
                       t_fail=t_fail, reason=reason, stats={"steps": steps, "rhs_evals": -1},
                       settings=used)

@@ -12,13 +12,13 @@ constant `qfrc_applied` on β. RK4.
 """
 from __future__ import annotations
 
-import math
-
 import mujoco
 import numpy as np
 
-from compare.contract import LeafResult, merge_settings
+from compare.contract import LeafResult
 from compare.physics import andrews as phys
+
+from .. import loop_common as lc
 
 DEFAULT_SETTINGS = {"integrator": "rk4", "dt": 1e-6, "solref_factor": 4.0,
                     "solimp": (0.9999, 0.9999, 0.001, 0.5, 2.0)}
@@ -38,30 +38,16 @@ QPOS_OF = (0, 1, 2, 4, 3, 6, 5)
 
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
-    s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
-    s["dt"] = float(s["dt"])
-    if not s["dt"] > 0:
-        raise ValueError(f"dt must be > 0, got {s['dt']!r}")
-    s["solref_factor"] = float(s["solref_factor"])
-    if not s["solref_factor"] > 0:
-        raise ValueError("solref_factor must be > 0")
-    s["solimp"] = tuple(float(x) for x in s["solimp"])
-    if len(s["solimp"]) != 5:
-        raise ValueError("solimp must have 5 numbers")
-    return s
+    return lc.mujoco_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
 
 
-def _f(x):
-    return f"{float(x):.17g}"
+_f = lc.fmt
 
 
 def xml(params: dict, s: dict) -> str:
     lay = phys.body_layout(params)
-    tc = s["solref_factor"] * s["dt"]
-    solref = f"{_f(tc)} 1"
-    solimp = " ".join(_f(x) for x in s["solimp"])
-    integ = {"rk4": "RK4", "euler": "Euler", "implicitfast": "implicitfast",
-             "implicit": "implicit"}[s["integrator"]]
+    solref, solimp = lc.soft_strings(s)
+    integ = lc.MJ_INTEGRATORS[s["integrator"]]
 
     def body(name, joint, pos, children):
         m, J, pts = lay[name]
@@ -111,8 +97,7 @@ def xml(params: dict, s: dict) -> str:
 def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> LeafResult:
     s = check_settings(settings)
     t_out = np.asarray(t_out, float)
-    m = mujoco.MjModel.from_xml_string(xml(params, s))
-    d = mujoco.MjData(m)
+    m, d = lc.mujoco_model(xml(params, s))
     q0 = phys.initial_angles(params)
     d.qpos[list(QPOS_OF)] = q0
     d.qvel[:] = 0.0
@@ -120,26 +105,16 @@ def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> L
     n = len(t_out)
     Q, QD = np.full((n, 7), np.nan), np.full((n, 7), np.nan)
     Q[0], QD[0] = q0, 0.0
-    n_sub = max(1, int(math.ceil((t_out[1] - t_out[0]) / s["dt"] - 1e-9)))
-    h = (t_out[1] - t_out[0]) / n_sub
-    m.opt.timestep = h
-    steps, status, t_fail, reason = 0, "ok", None, None
-    viol = 0.0
-    for i in range(1, n):
-        for _ in range(n_sub):
-            mujoco.mj_step(m, d)
-            steps += 1
-        if (not np.all(np.isfinite(d.qpos)) or not np.all(np.isfinite(d.qvel))
-                or d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0):
-            status, t_fail, reason = "diverged", float(t_out[i]), "non-finite state (bad qacc)"
-            break
+    viol = [0.0]
+
+    def record(i):
         Q[i], QD[i] = d.qpos[list(QPOS_OF)], d.qvel[list(QPOS_OF)]
         mujoco.mj_kinematics(m, d)
         e = d.site("K2_E").xpos
-        viol = max(viol, *(float(np.linalg.norm(e - d.site(f"{k}_E").xpos))
-                           for k in ("K3", "K4", "K6")))
-    evals = 4 * steps if s["integrator"] == "rk4" else steps
+        viol[0] = max(viol[0], *(float(np.linalg.norm(e - d.site(f"{k}_E").xpos))
+                                 for k in ("K3", "K4", "K6")))
+    steps, status, t_fail, reason, evals, h = lc.mujoco_run(m, d, t_out, s, record)
     return LeafResult(channels=phys.channels(Q, QD, phys.pack(params)), status=status,
                       t_fail=t_fail, reason=reason, stats={"steps": steps, "rhs_evals": evals},
-                      settings={**s, "dt": float(h)},
-                      extra={"loop_violation": np.array([viol])})
+                      settings={**s, "dt": h},
+                      extra={"loop_violation": np.array(viol)})

@@ -12,13 +12,13 @@ solimp (0.9999, 0.9999, 0.001, 0.5, 2). Gravity −g ŷ. RK4.
 """
 from __future__ import annotations
 
-import math
-
 import mujoco
 import numpy as np
 
-from compare.contract import LeafResult, merge_settings
+from compare.contract import LeafResult
 from compare.physics import bricard as phys
+
+from .. import loop_common as lc
 
 DEFAULT_SETTINGS = {"integrator": "rk4", "dt": 1e-4, "solref_factor": 4.0,
                     "solimp": (0.9999, 0.9999, 0.001, 0.5, 2.0)}
@@ -35,21 +35,10 @@ AXIAL = 1e-10
 
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
-    s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
-    s["dt"] = float(s["dt"])
-    if not s["dt"] > 0:
-        raise ValueError(f"dt must be > 0, got {s['dt']!r}")
-    s["solref_factor"] = float(s["solref_factor"])
-    if not s["solref_factor"] > 0:
-        raise ValueError("solref_factor must be > 0")
-    s["solimp"] = tuple(float(x) for x in s["solimp"])
-    if len(s["solimp"]) != 5:
-        raise ValueError("solimp must have 5 numbers")
-    return s
+    return lc.mujoco_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
 
 
-def _f(x):
-    return f"{float(x):.17g}"
+_f = lc.fmt
 
 
 def _v(x):
@@ -58,10 +47,8 @@ def _v(x):
 
 def xml(params: dict, s: dict) -> str:
     m, L, g = (float(params[n]) for n in phys.NAMES)
-    tc = s["solref_factor"] * s["dt"]
-    solref, solimp = f"{_f(tc)} 1", " ".join(_f(x) for x in s["solimp"])
-    integ = {"rk4": "RK4", "euler": "Euler", "implicitfast": "implicitfast",
-             "implicit": "implicit"}[s["integrator"]]
+    solref, solimp = lc.soft_strings(s)
+    integ = lc.MJ_INTEGRATORS[s["integrator"]]
     P = phys.POINTS * L
     tree = ""
     for k in reversed(range(5)):
@@ -92,34 +79,24 @@ def xml(params: dict, s: dict) -> str:
 def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> LeafResult:
     s = check_settings(settings)
     t_out = np.asarray(t_out, float)
-    m = mujoco.MjModel.from_xml_string(xml(params, s))
-    d = mujoco.MjData(m)
+    m, d = lc.mujoco_model(xml(params, s))
     n = len(t_out)
     Q, QD = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
     Q[0, :5], QD[0, :5] = d.qpos, d.qvel
-    n_sub = max(1, int(math.ceil((t_out[1] - t_out[0]) / s["dt"] - 1e-9)))
-    h = (t_out[1] - t_out[0]) / n_sub
-    m.opt.timestep = h
-    steps, status, t_fail, reason = 0, "ok", None, None
     L = float(params["L"])
     end = phys.POINTS[5] * L
-    viol = 0.0
-    for i in range(1, n):
-        mujoco.mj_step(m, d, nstep=n_sub)
-        steps += n_sub
-        if (not np.all(np.isfinite(d.qpos)) or not np.all(np.isfinite(d.qvel))
-                or d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0):
-            status, t_fail, reason = "diverged", float(t_out[i]), "non-finite state (bad qacc)"
-            break
+    viol = [0.0]
+
+    def record(i):
         Q[i, :5], QD[i, :5] = d.qpos, d.qvel
         mujoco.mj_kinematics(m, d)
         b = d.body("rod5")
         tip = b.xpos + b.xmat.reshape(3, 3) @ (phys.POINTS[5] - phys.POINTS[4]) * L
-        viol = max(viol, float(np.linalg.norm(tip - end)))
+        viol[0] = max(viol[0], float(np.linalg.norm(tip - end)))
+    steps, status, t_fail, reason, evals, h = lc.mujoco_run(m, d, t_out, s, record)
     Q[:, 5] = 0.0
     QD[:, 5] = 0.0
-    evals = 4 * steps if s["integrator"] == "rk4" else steps
     return LeafResult(channels=phys.channels(Q, QD, phys.pack(params)), status=status,
                       t_fail=t_fail, reason=reason, stats={"steps": steps, "rhs_evals": evals},
-                      settings={**s, "dt": float(h)},
-                      extra={"loop_violation": np.array([viol])})
+                      settings={**s, "dt": h},
+                      extra={"loop_violation": np.array(viol)})

@@ -30,6 +30,7 @@ import numpy as np
 from compare.contract import LeafResult
 from compare.physics import press as phys
 
+from .. import loop_common as lc
 from .. import press_common as pc
 
 DEFAULT_SETTINGS = {"integrator": "rk4", "dt": 1e-4, "solref_factor": 4.0,
@@ -43,14 +44,7 @@ KNOBS = {"solref_factor": -4}
 
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
-    s = pc.fixed_step_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
-    s["solref_factor"] = float(s["solref_factor"])
-    if not s["solref_factor"] > 0:
-        raise ValueError("solref_factor must be > 0")
-    s["solimp"] = tuple(float(x) for x in s["solimp"])
-    if len(s["solimp"]) != 5:
-        raise ValueError("solimp must have 5 numbers")
-    return s
+    return lc.mujoco_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
 
 
 def _xml(p: dict, st: dict, s: dict, cycle: bool) -> str:

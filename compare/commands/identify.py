@@ -1,7 +1,8 @@
 """`xval identify`: a scene's unknown parameters (the bearing rotor's defect) fitted to a
 measured record by each solver's model, with intervals, identifiability and a verdict per
 parameter and solver pair; `--synthesise FILE` writes a record from one solver with stated
-noise. The study's four files: this module, compare/workflows/identify.py,
+noise. The study: this module, compare/workflows/identify.py (the fit; measured.py the
+records, detection.py the intervals' coverage and the detection limits),
 compare/results/identify.py, docs/commands/identify.md (its figures:
 compare/output/identify_plot.py)."""
 from __future__ import annotations
@@ -50,7 +51,7 @@ def identify(scene: str, data, unknowns=None, solvers=None, *, noise: dict | Non
     angle where the orbit is fitted once per revolution (its section) instead. Returns an
     `IdentifyResult` (saved in the folder `out` when given: `claim_out`'s rule)."""
     from ..workflows.identify import identify as run
-    from ..workflows.identify import read_record
+    from ..workflows.measured import read_record
     from .common import overrides
     if out is not None:
         claim_out(str(out), "identify", force)
@@ -70,7 +71,7 @@ def synthesise(scene: str, path, solver: str, *, noise: dict | None = None, seed
     """Write a synthetic measured record to `path` (.npz or CSV): `solver`'s run of `scene` at
     `params`, white normal noise σ per channel (`noise`, default the scene's) from `seed`."""
     from ..output.identify_plot import write_record
-    from ..workflows.identify import synthesise as synth
+    from ..workflows.measured import synthesise as synth
     from .common import overrides
     rec = synth(scene, solver, overrides(params, kw), noise, seed, channels)
     return write_record(path, rec)
@@ -82,7 +83,7 @@ def detection(scene: str, solvers=None, *, alpha: float = 0.01, beta: float = 0.
     """The smallest defect (the scene's `Fit.size`) told from none at false-alarm rate
     `alpha` and miss rate `beta`, per solver, speed and channel set, against the noise level
     (`xval identify SCENE --detection`); the solvers' limits judged pair by pair."""
-    from ..workflows.identify import detection as run
+    from ..workflows.detection import detection as run
     from .common import overrides
     if out is not None:
         claim_out(str(out), "detection", force)

@@ -13,14 +13,14 @@ residuals (refit once). Intervals: the Jacobian's (central differences of the so
 step SENS_STEP of each scale) covariance, 95 %; checked on the first solver by the profile of
 the cost at each interval's ends (Δχ² against z², CONFIRMED the accepted ratio). An unknown whose
 interval is wider than its scale (a quarter period when periodic) or lies in a direction the data
-do not see is reported undetermined, with no value. Nothing is written here.
+do not see is reported undetermined, with no value. Records are read, checked and synthesised
+in measured.py; the intervals' coverage and the detection limits in detection.py. Nothing is
+written here.
 """
 from __future__ import annotations
 
-import csv
 import math
 import time
-from pathlib import Path
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -30,11 +30,11 @@ from .. import solvers
 from ..analysis import estimates as est
 from ..analysis import poincare
 from ..analysis.metrics import Comparison
-from ..analysis.verdict import Verdict
 from ..errors import BadInput
 from ..results.identify import IdentifyResult
 from ..scenes import get_scene
 from ..scenes.params import RUN_PARAMS
+from .measured import check_record, fit_spec
 from .plan import names
 
 SENS_STEP = 1e-3       # central-difference step of the Jacobian, in each unknown's scale
@@ -44,72 +44,6 @@ TOL = 1e-8             # least_squares' xtol, ftol, gtol
 REFINE = 3             # scan minima refined by the first solver
 CONFIRMED = (0.5, 2.0)  # Δχ² at an interval's end over z²: the profile confirms it
 FAIL_RESIDUAL = 1e3    # each residual of a run that failed (the fit steps back from it)
-
-
-# ------------------------------------------------------------------ the record
-def read_record(path) -> dict:
-    """A record file: CSV with a header row, or .npz; columns by name. One line on what is
-    wrong with it (BadInput)."""
-    path = Path(path)
-    if not path.is_file():
-        raise BadInput(f"--data {path}: no such file")
-    if path.suffix == ".npz":
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                return {k: np.asarray(z[k], float).ravel() for k in z.files}
-        except (ValueError, OSError) as e:
-            raise BadInput(f"--data {path}: not a readable .npz ({str(e).splitlines()[0]})") \
-                from None
-    with open(path, newline="") as fh:
-        rows = [r for r in csv.reader(fh) if r and any(c.strip() for c in r)]
-    if len(rows) < 2:
-        raise BadInput(f"--data {path}: a CSV needs a header row and at least one data row")
-    head = [h.strip() for h in rows[0]]
-    cols = {h: [] for h in head}
-    for i, r in enumerate(rows[1:], start=2):
-        if len(r) != len(head):
-            raise BadInput(f"--data {path}: line {i} has {len(r)} fields, the header "
-                           f"{len(head)}")
-        for h, c in zip(head, r):
-            try:
-                cols[h].append(float(c))
-            except ValueError:
-                raise BadInput(f"--data {path}: line {i}, column {h}: {c.strip()!r} is not a "
-                               "number") from None
-    return {h: np.asarray(v, float) for h, v in cols.items()}
-
-
-def check_record(scene, rec: dict, where: str = "--data") -> list[str]:
-    """The record's channels (in the scene's order) after the checks every record must pass."""
-    if "t" not in rec:
-        raise BadInput(f"{where}: no time column 't' (columns: {', '.join(rec) or 'none'})")
-    known = list(scene.channels)
-    unknown = [k for k in rec if k != "t" and k not in known]
-    if unknown:
-        raise BadInput(f"{where}: unknown channel {unknown[0]!r} for scene {scene.name} "
-                       f"(channels: {', '.join(known)})")
-    chans = [c for c in known if c in rec]
-    if not chans:
-        raise BadInput(f"{where}: no channel of scene {scene.name} besides t")
-    t = rec["t"]
-    for k in ["t", *chans]:
-        if len(rec[k]) != len(t):
-            raise BadInput(f"{where}: column {k} has {len(rec[k])} values, t {len(t)}")
-        bad = np.flatnonzero(~np.isfinite(rec[k]))
-        if len(bad):
-            raise BadInput(f"{where}: column {k} is not finite at row {bad[0] + 1} "
-                           f"({rec[k][bad[0]]})")
-    if len(t) < 4:
-        raise BadInput(f"{where}: {len(t)} samples; at least 4")
-    step = np.diff(t)
-    if (step <= 0).any():
-        i = int(np.flatnonzero(step <= 0)[0])
-        raise BadInput(f"{where}: time is not increasing at row {i + 2} (t = {t[i + 1]:g} s "
-                       f"after {t[i]:g} s)")
-    if t[0] < 0:
-        raise BadInput(f"{where}: time starts at {t[0]:g} s; the record starts at t ≥ 0 "
-                       "(t = 0: the scene's initial state)")
-    return chans
 
 
 # ------------------------------------------------------------------ the model
@@ -384,13 +318,7 @@ def _profile(model, u, chi2, iv) -> list:
 
 
 # ------------------------------------------------------------------ the study
-def _spec(scene):
-    if scene.fit is None:
-        raise BadInput(f"scene {scene.name!r} declares nothing to identify")
-    return scene.fit
-
-
-def _unknowns(scene, spec, unknowns, fixed: dict):
+def chosen_unknowns(scene, spec, unknowns, fixed: dict):
     chosen = list(unknowns or spec.unknowns)
     for n in chosen:
         try:
@@ -454,13 +382,13 @@ def identify(scene_name: str, rec: dict, unknowns=None, solver_names=None,
     there instead of in time."""
     log = log or (lambda *a: None)
     scene = get_scene(scene_name)
-    spec = _spec(scene)
+    spec = fit_spec(scene)
     chans = check_record(scene, rec)
     fixed = dict(overrides or {})
-    unknowns, scale = _unknowns(scene, spec, unknowns, fixed)
+    unknowns, scale = chosen_unknowns(scene, spec, unknowns, fixed)
     chosen = solvers.pick(scene, names(solver_names) or None)
     sigma, estimated = _noise(spec, rec, chans, noise)
-    section = _section_spec(scene, spec, chans, poincare)
+    section = _sectionfit_spec(scene, spec, chans, poincare)
     base = scene.resolve(fixed)
     u0 = np.array([float(base[n]) for n in unknowns]) / np.array(scale)
     fits, first = [], None
@@ -495,7 +423,7 @@ def identify(scene_name: str, rec: dict, unknowns=None, solver_names=None,
     return IdentifyResult(data, record=rec, curves=curves)
 
 
-def _section_spec(scene, spec, chans, phase):
+def _sectionfit_spec(scene, spec, chans, phase):
     """(phase, angle, x, y) of `--poincare PHASE`, the record holding all three channels."""
     if phase is None:
         return None
@@ -570,168 +498,3 @@ def _compare(unknowns, spec, fits, scale) -> list[dict]:
                 rows.append({**c.as_dict(), "parameter": n, "difference": diff,
                              "bound": bound})
     return rows
-
-
-# ------------------------------------------------------------------ synthetic records
-def clean_record(scene_name: str, solver_name: str, params: dict | None = None,
-                 channels=None) -> dict:
-    """A solver's noise-free record of the scene at `params` (its own grid t_end/output_dt):
-    {"t", channel…} (default channels: those of the scene's `Fit.noise`)."""
-    scene = get_scene(scene_name)
-    spec = _spec(scene)
-    chans = list(channels or spec.noise)
-    for c in chans:
-        if c not in scene.channels:
-            raise BadInput(f"--channel {c}: not a channel of scene {scene.name}")
-    p = scene.resolve(params or {})
-    (s,) = solvers.pick(scene, [solver_name])
-    st = solvers.settings_for(s, scene)
-    tr = solvers.simulate(scene, s, p, st)
-    if tr.status != "ok":
-        raise BadInput(f"{solver_name}: the synthesising run {tr.status}: {tr.reason}")
-    return {"t": tr.t, **{c: tr.channels[c] for c in chans}}
-
-
-def add_noise(scene_name: str, clean: dict, noise: dict | None = None, seed: int = 0) -> dict:
-    """The record with white normal noise σ per channel (default the scene's `Fit.noise`),
-    drawn from numpy's Generator seeded with `seed`."""
-    spec = _spec(get_scene(scene_name))
-    sig = {**spec.noise, **(noise or {})}
-    rng = np.random.default_rng(seed)
-    out = {"t": clean["t"]}
-    for c, y in clean.items():
-        if c != "t":
-            out[c] = y + sig[c] * rng.standard_normal(len(y))
-    return out
-
-
-def synthesise(scene_name: str, solver_name: str, params: dict | None = None,
-               noise: dict | None = None, seed: int = 0, channels=None) -> dict:
-    """A synthetic measured record: `clean_record` plus `add_noise`."""
-    return add_noise(scene_name, clean_record(scene_name, solver_name, params, channels),
-                     noise, seed)
-
-
-# ------------------------------------------------------------------ coverage of the intervals
-def coverage(scene_name: str, pairs, records: int, params: dict | None = None,
-             noise: dict | None = None, seed: int = 0, unknowns=None, channels=None,
-             log=None) -> dict:
-    """How often the truth lies in the 95 % interval: for each (synthesising solver, fitting
-    solver) pair, `records` records (one clean run of the synthesiser, white noise drawn from
-    `seed`, `seed` + 1, …) fitted by the other solver from the truth (this measures the
-    intervals; the multi-start that finds the basin is checked apart), σ stated. Per pair and
-    unknown: hits/records (a fit that failed or left the unknown undetermined is a miss)."""
-    log = log or (lambda *a: None)
-    scene = get_scene(scene_name)
-    spec = _spec(scene)
-    truth = scene.resolve(params or {})
-    unknowns, scale = _unknowns(scene, spec, unknowns, {})
-    sig = {**spec.noise, **(noise or {})}
-    clean = {}
-    out = {"scene": scene.name, "records": records, "seed": seed, "noise": sig,
-           "truth": {n: float(truth[n]) for n in unknowns}, "pairs": []}
-    for syn, fitter in pairs:
-        if syn not in clean:
-            clean[syn] = clean_record(scene_name, syn, params, channels)
-        chans = [c for c in clean[syn] if c != "t"]
-        (s,) = solvers.pick(scene, [fitter])
-        hits = {n: 0 for n in unknowns}
-        t0 = time.perf_counter()
-        for k in range(records):
-            rec = add_noise(scene_name, clean[syn], noise, seed + k)
-            fixed = {q: v for q, v in (params or {}).items() if q not in unknowns}
-            model = Model(scene, s, fixed, unknowns, scale, rec, chans,
-                          {c: sig[c] for c in chans})
-            u0 = np.array([truth[n] for n in unknowns]) / np.array(scale)
-            f = fit_one(model, u0, spec, scan=False, profile=False, log=log)
-            for i, n in enumerate(unknowns):
-                if f["converged"] and f["identifiable"][i]:
-                    d = abs(est.wrap(f["values"][i] - truth[n], spec.periodic.get(n)))
-                    hits[n] += d <= f["half_width"][i]
-        row = {"synthesised_by": syn, "fitted_by": fitter, "hits": hits,
-               "rate": {n: hits[n] / records for n in unknowns},
-               "wall_s": time.perf_counter() - t0}
-        log(f"coverage {syn} → {fitter}: " + ", ".join(
-            f"{n} {row['rate'][n]:.0%}" for n in unknowns) + f" ({row['wall_s']:.3g} s)")
-        out["pairs"].append(row)
-    return out
-
-
-# ------------------------------------------------------------------ detection limits
-NOISE_FACTORS = (0.1, 0.3, 1.0, 3.0, 10.0)   # × the scene's Fit.noise
-PROBE = 1e-6        # the size the signature is measured at (× its scale's unit: linear there)
-DETECT_TOL = 1e-3   # relative: two solvers' limits agree within this plus their linearity
-
-
-def detection(scene_name: str, solver_names=None, params: dict | None = None,
-              alpha: float = 0.01, beta: float = 0.05, factors=NOISE_FACTORS,
-              log=None) -> dict:
-    """The smallest `Fit.size` told from none, per solver, speed and channel set, at noise
-    factors × the scene's σ: the defect's signature d(t) = y(size) − y(0) from runs at PROBE
-    and 2·PROBE (linear there: `linearity` is how far |d(2·PROBE)| is from 2|d(PROBE)|); a
-    matched filter on white noise sees size·|d/size|_σ against unit noise, so with the angle
-    searched over `Fit.starts` positions (Bonferroni) the limit is (z(1 − α/starts) +
-    z(1 − β)) / |d/size|_σ — false-alarm rate α, miss rate β. Limits scale with σ exactly;
-    solvers are compared at factor 1. Returns the map's dict (rows, comparisons)."""
-    from scipy.stats import norm
-    log = log or (lambda *a: None)
-    scene = get_scene(scene_name)
-    spec = _spec(scene)
-    if not (spec.size and spec.speed and spec.channel_sets):
-        raise BadInput(f"scene {scene.name} declares no detection limit")
-    for name, v in (("--alpha", alpha), ("--beta", beta)):
-        if not 0 < v < 0.5:
-            raise BadInput(f"{name} {v}: a rate in (0, 0.5)")
-    chosen = solvers.pick(scene, names(solver_names) or None)
-    starts = spec.starts if spec.periodic else 1
-    z = float(norm.isf(alpha / starts) + norm.isf(beta))
-    sig = spec.noise
-    rows = []
-    for s in chosen:
-        for w in spec.speeds:
-            ys = []
-            for h in (0.0, PROBE, 2 * PROBE):
-                p = scene.resolve({**(params or {}), spec.size: h, spec.speed: w})
-                tr = solvers.simulate(scene, s, p, solvers.settings_for(s, scene))
-                ys.append(tr)
-            bad = next((tr for tr in ys if tr.status != "ok"), None)
-            for label, chans in spec.channel_sets.items():
-                row = {"solver": s.name, "set": label, "speed": w}
-                if bad is not None:
-                    rows.append({**row, "status": bad.status, "reason": bad.reason})
-                    continue
-                d1 = np.concatenate([(ys[1].channels[c] - ys[0].channels[c]) / sig[c]
-                                     for c in chans])
-                d2 = np.concatenate([(ys[2].channels[c] - ys[0].channels[c]) / sig[c]
-                                     for c in chans])
-                g = float(np.linalg.norm(d1)) / PROBE
-                lin = abs(float(np.linalg.norm(d2)) / (2 * float(np.linalg.norm(d1))) - 1)
-                steady = float(np.mean(ys[0].channels[scene.key_channel][-len(ys[0].t) // 5:]))
-                rows.append({**row, "status": "ok", "steady_key": steady, "linearity": lin,
-                             "limit": [z / g * f if g > 0 else math.inf for f in factors]})
-            log(f"{scene.name}: {s.name} at {spec.speed} = {w:g} done")
-    comps = []
-    k1 = list(factors).index(1.0) if 1.0 in factors else 0
-    for label in spec.channel_sets:
-        for w in spec.speeds:
-            at = [r for r in rows if r["set"] == label and r["speed"] == w]
-            for i, a in enumerate(at):
-                for b in at[i + 1:]:
-                    ok = a["status"] == "ok" and b["status"] == "ok"
-                    la, lb = (a["limit"][k1], b["limit"][k1]) if ok else (math.nan, math.nan)
-                    tol = DETECT_TOL + (max(a["linearity"], b["linearity"]) if ok else 0.0)
-                    diff = abs(la - lb)
-                    v = (Verdict.INCOMPLETE if not ok else
-                         Verdict.AGREE if diff <= tol * max(la, lb) else Verdict.DISAGREE)
-                    c = Comparison(a["solver"], b["solver"], f"{label} @ {spec.speed}={w:g}",
-                                   diff, diff, diff / max(la, lb) if ok else math.nan,
-                                   max(la, lb) if ok else math.nan, tol, v,
-                                   f"|Δ limit| against {DETECT_TOL:g} + linearity, relative",
-                                   deviation=diff, error_estimate=None, allowance=math.nan)
-                    comps.append({**c.as_dict(), "set": label, "speed": w})
-    return {"scene": scene.name, "size": spec.size, "speed_param": spec.speed,
-            "speeds": list(spec.speeds), "channel_sets": {k: list(v) for k, v in
-                                                          spec.channel_sets.items()},
-            "noise": dict(sig), "noise_factors": list(factors), "alpha": alpha, "beta": beta,
-            "starts": starts, "z": z, "probe": PROBE, "key_channel": scene.key_channel,
-            "rows": rows, "comparisons": comps}

@@ -16,7 +16,9 @@ import pytest
 from compare.analysis import estimates as est
 from compare.analysis.verdict import Verdict
 from compare.cli import main
+from compare.workflows import detection as wd
 from compare.workflows import identify as wf
+from compare.workflows import measured as wm
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = "bearing-rotor"
@@ -28,7 +30,7 @@ NOISE = {"spin_rate": 0.01, "journal_a_x": 1e-6, "journal_a_y": 1e-6}   # the is
 
 @pytest.fixture(scope="module")
 def mujoco_record():
-    return wf.synthesise(SCENE, "mujoco", {**SHORT, **TRUTH}, NOISE, seed=3, channels=CHANNELS)
+    return wm.synthesise(SCENE, "mujoco", {**SHORT, **TRUTH}, NOISE, seed=3, channels=CHANNELS)
 
 
 def _within(result, solver, truth):
@@ -83,7 +85,7 @@ def test_solvers_agree_and_a_shifted_defect_angle_disagrees(mujoco_record, monke
 
 
 def test_a_record_without_a_defect_leaves_its_width_and_angle_undetermined():
-    rec = wf.synthesise(SCENE, "mujoco", {**SHORT, "defect_height": 0.0}, NOISE, seed=4,
+    rec = wm.synthesise(SCENE, "mujoco", {**SHORT, "defect_height": 0.0}, NOISE, seed=4,
                         channels=CHANNELS)
     r = wf.identify(SCENE, rec, solver_names=["quaternion"], noise=NOISE, profile=False)
     h = r.estimate("quaternion", "defect_height")
@@ -142,7 +144,7 @@ def test_noise_estimate_and_intervals_against_closed_forms():
 
 
 def test_coverage_of_a_few_records_fitted_by_another_solver():
-    c = wf.coverage(SCENE, [("mujoco", "quaternion")], 4, {**SHORT, **TRUTH}, NOISE, seed=11,
+    c = wd.coverage(SCENE, [("mujoco", "quaternion")], 4, {**SHORT, **TRUTH}, NOISE, seed=11,
                     channels=CHANNELS)
     (row,) = c["pairs"]
     # 4 records at 95 %: P(≥ 3 hits) = 0.986 per unknown; the seed is fixed
@@ -151,7 +153,7 @@ def test_coverage_of_a_few_records_fitted_by_another_solver():
 
 @pytest.mark.slow
 def test_coverage_over_50_records_is_at_least_90_percent():
-    c = wf.coverage(SCENE, [("mujoco", "quaternion"), ("exudyn", "quaternion"),
+    c = wd.coverage(SCENE, [("mujoco", "quaternion"), ("exudyn", "quaternion"),
                             ("quaternion", "mujoco")], 50, {"t_end": 1.0, **TRUTH}, NOISE,
                     seed=1000, channels=CHANNELS)
     for row in c["pairs"]:
@@ -181,7 +183,7 @@ def test_the_section_samples_a_known_orbit_once_per_revolution():
 
 def test_the_defect_recovered_from_the_poincare_section():
     noise = {**NOISE, "spin_angle": 1e-4}
-    rec = wf.synthesise(SCENE, "mujoco", {"t_end": 1.0, **TRUTH}, noise, seed=5,
+    rec = wm.synthesise(SCENE, "mujoco", {"t_end": 1.0, **TRUTH}, noise, seed=5,
                         channels=list(noise))
     r = wf.identify(SCENE, rec, solver_names=["quaternion"], noise=noise, profile=False,
                     poincare=0.0)
@@ -236,7 +238,7 @@ def test_detection_limits_hold_their_rates_and_a_1_percent_height_slip_disagrees
     from compare import solvers
     from compare.scenes import get_scene
     short = {"t_end": 0.5}
-    d = wf.detection(SCENE, ["quaternion", "mujoco"], short)
+    d = wd.detection(SCENE, ["quaternion", "mujoco"], short)
     assert [c["verdict"] for c in d["comparisons"]] == [Verdict.AGREE] * 9
     # the quaternion's limit at the default speed, orbit at a, σ as stated; tested on MuJoCo's
     # signature with independent noise: the matched filter at the true angle detects it at
@@ -261,7 +263,7 @@ def test_detection_limits_hold_their_rates_and_a_1_percent_height_slip_disagrees
     # seeded bug: the quaternion's bump 1 % too high — every limit 1 % low
     import custom_models.bearing.quaternion as q
     monkeypatch.setattr(q, "phys", _scaled_height(q, 1.01))
-    bad = wf.detection(SCENE, ["quaternion", "mujoco"], short)
+    bad = wd.detection(SCENE, ["quaternion", "mujoco"], short)
     assert all(c["verdict"] == Verdict.DISAGREE for c in bad["comparisons"]), bad["comparisons"]
 
 

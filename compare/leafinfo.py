@@ -27,7 +27,7 @@ RTOLS = tuple(10.0 ** -k for k in range(1, 14))     # the tolerance ladder, 1e-1
 START_RTOL = 1e-6
 # a map point's first, cheap run: a tolerance 1e5× looser than the accurate default (DOP853 at
 # 1e-6 takes ~1/4 the steps of 1e-11 on the rotor); a point next to a regime change is rerun at
-# the accurate setting (compare/workflows/maps.py)
+# the accurate setting (compare/workflows/map_trace.py: adaptive_grid)
 CHEAP_LOOSENING = 1e5
 MAX_DOUBLINGS = 7          # a fixed step goes at most 2^7 coarser or finer than the default
 

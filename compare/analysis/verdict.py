@@ -63,8 +63,9 @@ class Verdict(StrEnum):
 
 
 # Worst first, as the studies decide today: a map pair is disagree over incomplete over
-# unconfirmed over no data over agree (workflows/maps.py); a modes run counts any verdict but
-# agree and inconclusive as disagree, above inconclusive (workflows/modes.py: modes_status).
+# unconfirmed over no data over agree (workflows/map_verdicts.py); a modes run counts any
+# verdict but agree and inconclusive as disagree, above inconclusive (workflows/modes.py:
+# modes_status).
 _RANK = {v: r for r, v in enumerate(reversed((
     Verdict.DISAGREE, Verdict.INCOMPLETE, Verdict.UNCONFIRMED, Verdict.SKIPPED,
     Verdict.INCONCLUSIVE, Verdict.NO_DATA, Verdict.AGREE)))}

@@ -11,7 +11,7 @@ import pytest
 from compare import solvers
 from compare.physics.rotor import constants
 from compare.scenes import get_scene
-from compare.workflows import maps
+from compare.workflows import map_run, maps
 from compare.workflows.campaign import run_campaign
 from tests.conftest import xval
 
@@ -260,7 +260,7 @@ def _quaternion_and_mujoco(monkeypatch, mujoco_points=None):
         def chunk(scene, solver, base, points, settings, what):
             return orig(scene, solver, base, [mujoco_points(p) for p in points]
                         if solver == "mujoco" else points, settings, what)
-        monkeypatch.setattr(maps, "evaluate_chunk", chunk)
+        monkeypatch.setattr(map_run, "evaluate_chunk", chunk)   # where Runner calls it
     plan = maps.plan_map("rotor-spinup", "torque=2.5:3.5", overrides=BASE,
                          solver_names=["quaternion", "mujoco"], resolution=0.05, coarse=(3, 1))
     res = maps.run_map(plan)

@@ -61,9 +61,10 @@ REGISTRY = {s.name: s for s in (
            "(cf. seed 001); the bearing rotor in the paper's second-order fixed-frame form; numba",
            "numba", compiled=True),
     Solver("closed-form", "analytic frequencies (whirl: I_t w² ∓ I_p Ω w − k_eff = 0)", "numpy"),
-    Solver("lagrange-partial", "the paper's method (seed 003): Lagrange equations with velocity "
+    Solver("lagrange-partial", "the press paper's method (Lagrange equations with velocity "
            "analogues from 'partial systems' by central differences; linear-acceleration "
-           "(Wilson) or RK integration", "numba", compiled=True),
+           "(Wilson) or RK integration), and the same generalised to the benchmark loops",
+           "numba", compiled=True),
     Solver("lagrange-exact", "the same Lagrange equations with analytic derivatives", "numba",
            compiled=True),
     Solver("thread-spool", "the paper's spring–mass thread (seed 004) in the rotating frame: "

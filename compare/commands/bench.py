@@ -29,17 +29,29 @@ from .common import positive_int as positive_int_arg
 def bench(scene: str, solvers=None, *, repeats: int = 3, vary=None, out=None,
           max_output_gib=None, max_steps=None, params: dict | None = None,
           log: Callable | None = None, points: int | None = None, force: bool = False,
-          **kw) -> BenchResult:
+          identify: bool = False, **kw) -> BenchResult:
     """Work-precision sweep (`xval bench`): each solver along its accuracy knob, error of the
     key channel against a tight reference, median wall time of `repeats` runs. `vary`: trade a
     model parameter instead, as `"stiffness=1e5,1e6"` or `{"stiffness": [1e5, 1e6]}`.
     `points=N`: throughput instead — each solver's points per second over N points of the
-    scene's first default map. `out`: the bench's folder (default: a temporary one that goes
-    with the result); an existing one must be empty or hold an earlier bench, unless `force`."""
+    scene's first default map. `identify=True`: the identification's speed instead — xval's
+    fit of a synthetic record against a plain least_squares loop over the same solver (a scene
+    with a Fit). `out`: the bench's folder (default: a temporary one that goes with the
+    result); an existing one must be empty or hold an earlier bench, unless `force`."""
     from ..workflows.bench import run_bench, run_throughput
     positive_int("--repeats", repeats)
+    if identify and (points is not None or vary is not None):
+        raise BadInput(f"--identify: not with {'--points' if points is not None else '--vary'}"
+                       " (one bench mode at a time)")
     if out is not None:
         claim_out(str(out), "bench", force)
+    if identify:                        # the identification's speed (issue 50, item 5)
+        from ..workflows.bench_identify import run_identify_bench
+        out, temporary = out_or_temporary(out)
+        with removed_on_error(temporary):
+            obj = run_identify_bench(scene, names(solvers), overrides(params, kw), out,
+                                     repeats, log=log or quiet, make_out=make_out)
+        return BenchResult(obj, Path(obj["report"]).parent, temporary)
     if points is not None:              # throughput: points per second over the default map
         positive_int("--points", points)
         out, temporary = out_or_temporary(out)
@@ -68,11 +80,13 @@ def main(args) -> int:
     from ..workflows.work_precision import new_bench_dir
     # without --out a new folder under logs/bench/ (the default place since the first release)
     out = args.out or new_bench_dir("logs", get_scene(args.scene).name
-                                    + ("-points" if args.points else ""))
+                                    + ("-points" if args.points else "")
+                                    + ("-identify" if args.identify else ""))
     with stdout_to_stderr():
         r = bench(args.scene, args.solver, repeats=args.repeats, vary=args.vary, out=out,
                   max_output_gib=args.max_output_gib, max_steps=args.max_steps,
-                  params=parse_sets(args.set), log=log, points=args.points, force=args.force)
+                  params=parse_sets(args.set), log=log, points=args.points, force=args.force,
+                  identify=args.identify)
     answer(args, r)
     return 0
 
@@ -91,6 +105,10 @@ COMMAND = Command(
           arg("--points", type=positive_int_arg("--points"), metavar="N",
               help="throughput instead: each solver's points per second over N points of the "
                    "scene's default map (the map's batch path)"),
+          arg("--identify", action="store_true",
+              help="the identification's speed instead (a scene with a Fit): a record "
+                   "synthesised from the first solver at the --set parameters, xval's fit on "
+                   "each solver against a plain scipy least_squares loop over the first"),
           arg("--vary", metavar="NAME=V1,V2,...",
               help="trade a model parameter instead of the step: each solver's default "
                    "settings at each value, errors against the reference at the --set value "

@@ -35,6 +35,10 @@ def _draw(result, bode: Path, polar: Path):
         ax.grid(alpha=0.3)
     ax_a.set_ylabel("|a|")
     ax_a.set_yscale("log")
+    rpm = ax_a.secondary_xaxis("top", functions=(lambda w: w * 30 / np.pi,
+                                                 lambda r: r * np.pi / 30))
+    rpm.set_xlabel("rotation speed [rpm]", fontsize=8)
+    rpm.tick_params(labelsize=8)
     from ..scenes import get_scene
     from .report import params_title
     given = params_title(get_scene(d["scene"]), d.get("params"))[2:-1]   # e, c_ext among them

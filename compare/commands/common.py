@@ -185,6 +185,14 @@ def removed_on_error(temporary):
         raise
 
 
+def result_folder(args):
+    """A run's, modes' or response's folder: `--out DIR`, else a new one under logs/runs/ (the
+    scene name checked first: an unknown scene is one line before anything is made)."""
+    from ..scenes import get_scene
+    from ..workflows.runner import new_run_dir
+    return args.out or new_run_dir("logs", get_scene(args.scene).name)
+
+
 def out_or_temporary(out):
     """(folder, temporary folder or None): `out` checked, or a fresh temporary folder."""
     if out is None:

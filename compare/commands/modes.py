@@ -16,6 +16,7 @@ from .common import (
     overrides,
     parse_sets,
     quiet,
+    result_folder,
     stdout_to_stderr,
 )
 
@@ -40,9 +41,7 @@ def modes(scene: str, solvers=None, *, out=None, params: dict | None = None,
 
 def main(args) -> int:
     from ..results.modes import threshold_lines
-    from ..scenes import get_scene
-    from ..workflows.runner import new_run_dir
-    out = args.out or new_run_dir("logs", get_scene(args.scene).name)   # default: logs/runs/…
+    out = result_folder(args)
     with stdout_to_stderr():
         r = modes(args.scene, args.solver, out=out, params=parse_sets(args.set), log=log,
                   campbell_frame=args.campbell_frame, force=args.force)

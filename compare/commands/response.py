@@ -20,6 +20,7 @@ from .common import (
     overrides,
     parse_sets,
     quiet,
+    result_folder,
     stdout_to_stderr,
 )
 from .common import positive_int as positive_int_arg
@@ -44,9 +45,7 @@ def response(scene: str, solvers=None, *, speeds: int = 24, out=None,
 
 
 def main(args) -> int:
-    from ..scenes import get_scene
-    from ..workflows.runner import new_run_dir
-    out = args.out or new_run_dir("logs", get_scene(args.scene).name)   # default: logs/runs/…
+    out = result_folder(args)
     with stdout_to_stderr():
         r = response(args.scene, args.solver, speeds=args.speeds, out=out,
                      params=parse_sets(args.set), log=log, force=args.force)

@@ -22,6 +22,7 @@ from .common import (
     overrides,
     parse_sets,
     quiet,
+    result_folder,
     stdout_to_stderr,
 )
 from .common import (
@@ -83,10 +84,7 @@ def run(scene: str, solvers=None, settings: dict | None = None, *, dt=None, rtol
 
 
 def main(args) -> int:
-    from ..scenes import get_scene
-    from ..workflows.runner import new_run_dir
-    # without --out a new folder under logs/runs/ (the default place since the first release)
-    out = args.out or new_run_dir("logs", get_scene(args.scene).name)
+    out = result_folder(args)
     with stdout_to_stderr():
         r = run(args.scene, args.solver, dt=args.dt, rtol=args.rtol,
                 integrator=args.integrator, out=out, record=not args.no_record,

@@ -7,6 +7,7 @@ adapter in `compare/solvers.py` validates every result a leaf returns.
 """
 from __future__ import annotations
 
+import functools
 import importlib
 import sys
 from dataclasses import dataclass, field
@@ -32,7 +33,10 @@ def merge_settings(settings: dict | None, defaults: dict, integrators: tuple,
                    extra_keys: tuple = ()) -> dict:
     """The caller's settings over a leaf's defaults, checked the same way for every leaf:
     unknown keys and integrators raise ValueError with one line; integrator names and key
-    spellings are normalised. `extra_keys` are accepted without a default (e.g. presets)."""
+    spellings are normalised. `extra_keys` are accepted without a default (e.g. presets).
+    Settings this merge returned for the same `defaults` come back as they are."""
+    if isinstance(settings, Checked) and settings.by is defaults:
+        return settings
     s = dict(defaults)
     for k, v in (settings or {}).items():
         k = KEY_ALIASES.get(k, k)
@@ -49,7 +53,60 @@ def merge_settings(settings: dict | None, defaults: dict, integrators: tuple,
             raise ValueError(f"integrator {s['integrator']!r} is not offered "
                              f"(choose: {', '.join(allowed)})")
         s["integrator"] = name
-    return s
+    return Checked(s, by=defaults)
+
+
+class Checked(dict):
+    """Settings a check has passed, marked with the check (`by`) and the output span it
+    checked them for: handed to the same check again they are not checked again, so a run's
+    settings are checked once (`compare.solvers.settings_for`), not again in every `simulate`.
+    Any change in place drops the mark; a copy (`dict(s)`, `{**s}`) is a plain dict."""
+
+    def __init__(self, *args, by=None, span=None, **kw):
+        super().__init__(*args, **kw)
+        self.by, self.span = by, span
+
+    def _changed(self, name, *args):
+        self.by = None
+        return getattr(super(), name)(*args)
+
+    def __setitem__(self, k, v):
+        self._changed("__setitem__", k, v)
+
+    def __delitem__(self, k):
+        self._changed("__delitem__", k)
+
+    def update(self, *args, **kw):
+        self.by = None
+        super().update(*args, **kw)
+
+    def pop(self, *args):
+        return self._changed("pop", *args)
+
+    def setdefault(self, *args):
+        return self._changed("setdefault", *args)
+
+    def clear(self):
+        self._changed("clear")
+
+
+def _span(t_out):
+    t = None if t_out is None else np.asarray(t_out, float)
+    return None if t is None or t.size < 2 else (float(t[0]), float(t[-1]))
+
+
+def check_once(check):
+    """A leaf's `check_settings(settings, t_out=None)` that returns settings it already passed
+    (for the same output span, or any span when none is given now) as they are."""
+    @functools.wraps(check)
+    def once(settings=None, *args, **kw):
+        t_out = args[0] if args else kw.get("t_out")
+        span = _span(t_out)
+        if isinstance(settings, Checked) and settings.by is once \
+                and (span is None or span == settings.span):
+            return settings
+        return Checked(check(settings, *args, **kw), by=once, span=span)
+    return once
 
 
 def require_positive(settings: dict, keys: tuple, auto_ok: bool = False) -> None:

@@ -134,14 +134,14 @@ def settings_for(solver: Solver, scene_name: Scene | str, dt: float | None = Non
                  extra: dict | None = None, t_out: np.ndarray | None = None) -> dict:
     """The settings one solver runs a scene with — its leaf's defaults, its preset, the knobs —
     checked by the leaf (`check_settings(settings, t_out)` where it has one, else the shared
-    merge) before anything runs: bad settings raise BadInput naming the solver."""
+    merge) before anything runs, and returned as checked (the leaf does not check them again):
+    bad settings raise BadInput naming the solver."""
     info = solver.info(scene_name)
     try:
-        s = info.resolve(dt, rtol, integrator, {**solver.preset, **(extra or {})})
-        info.check(s, t_out)
+        return info.check(info.resolve(dt, rtol, integrator, {**solver.preset, **(extra or {})}),
+                          t_out)
     except ValueError as e:
         raise BadInput(f"{solver.name}: {str(e).splitlines()[0]}") from None
-    return s
 
 
 def check_settings(leaf: ModuleType, settings: dict, t_out: np.ndarray | None) -> dict:

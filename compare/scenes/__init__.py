@@ -8,11 +8,12 @@ A plug-in's entry point names a `Scene`, a list of scenes, or a module (or objec
 and `mujoco` serve a plug-in scene through its `leaves`. One way to write a scene: the same
 `Scene` and `LeafResult` as the built-in ones. A plug-in that fails to load is reported in one
 line on stderr and left out; the built-in scenes stay."""
+import importlib
 import importlib.metadata
 import sys
+from collections.abc import MutableMapping
 
 from ..errors import BadInput
-from . import bearing, mstmm, press, rotor, sail
 from .base import (  # noqa: F401  (the scene types, for plug-ins)
     Calibration,
     Campbell,
@@ -26,19 +27,65 @@ from .base import (  # noqa: F401  (the scene types, for plug-ins)
     Threshold,
     TimeScene,
 )
-from .benchmarks_andrews import ANDREWS
-from .benchmarks_bicycle import BICYCLE
-from .benchmarks_bricard import BRICARD
 
 GROUP = "xval.scenes"
 
-SCENES = {s.name: s for s in (rotor.SPINUP, rotor.WHIRL, bearing.BEARING_ROTOR, press.PRESS,
-                               press.PRESS_CYCLE, sail.SAIL, mstmm.ROTATING_BEAM,
-                               mstmm.SPINNING_SHAFT, mstmm.HELICOPTER_CLAMPED,
-                               mstmm.HELICOPTER_HOVER)}
-SCENES[BICYCLE.name] = BICYCLE
-SCENES[ANDREWS.name] = ANDREWS
-SCENES[BRICARD.name] = BRICARD
+# the built-in scenes, in `xval list`'s order: name -> (module of compare.scenes, attribute).
+# A scene's module (and its physics) is imported when the scene is first asked for, so
+# `xval run SCENE` loads one scene family, not all of them.
+BUILT_IN = {
+    "rotor-spinup": ("rotor", "SPINUP"),
+    "rotor-whirl": ("rotor", "WHIRL"),
+    "bearing-rotor": ("bearing", "BEARING_ROTOR"),
+    "press": ("press", "PRESS"),
+    "press-cycle": ("press", "PRESS_CYCLE"),
+    "sail-deploy": ("sail", "SAIL"),
+    "rotating-beam": ("mstmm", "ROTATING_BEAM"),
+    "spinning-shaft": ("mstmm", "SPINNING_SHAFT"),
+    "helicopter-clamped": ("mstmm", "HELICOPTER_CLAMPED"),
+    "helicopter-hover": ("mstmm", "HELICOPTER_HOVER"),
+    "bicycle": ("benchmarks_bicycle", "BICYCLE"),
+    "andrews-squeezer": ("benchmarks_andrews", "ANDREWS"),
+    "bricard": ("benchmarks_bricard", "BRICARD"),
+}
+
+
+class Registry(MutableMapping):
+    """Scenes by name: the built-in ones imported on first use, plug-ins' as registered."""
+
+    def __init__(self, built_in):
+        self._built_in, self._scenes = dict(built_in), {}
+
+    def __getitem__(self, name):
+        if name not in self._scenes and name in self._built_in:
+            module, attr = self._built_in[name]
+            sc = getattr(importlib.import_module(f"{__name__}.{module}"), attr)
+            if sc.name != name:
+                raise RuntimeError(f"BUILT_IN names {name!r} for the scene {sc.name!r}")
+            self._scenes[name] = sc
+        return self._scenes[name]
+
+    def __setitem__(self, name, scene):
+        self._scenes[name] = scene
+
+    def __delitem__(self, name):
+        if name not in self:
+            raise KeyError(name)
+        self._built_in.pop(name, None)
+        self._scenes.pop(name, None)
+
+    def __contains__(self, name):
+        return name in self._built_in or name in self._scenes
+
+    def __iter__(self):
+        yield from self._built_in
+        yield from (n for n in list(self._scenes) if n not in self._built_in)
+
+    def __len__(self):
+        return len(self._built_in) + sum(n not in self._built_in for n in self._scenes)
+
+
+SCENES = Registry(BUILT_IN)
 ORIGIN = {}          # plug-in scene name -> (distribution or entry point, module)
 PLUGIN_SOLVERS = []  # solvers plug-ins add, as dicts (compare.solvers puts them in REGISTRY)
 

@@ -8,7 +8,7 @@ accelerations), closure_tol (the loop closure's Newton, rad), max_iter.
 """
 import numpy as np
 
-from compare.contract import LeafResult
+from compare.contract import LeafResult, check_once
 from compare.physics import andrews as phys
 
 from .. import loops
@@ -27,6 +27,7 @@ REASONS = {**FAIL_REASONS, **LA_REASONS,
                                "assembly near the last one (dependent-angle Jacobian singular)"}
 
 
+@check_once
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
     return loops.partial_settings(settings, DEFAULT_SETTINGS, INTEGRATORS, "dbeta")

@@ -29,7 +29,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from compare.contract import LeafResult, merge_settings
+from compare.contract import LeafResult, check_once, merge_settings
 from compare.physics import bearing_rotor as phys
 from compare.physics.rotation import (
     cross_t,
@@ -177,6 +177,7 @@ def guard(t, y, p):
     return 0
 
 
+@check_once
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError, one line)."""
     s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)

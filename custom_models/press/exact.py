@@ -8,7 +8,7 @@ only)), dt or rtol/atol, newton_tol, max_iter, singular_tol, energy_jump, event_
 """
 import numpy as np
 
-from compare.contract import LeafResult
+from compare.contract import LeafResult, check_once
 
 from . import lagrange as press
 
@@ -18,6 +18,7 @@ ADAPTIVE = press.ADAPTIVE          # error-controlled (press only, not press-cyc
 CHANNELS = press.CHANNELS
 
 
+@check_once
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
     return press.settings_of(DEFAULT_SETTINGS, settings)

@@ -8,7 +8,7 @@ Settings: as `press_exact`, plus dphi_deg, dpsi_deg (paper: 0.1°).
 """
 import numpy as np
 
-from compare.contract import LeafResult
+from compare.contract import LeafResult, check_once
 
 from . import lagrange as press
 
@@ -21,6 +21,7 @@ KNOBS = {"dphi_deg": 2, "dpsi_deg": 2}
 CHANNELS = press.CHANNELS
 
 
+@check_once
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
     return press.settings_of(DEFAULT_SETTINGS, settings)

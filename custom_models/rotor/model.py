@@ -14,7 +14,7 @@ fused scalar code (`rotation.*_t` helpers): no allocation per evaluation.
 import numba as nb
 import numpy as np
 
-from compare.contract import LeafResult, merge_settings
+from compare.contract import LeafResult, check_once, merge_settings
 from compare.physics import rotor as physics
 from compare.physics.rotation import matrices_to_quats, rotation_tensor
 
@@ -79,6 +79,7 @@ def tilt_guard_z(n_z):
     return FAIL_TILT if np.arccos(min(1.0, max(-1.0, n_z))) > TILT_LIMIT else 0
 
 
+@check_once
 def check_settings(settings, t_out=None):
     """The settings merged and checked before anything runs."""
     s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)

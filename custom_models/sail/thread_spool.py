@@ -79,7 +79,7 @@ import time
 
 import numpy as np
 
-from compare.contract import LeafResult, merge_settings, require_positive
+from compare.contract import LeafResult, check_once, merge_settings, require_positive
 from compare.physics import sail as phys
 
 from .driver import FAIL_NONFINITE, FAIL_STRETCH, REASONS, run_imr, run_rk4
@@ -127,6 +127,7 @@ def _initial_state(P: np.ndarray, n: int, inertial: bool) -> np.ndarray:
     return y0
 
 
+@check_once
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
     s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)

@@ -15,7 +15,7 @@ import exudyn as exu
 import numpy as np
 from exudyn import itemInterface as ii
 
-from compare.contract import LeafResult
+from compare.contract import LeafResult, check_once
 from compare.physics import andrews as phys
 
 from .. import loop_common as lc
@@ -26,6 +26,7 @@ INTEGRATORS = ("generalized_alpha", "trapezoidal")
 BODIES = ("K1", "K2", "K3", "K4", "K5", "K6", "K7")
 
 
+@check_once
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
     return lc.exudyn_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)

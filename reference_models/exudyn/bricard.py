@@ -21,7 +21,7 @@ import exudyn as exu
 import numpy as np
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
-from compare.contract import LeafResult
+from compare.contract import LeafResult, check_once
 from compare.physics import bricard as phys
 
 from .. import loop_common as lc
@@ -34,6 +34,7 @@ INTEGRATORS = ("generalized_alpha", "trapezoidal")
 CLOSING_AXES = [1, 1, 1, 0, 0, 1]
 
 
+@check_once
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
     return lc.exudyn_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)

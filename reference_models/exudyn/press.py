@@ -28,7 +28,7 @@ import exudyn as exu
 import numpy as np
 from exudyn import itemInterface as ii
 
-from compare.contract import LeafResult
+from compare.contract import LeafResult, check_once
 from compare.physics import press as phys
 
 from .. import press_common as pc
@@ -43,6 +43,7 @@ class _Diverged(Exception):
         self.t, self.reason = t, reason
 
 
+@check_once
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
     s = pc.fixed_step_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)

@@ -67,7 +67,7 @@ from exudyn.itemInterface import (
     SpringDamper,
 )
 
-from compare.contract import LeafResult, merge_settings, require_positive
+from compare.contract import LeafResult, check_once, merge_settings, require_positive
 from compare.physics import sail as phys
 
 from ..sail_common import check_grid, stable_dt_explicit
@@ -287,6 +287,7 @@ def _run(model: _Sail, p: dict, t_out: np.ndarray, h: float) -> tuple:
     return "ok", None, None, steps
 
 
+@check_once
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
     s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from compare.contract import LeafResult
+from compare.contract import LeafResult, check_once
 from compare.physics import andrews as phys
 
 from .. import loop_common as lc
@@ -36,6 +36,7 @@ TREE = (("K1", None, "O"), ("K2", "K1", "P"), ("K3", None, "B"), ("K5", None, "A
 QPOS_OF = (0, 1, 2, 4, 3, 6, 5)
 
 
+@check_once
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
     return lc.mujoco_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)

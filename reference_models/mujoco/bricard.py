@@ -15,7 +15,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from compare.contract import LeafResult
+from compare.contract import LeafResult, check_once
 from compare.physics import bricard as phys
 
 from .. import loop_common as lc
@@ -33,6 +33,7 @@ KNOBS = {"solref_factor": 2}
 AXIAL = 1e-10
 
 
+@check_once
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
     return lc.mujoco_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)

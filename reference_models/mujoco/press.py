@@ -27,7 +27,7 @@ import math
 import mujoco
 import numpy as np
 
-from compare.contract import LeafResult
+from compare.contract import LeafResult, check_once
 from compare.physics import press as phys
 
 from .. import loop_common as lc
@@ -42,6 +42,7 @@ INTEGRATORS = ("rk4", "euler", "implicitfast", "implicit")
 # varies the ratio on its own
 KNOBS = {"solref_factor": -4}
 
+@check_once
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
     return lc.mujoco_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)

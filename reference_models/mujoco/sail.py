@@ -47,7 +47,7 @@ import time as _time
 import mujoco
 import numpy as np
 
-from compare.contract import LeafResult, merge_settings, require_positive
+from compare.contract import LeafResult, check_once, merge_settings, require_positive
 from compare.physics import sail as phys
 
 from ..sail_common import check_grid, stable_dt_explicit
@@ -233,6 +233,7 @@ class _Sail:
         o["W"][io] = 2.0 * self.work["W"]                   # two blades
 
 
+@check_once
 def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
     """The settings merged and checked before anything runs (ValueError with one line)."""
     s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)

@@ -3,7 +3,7 @@ import math
 
 import exudyn as exu
 
-from compare.contract import merge_settings
+from compare.contract import check_once, merge_settings
 
 SOLVERS = {
     "rk4": exu.DynamicSolverType.RK44,
@@ -26,6 +26,7 @@ DEFAULT_SETTINGS = {"integrator": "rk67", "dt": 2e-3, "rtol": 1e-10, "spectral_r
 CHEAP_DT = {"rk67": 1e-2}
 
 
+@check_once
 def check_settings(settings, t_out=None):
     """Settings merged and checked before anything runs."""
     s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)

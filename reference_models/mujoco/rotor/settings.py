@@ -3,7 +3,7 @@ import math
 
 import mujoco
 
-from compare.contract import merge_settings
+from compare.contract import check_once, merge_settings
 
 DEFAULT_SETTINGS = {
     "integrator": "rk4",
@@ -31,6 +31,7 @@ INTEGRATOR_ENUM = {
 RHS_PER_STEP = {"rk4": 4, "euler": 1, "implicitfast": 1, "implicit": 1}
 
 
+@check_once
 def check_settings(settings, t_out=None):
     """Settings merged and checked before anything runs."""
     s = merge_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)

@@ -20,9 +20,8 @@ from .. import solvers
 from ..analysis import metrics
 from ..errors import BadInput
 from ..leafinfo import ORDERS, Adaptive, Fixed, snap  # noqa: F401  (ORDERS: the tests' table)
-from ..output.report import fmt_value
+from ..output.bench_report import bench_dir, write_throughput, write_time_bench
 from ..output.run_folder import write_trajectory
-from ..output.study import write_study
 from ..results import BenchResult
 from ..scenes import get_scene
 from . import budget
@@ -30,14 +29,11 @@ from .bench_modes import run_bench_modes
 from .plan import Limits, plan
 from .work_precision import (
     FLOOR_ERR,
-    bench_dir,
     convergence_orders,
     order_lines,
-    plot,
     repeat_timed,
     summarise,
     walk,
-    write_outputs,
 )
 
 
@@ -123,22 +119,8 @@ def run_throughput(scene_name, solver_names, overrides, out, n_points, log=print
     lines = [f"{r['solver']}: {r['points']} points in {r['wall_s']:.3g} s — "
              f"{r['points_per_second']:.1f} points/s ({r['points_per_core_second']:.1f} per "
              f"core-second, {obj['workers']} workers{more(r)})" for r in obj["rows"]]
-    out_dir = bench_dir(out)
-    md = [f"# Throughput: {scene_name}", "", f"{obj['rows'][0]['points'] if obj['rows'] else 0}"
-          f" points over the default map `{obj['map']}` ({obj['x']['name']}"
-          + (f" × {obj['y']['name']}" if obj["y"] else "") + f"), set {obj['set']}, after a "
-          "warm-up batch: each solver at its accurate default settings everywhere, and "
-          "accuracy-adaptive as a map runs its grid (a cheap tolerance first, the accurate one "
-          "for every point next to a regime change); `labels differ`: points whose adaptive "
-          "regime is not the all-accurate one (0: the same boundary).", "",
-          "| solver | points | points / s (adaptive) | points / core-s | points / s (accurate) "
-          "| rerun accurate | labels differ |", "|---|---|---|---|---|---|---|"]
-    md += [f"| {r['solver']} | {r['points']} | {r['points_per_second']:.1f} | "
-           f"{r['points_per_core_second']:.1f} | {r['accurate_points_per_second']:.1f} | "
-           + (f"{r['rerun_fraction']:.1%} | {r['labels_differ']} |" if "rerun_fraction" in r
-              else "— | — |") for r in obj["rows"]]
     obj["summary_lines"], obj["result"] = lines, BenchResult.TYPE
-    return write_study(out_dir, md, obj, "bench.json", report_in_json=False)
+    return write_throughput(bench_dir(out), obj, scene_name)
 
 
 def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, vary=None,
@@ -226,32 +208,13 @@ def _bench_time(sc, solver_names, overrides, out, repeats, log, vary, max_output
     orders = convergence_orders(rows, 100 * max(FLOOR_ERR, ref_check or 0.0), _fixed_dt,
                                 lambda r: infos[r["solver"]].order(r["method"]))
     lines += order_lines(orders, "dt", " s")
-    plot(out_dir / "work_precision.png", rows, sc.name, f"relative error of final {key}",
-         summary)
     obj = {"scene": sc.name, "params": params, "key_channel": key,
            "vary": vary and {"name": vary[0], "values": vary[1]},
            "reference": {"solvers": [s.name for s in refs], "value": ref,
                          "cross_check_rel": ref_check},
            "repeats": repeats, "rows": rows, "summary": summary, "orders": orders,
-           "summary_lines": lines}
-    md = [f"# Work-precision: {sc.name}", "",
-          f"Reference: {refs[0].name} ({_settings_text(ref_runs[0].settings)}), "
-          f"final {key} = {ref:.15g}"
-          + (f"; {refs[1].name} agrees to {ref_check:.1e} relative" if ref_check is not None
-             else ""), "", *[f"- {x}" for x in lines], "",
-          "| solver | method | setting | rel. error | energy residual [J] | median wall [s] | "
-          "compile [s] | steps | RHS evals | ns / RHS |", "|---" * 10 + "|"]
-    for r in rows:
-        knob = r["settings"].get("rtol") if "rtol" in r["settings"] and r["method"] in (
-            "dop853", "dopri5", "rk23", "ode23") else r["settings"].get("dt")
-        err, er = r["rel_error"], r["energy_residual"]
-        md.append(f"| {r['solver']} | {r['method']} | {fmt_value(knob)} | "
-                  f"{'—' if err is None else format(err, '.2e')} | "
-                  f"{'—' if er is None else format(er, '.2e')} | {r['wall_s']:.4g} | "
-                  f"{fmt_value(r['compile_s'], 3) if r['compile_s'] else '—'} | {r['steps']} | "
-                  f"{r['rhs_evals'] or '—'} | "
-                  f"{'—' if r['ns_per_rhs'] is None else format(r['ns_per_rhs'], '.0f')} |")
-    return write_outputs(out_dir, obj, md)
+           "summary_lines": lines, "result": BenchResult.TYPE}
+    return write_time_bench(out_dir, obj, ref_runs[0].settings)
 
 
 
@@ -293,14 +256,3 @@ def _fixed_dt(row):
     """A fixed-step row's step (None for an error-controlled one)."""
     dt = row["settings"].get("dt")
     return dt if isinstance(dt, (int, float)) and "rtol" not in row["settings"] else None
-
-
-
-
-
-
-
-
-def _settings_text(settings):
-    return ", ".join(f"{k}={fmt_value(v)}" for k, v in settings.items() if v is not None)
-

@@ -22,13 +22,13 @@ from .. import solvers
 from ..analysis import estimates as est
 from ..errors import BadInput
 from ..output.bench_identify import write_identify_bench
+from ..output.bench_report import bench_dir
 from ..results import BenchResult
 from ..scenes import get_scene
 from .identify import Model, chosen_unknowns
 from .identify import identify as run_identify
 from .measured import fit_spec, synthesise
 from .plan import names
-from .work_precision import bench_dir
 
 SEED = 0        # the synthetic record's noise seed
 

@@ -25,18 +25,18 @@ import numpy as np
 
 from .. import solvers
 from ..analysis import metrics
+from ..output.bench_report import bench_dir, write_modes_bench
+from ..output.bench_report import knob_text as _knob_text
+from ..results import BenchResult
 from ..scenes import Scene
 from .plan import plan
 from .work_precision import (
     FLOOR_ERR,
-    bench_dir,
     convergence_orders,
     order_lines,
-    plot,
     repeat_timed,
     summarise,
     walk,
-    write_outputs,
 )
 
 TOLERANCES = {"rtol": tuple(10.0 ** -k for k in range(1, 14)),      # root refinement
@@ -90,15 +90,6 @@ def deviation(ref, m) -> tuple[float | None, str]:
     rel = [abs(fm[j] - fr[i]) / abs(fr[i]) for i, j in pairs]
     k = int(np.argmax(rel))
     return float(rel[k]), ref.labels[pairs[k][0]] or f"mode {pairs[k][0] + 1}"
-
-
-def _knob_text(knob: dict) -> str:
-    def text(v):
-        if isinstance(v, dict):            # per part (e.g. a mesh per mode family)
-            return (str(next(iter(v.values()))) if len(set(v.values())) == 1
-                    else "/".join(f"{k} {x}" for k, x in v.items()))
-        return f"{v:g}" if isinstance(v, float) else str(v)
-    return ", ".join(f"{k}={text(v)}" for k, v in knob.items())
 
 
 def _rung_text(row) -> str:
@@ -274,8 +265,6 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
     published, timing_lines = against_published(sc, chosen, timing_params, call, repeats)
     lines += timing_lines
 
-    plot(out_dir / "work_precision.png", rows, sc.name, "largest relative frequency error",
-         summary)
     blas = os.environ.get("OPENBLAS_NUM_THREADS")
     obj = {"scene": sc.name, "kind": "modes", "params": params, "repeats": repeats,
            "reference": {"solver": refs[0].name, "settings": ref.settings,
@@ -283,24 +272,5 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
                          "confirmed_by": check},
            "first_call_s": first_call, "blas_threads": blas, "rows": rows,
            "summary": summary, "orders": orders, "published_timings": published,
-           "summary_lines": lines}
-    md = [f"# Work-precision: {sc.name} (natural frequencies)", "",
-          f"Reference: {refs[0].name} ({_knob_text(ref.settings)}): "
-          + ", ".join(f"{lb} {f:.10g} Hz" for lb, f in zip(ref.labels, ref.frequencies_hz)),
-          "", (f"Confirmed by {check['solver']} ({_knob_text(check['settings'])}) to "
-               + (f"{check['rel']:.1e} relative (at {check['worst_mode']})"
-                  if check['rel'] is not None else f"— ({check['worst_mode']})"))
-          if check else "No second reference solver.", "",
-          "First call (import, compile): " + ", ".join(f"{s} {t:.2f} s"
-                                                       for s, t in first_call.items())
-          + f"; OPENBLAS_NUM_THREADS={blas or 'unset'}; median of {repeats} warm calls "
-            f"({repeats * 5} under 50 ms).", "", *[f"- {x}" for x in lines], "",
-          "| solver | ladder | setting | max rel. error | at | median wall [s] | median CPU [s] |",
-          "|---|---|---|---|---|---|---|"]
-    for r in rows:
-        err = r["rel_error"]
-        md.append(f"| {r['solver']} | {r['method']} | {_knob_text(r['knob'])} | "
-                  f"{'—' if err is None else format(err, '.2e')} | "
-                  f"{r.get('worst_mode') or r.get('reason')} | {r['wall_s']:.4g} | "
-                  f"{r['cpu_s']:.4g} |")
-    return write_outputs(out_dir, obj, md)
+           "summary_lines": lines, "result": BenchResult.TYPE}
+    return write_modes_bench(out_dir, obj)

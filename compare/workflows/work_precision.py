@@ -1,16 +1,14 @@
 """The work-precision machinery both benches share (time scenes: `bench`, frequency scenes:
 `bench_modes`): walking a ladder of accuracy settings, timing a rung, the summary per error
-level, observed convergence orders, the figure and the bench folder's files."""
+level, observed convergence orders (the figure and the bench folder's files:
+compare/output/bench_report.py)."""
 import datetime
 from pathlib import Path
 
 import numpy as np
 
-from ..output.report import plot_style, save_figure
-from ..output.study import write_study
-from ..results import BenchResult
+from ..output.bench_report import LEVELS  # the summary's error levels, the figure's
 
-LEVELS = (1e-3, 1e-6, 1e-9)
 COARSE_ERR = 1e-2          # the coarse end of a ladder: this error reached (or a failed run)
 FLOOR_ERR = 1e-12          # the fine end: below this the reference cannot tell rungs apart
 RUNG_WALL_S = 3.0          # nor walk finer once one run of a rung takes this long
@@ -43,13 +41,6 @@ def walk(rungs, start, run, exhaustive=False, patience=2):
             stall = stall + 1 if r["rel_error"] > 0.5 * prev["rel_error"] else 0
         prev = r
     return [rows[i] for i in sorted(rows) if rows[i] is not None]
-
-
-def write_outputs(out_dir, obj, md):
-    """report.md (the figure linked at its end) and bench.json; the result with its report."""
-    obj["result"] = BenchResult.TYPE
-    md = md + ["", "![work-precision](work_precision.png)"]
-    return write_study(out_dir, md, obj, "bench.json", report_in_json=False)
 
 
 def repeat_timed(walls, again, repeats):
@@ -140,44 +131,3 @@ def new_bench_dir(root, scene_name):
     """The default bench folder (no --out): ROOT/bench/SCENE-YYYYmmdd-HHMMSS, not made here."""
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
     return Path(root) / "bench" / f"{scene_name}-{stamp}"
-
-
-def bench_dir(out):
-    """The bench's folder: `out` itself (--out names the result's folder), made if missing."""
-    out_dir = Path(out)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    return out_dir
-
-
-def plot(path, rows, scene, ylabel, summary=None):
-    """The work-precision figure: error over median wall time per ladder, the summary levels
-    and each level's fastest rung starred."""
-    plt = plot_style()
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    for (s, m) in dict.fromkeys((r["solver"], r["method"]) for r in rows):
-        pts = [(r["wall_s"], r["rel_error"]) for r in rows
-               if r["solver"] == s and r["method"] == m and r["rel_error"]]
-        if pts:
-            x, y = zip(*pts)             # ladder order: coarse → fine
-            ax.loglog(x, y, "o-", ms=4, label=f"{s} {m}")
-    for level in LEVELS:
-        ax.axhline(level, color="grey", lw=0.6, ls=":")
-        best = (summary or {}).get(f"{level:g}")
-        if best:       # the level's fastest solver: a star at its rung, named
-            ax.plot(best["wall_s"], best["rel_error"], "*", ms=12, color="black", zorder=5)
-            ax.annotate(f"≤ {level:g}: {best['fastest']} {best['method']}",
-                        (best["wall_s"], level), textcoords="offset points", xytext=(4, 3),
-                        fontsize=7)
-    ax.set_xlabel("median wall time [s]")
-    ax.set_ylabel(ylabel)
-    ax.set_title(f"work-precision: {scene}")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7)
-    # log axes spanning less than a decade get minor labels that overlap: major decades only,
-    # and plain numbers where the span is short
-    from matplotlib.ticker import LogLocator, NullFormatter
-    for axis in (ax.xaxis, ax.yaxis):
-        axis.set_major_locator(LogLocator(base=10, numticks=8))
-        axis.set_minor_formatter(NullFormatter())
-    fig.tight_layout()
-    save_figure(fig, path)

@@ -179,7 +179,8 @@ def write_map_recording(path, result):
 
 def write_map_outputs(out_dir, result, record=True):
     """map.png, report.md (the map section), map.rrd and, last, map.json (the result dict with
-    these files in "files" and "map") in `out_dir`; returns the result dict."""
+    these files in "files" and "map") in `out_dir` (made if missing); returns the result dict."""
+    out_dir.mkdir(parents=True, exist_ok=True)
     plot_map(out_dir / "map.png", result)
     from ..scenes import get_scene
     head = header_lines(get_scene(result["scene"]), result.get("set"))

@@ -7,19 +7,19 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from . import campbell_plot, frequency_plot, mode_shapes
+from . import campbell_plot, frequency_plot, mode_shapes, modes_report
 from .study import write_study
 
 
 def write_modes_folder(out_dir: Path, result) -> dict:
-    """Every file of a modes result made in memory (`result.report`: its Markdown sections
-    "head", "explain", "campbell", "threshold", "identify"; `result.drawing`: the Campbell diagram's
+    """Every file of a modes result made in memory (its report's sections composed by
+    modes_report.sections from the result's data; `result.drawing`: the Campbell diagram's
     (values, the lines in the figure's frame, critical speeds, events, that frame, the lines in
     the solvers' frame, where each line's root grows)). `result.out_dir` and `result.files`
     name them; returns the JSON written."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    sc, part, files = result.scene, result.report, {}
+    sc, part, files = result.scene, modes_report.sections(result), {}
     md = [*part["head"]]
     repeated = mode_shapes.repeated_frequencies(list(result.runs.values()))
     if repeated:
@@ -48,7 +48,7 @@ def write_modes_folder(out_dir: Path, result) -> dict:
                    "bar, and |Δf| of every compared pair against the bound its verdict used; "
                    "`frequencies.rrd` holds them per solver on the `mode` timeline.", "",
                    f"![frequencies]({png})"]
-    md += part["campbell"] + part.get("threshold", []) + part["identify"]
+    md += part["campbell"] + part["threshold"] + part["identify"]
     md[1:1] = ["", f"**{result.summary}**"]
     files["report"] = out_dir / "report.md"
     result.out_dir, result.files = out_dir, files

@@ -9,7 +9,7 @@ import numpy as np
 from ..analysis.trajectory import Modes
 from ..analysis.verdict import Verdict
 from ..errors import BadInput
-from ..physics.whirl import shown_label
+from ..output.modes_report import DAMPED_HEADER, damped_rows, log_dec  # noqa: F401 (the tables)
 from . import tables
 from .base import ComparedResult, comparisons_from_json
 from .records import Side, modes_case
@@ -34,17 +34,6 @@ def _extra_json(v):
     return np.asarray(v).tolist() if np.ndim(v) > 1 else list(np.ravel(v))
 
 
-DAMPED_HEADER = ["solver", "mode", "whirl", "f_d [Hz]", "ω_d [rad/s]", "ω_d [rpm]", "ζ",
-                 "log dec"]
-
-
-def log_dec(zeta):
-    """The logarithmic decrement δ = 2πζ/√(1 − ζ²) (inf for ζ ≥ 1: no oscillation)."""
-    z = np.asarray(zeta, float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(z < 1, 2 * np.pi * z / np.sqrt(np.maximum(1 - z * z, 0.0)), np.inf)
-
-
 def damped_json(m: Modes | None) -> dict:
     """A run's damped modes as `xval modes --json` lists them (contract.md, "Rotordynamic
     results"): ω_d [rad/s] and rpm beside frequencies_hz, ζ, log dec, whirl; {} without ζ."""
@@ -54,21 +43,6 @@ def damped_json(m: Modes | None) -> dict:
     return {"omega_d": list(w), "rpm": list(w * 30 / np.pi), "zeta": list(map(float, m.damping)),
             "log_dec": list(map(float, log_dec(m.damping))),
             **({"whirl": list(m.whirl)} if m.whirl is not None else {})}
-
-
-def damped_rows(results: list[Modes]) -> list[list[str]]:
-    """One row per mode of every solver that gives damping ratios (DAMPED_HEADER): Hz, rad/s
-    and rpm side by side, ζ and log dec (ROSS's conventions)."""
-    rows = []
-    for m in results:
-        if m.status != "ok" or m.damping is None:
-            continue
-        whirl = m.whirl or ["—"] * len(m.labels)
-        for f, lb, wh, z, d in zip(m.frequencies_hz, m.labels, whirl, m.damping,
-                                   log_dec(m.damping)):
-            rows.append([m.solver, shown_label(lb, wh), wh, f"{f:.10g}", f"{2 * np.pi * f:.10g}",
-                         f"{60 * f:.8g}", f"{z + 0.0:.8g}", f"{d + 0.0:.6g}"])   # no −0
-    return rows
 
 
 def growing_modes(results: list[Modes], floor: float = 0.0) -> list[dict]:
@@ -99,9 +73,10 @@ class ModesResult(ComparedResult):
     `unpaired_modes`, `incomplete`; what else the study found (explanations, identification)
     in `extra`.
 
-    A result made in memory holds what its report needs (`report`: the Markdown sections,
-    `drawing`: the Campbell lines) and writes it with `save`; one read from files is saved by
-    copying its folder."""
+    A result made in memory holds what its report needs beyond the JSON (`parts`: the scene's
+    mode-by-mode comparisons, its hooks' lines, the Campbell sweep's verdicts; `drawing`: the
+    Campbell lines), composed and written by `save` (compare/output/modes_report.py); one read
+    from files is saved by copying its folder."""
     TYPE = "modes"
     FREQ_HEADER = ["solver", "status", "wall [s]", "frequencies [Hz] (labels)"]
 
@@ -109,7 +84,7 @@ class ModesResult(ComparedResult):
                  status: str | None = None, summary: str | None = None,
                  critical_speeds: dict | None = None, campbell: dict | None = None,
                  unpaired_modes: list | None = None, incomplete: list | None = None,
-                 extra: dict | None = None, report: dict | None = None, drawing=None,
+                 extra: dict | None = None, parts: dict | None = None, drawing=None,
                  out_dir=None, files: dict | None = None):
         self.scene_name = self._of(scene)
         self.params = params
@@ -121,7 +96,7 @@ class ModesResult(ComparedResult):
         self.unpaired_modes = unpaired_modes or []
         self.incomplete = incomplete or []
         self.extra = extra or {}
-        self.report, self.drawing = report, drawing
+        self.parts, self.drawing = parts, drawing
         self.out_dir = Path(out_dir) if out_dir else None
         self.files = dict(files or {})
 
@@ -173,7 +148,7 @@ class ModesResult(ComparedResult):
         result.json, the Campbell diagram and its recording, the mode shapes."""
         from ..output.folders import copy_folder, make_out
         from ..output.modes_folder import write_modes_folder
-        if self.report is None:                 # read from files: its folder holds them
+        if self.parts is None:                  # read from files: its folder holds them
             if self.out_dir is None:
                 raise BadInput("nothing to save: this modes result holds no report")
             self.out_dir = copy_folder(self.out_dir, path, {})[0]

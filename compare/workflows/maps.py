@@ -250,7 +250,6 @@ def map_to_folder(plan, out, settings_for=None, executor="local", scheduler=None
     `out` (or `out_dir`): map.json, map.png, report.md, map.rrd."""
     from ..output.map_plot import write_map_outputs
     out_dir = Path(out_dir or out)
-    out_dir.mkdir(parents=True, exist_ok=True)
     workers = workers or 2
     if store is not None and salt is None:       # stored points are valid while these hold
         sc = plan["scene"]

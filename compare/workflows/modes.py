@@ -19,17 +19,8 @@ from ..analysis.campbell import mac
 from ..analysis.trajectory import Modes
 from ..analysis.verdict import Verdict, agree_text
 from ..errors import BadInput
-from ..output.campbell_plot import critical_table
-from ..output.report import header_lines
-from ..physics.whirl import shown_label
 from ..results import ModesResult
-from ..results.modes import (
-    DAMPED_HEADER,
-    damped_json,
-    damped_rows,
-    growing_modes,
-)
-from ..results.tables import VERDICT_HEADER, markdown, verdict_rows
+from ..results.modes import damped_json, growing_modes
 from ..scenes import Scene, get_scene
 from .plan import plan
 from .threshold import run_threshold
@@ -295,9 +286,10 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
     uncertain, every solver on the same points, lines tracked by MAC with veerings and
     crossings told apart (compare/analysis/campbell.py) in the frame the solvers report, and
     read in the other frame too where the modes whirl. The figure is drawn in `frame` (default:
-    the solvers'). Returns the JSON part, the critical speeds, the report's lines and what the
-    figure draws (values, the lines in `frame`, critical speeds, events, `frame`, the lines in
-    the solvers' frame)."""
+    the solvers'). Returns the JSON part, the critical speeds, what the report says beyond the
+    JSON (`told`: the ζ allowance, the figure's frame, the sweep's comparisons judged and not)
+    and what the figure draws (values, the lines in `frame`, critical speeds, events, `frame`,
+    the lines in the solvers' frame)."""
     cb = sc.campbell
     frame = frame or cb.frame
     chosen = [s for s in chosen if not cb.solvers or s.name in cb.solvers]
@@ -381,40 +373,12 @@ def campbell_diagram(sc: Scene, chosen, params, log=print, frame=None):
                                             if c.verdict != Verdict.AGREE]}}
     if lines:
         obj["figure_frame"] = frame
-    md = ["", "## Campbell diagram", "",
-          f"{len(grid)} values of {cb.parameter} ({len(values)} on the scene's grid, "
-          f"{len(grid) - len(values)} added where lines come close, swap or lose their shape); "
-          f"the solvers report their lines in the {cb.frame} frame"
-          + (f", the figure shows them in the {frame} frame" if frame != cb.frame else "")
-          + ".", "Lines continue where consecutive mode shapes correlate (MAC ≥ "
-          f"{campbell.MAC_KEEP}); least MAC on a line outside a marked veering: "
-          + ", ".join(f"{s} {d.min_mac_unmarked():.3f}" for s, d in diagrams.items()) + ".", ""]
-    md += [f"- {s} {e.kind}: {' / '.join(e.lines)} at {cb.parameter} ≈ {e.at:.4g} "
-           f"({e.lo:.4g}–{e.hi:.4g}; least gap {e.gap_hz:.3g} Hz)"
-           for s, ev in events.items() for e in ev]
-    md += [""] + critical_table(cb, entries)
-    md += ["", f"Growing roots on the sweep (ζ below −({floor:.1e}, the scene's ζ allowance, + "
-           "the solver's own ζ error); onset where ζ crosses zero):", ""] + [
-        f"- {s}: {o['line']} grows from {cb.parameter} ≈ {o['from']:.6g} "
-        f"({o['lo']:.6g}–{o['hi']:.6g}; least ζ {o['least_zeta']:.3g})"
-        for s, os_ in onsets.items() for o in os_] if any(onsets.values()) else []
-    md += [f"- {n}: {u['name']} unconfirmed (the lines cross near {u['lines_estimate']:.6g}): "
-           f"{u['reason']}" for n, us in unconfirmed.items() for u in us]
-    md += [f"- {m['solver']}: no critical speeds — {m['reason']}" for m in missing]
-    md += ["", f"Every sampled {cb.parameter} and every critical speed judged pairwise: "
-           + agree_text(c.verdict for c in sweep) + "."]
-    md += [f"- {c.a} vs {c.b} {c.channel}: {c.verdict} (Δ/bound {c.ratio:.2g})"
-           for c in sweep if c.verdict != Verdict.AGREE]
-    if renamed:
-        md += [f"- not judged, the two solvers give the name to different modes there (each "
-               f"one's mode nearest the other's is another): {len(renamed)} comparisons, "
-               + ", ".join(f"{c.a} vs {c.b} {c.channel}" for c in renamed[:4])
-               + (" …" if len(renamed) > 4 else "")]
-    md += ["", "![campbell](campbell.png)"]
+    # what the report says beyond the JSON (compare/output/modes_report.py composes it)
+    told = {"floor": floor, "frame": frame, "sweep": sweep, "renamed": renamed}
     growing = {s: {k: np.asarray(z, float) < -(floor + np.nan_to_num(np.asarray(
         zeta_error.get(s, {}).get(k, 0.0), float))) for k, z in zeta[s].items()}
         for s, o in onsets.items() if o}
-    return obj, crit, md, (grid, by_frame[frame], entries, events, frame, lines, growing), \
+    return obj, crit, told, (grid, by_frame[frame], entries, events, frame, lines, growing), \
         [c for c in sweep if c.verdict != Verdict.AGREE]
 
 
@@ -471,51 +435,31 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
     unpaired = metrics.unpaired_modes(results)
     incomplete = [{"solver": r.solver, "status": r.status, "reason": r.reason}
                   for r in results if r.status != "ok"]
-    extra, report = {}, {"explain": [], "campbell": [], "threshold": [], "identify": []}
+    # what the report needs beyond the JSON (compare/output/modes_report.py composes it): the
+    # scene's own comparisons (the head's table), the lines of its hooks, the sweep's `told`
+    extra, parts = {}, {"comparisons": comparisons}
     growing = growing_modes(results, sc.tolerances_for(params).get("damping", 0.0))
     if growing:                                  # only then: undamped answers stay as they were
         extra["unstable"] = growing
-    md = [f"# {sc.name}: {sc.title}", "", *header_lines(sc, params),
-          "| solver | status | frequencies [Hz] | labels | notes |", "|---|---|---|---|---|"]
-    md += [f"| {r.solver} | {r.status} | {', '.join(f'{f:.8g}' for f in r.frequencies_hz)} | "
-           f"{', '.join(map(shown_label, r.labels, r.whirl or [None] * len(r.labels)))} | "
-           f"{'; '.join(r.notes) or r.reason or ''} |" for r in results]
-    if any(r.damping is not None for r in results):
-        md += ["", "Damped modes (ζ: damping ratio, log dec δ = 2πζ/√(1 − ζ²); whirl about the "
-               "spin as ROSS names it):", "",
-               *markdown(DAMPED_HEADER, damped_rows(results)).splitlines()]
-    if growing:
-        md += ["", "**unstable**: " + "; ".join(
-            f"{g['solver']} {g['mode']} grows at {g['growth_per_s']:.6g} /s (ζ = {g['zeta']:.3g})"
-            for g in growing)]
-    md += ["", *markdown(VERDICT_HEADER, verdict_rows(comparisons)).splitlines()]
-    if unpaired:
-        md += ["", "Modes left unpaired (not compared):", "",
-               "| a | b | solver | mode | frequency [Hz] | why |", "|---|---|---|---|---|---|"]
-        md += [f"| {u['a']} | {u['b']} | {u['solver']} | {u['mode']} | "
-               f"{u['frequency_hz']:.8g} | {u['reason']} |" for u in unpaired]
-    report["head"] = md
     if sc.explain_frequencies and any(c.verdict == Verdict.DISAGREE for c in comparisons):
         ran = {r.solver: r for r in results}        # the runs above, not run again
         rows, lines_md = sc.explain_frequencies(
             params, comparisons, lambda n, p: ran[n] if p == params and n in ran
             else solvers.modes(sc, solvers.get_solver(n), p), sc.tolerances_for(params))
         extra["explanations"] = rows
-        report["explain"] = [""] + lines_md
+        parts["explain"] = lines_md
     crit, obj_cb, drawing = {}, None, None
     if sc.campbell and campbell_sweep and any(
             not sc.campbell.solvers or s.name in sc.campbell.solvers for s in chosen):
-        obj_cb, crit, report["campbell"], drawing, off_sweep = campbell_diagram(
+        obj_cb, crit, parts["campbell"], drawing, off_sweep = campbell_diagram(
             sc, chosen, params, log, campbell_frame)
         comparisons = comparisons + off_sweep        # the sweep's refusals are the run's
     if threshold and sc.threshold is not None and sc.threshold.active(params):
-        extra["threshold"], report["threshold"] = run_threshold(sc, params, chosen,
-                                                                solver_names, log)
+        extra["threshold"] = run_threshold(sc, params, chosen, solver_names, log)
     if sc.identify and identify:
         rows, lines_md = sc.identify(params, _run_time, solver_names or None)
         if rows:
             extra["identified_from_free_response"] = rows
-            report["identify"] = [""] + lines_md
             more = []
             for row in rows:             # a ring-down fit against the solver's eigenvalues
                 eig, fit = identified_against_eigenvalues(sc, row, results)
@@ -523,9 +467,7 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
                     row.update(damped_json(fit))
                     more += sc.verdicts(params, [eig, fit])
             comparisons = comparisons + more
-            if more:
-                report["identify"] += ["", *markdown(VERDICT_HEADER,
-                                                     verdict_rows(more)).splitlines()]
+            parts["identify"] = (lines_md, more)
     failed = {m["solver"] for m in incomplete}
     incomplete += [m for m in (obj_cb or {}).get("incomplete", []) if m["solver"] not in failed]
     status, summary = modes_status(comparisons, {"incomplete": incomplete,
@@ -535,7 +477,7 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
                                                  "threshold": extra.get("threshold")})
     return ModesResult(sc, params, results, comparisons, status=status, summary=summary,
                        critical_speeds=crit, campbell=obj_cb, unpaired_modes=unpaired,
-                       incomplete=incomplete, extra=extra, report=report, drawing=drawing)
+                       incomplete=incomplete, extra=extra, parts=parts, drawing=drawing)
 
 
 def identified_against_eigenvalues(sc: Scene, row: dict, results: list[Modes]):

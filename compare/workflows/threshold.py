@@ -139,43 +139,17 @@ def eigen_threshold(scene, solver, params: dict, w_cf: float) -> dict:
             "agrees": bool(abs(at - w_cf) <= err)}
 
 
-def run_threshold(scene, params: dict, chosen, names, log) -> tuple[dict, list[str]]:
-    """The threshold block of `xval modes` (JSON, report lines): the closed form, every chosen
-    solver's eigenvalues, every time solver of the scene's response among `names` (all where
-    none are named)."""
+def run_threshold(scene, params: dict, chosen, names, log) -> dict:
+    """The threshold block of `xval modes` (its JSON; compare/output/modes_report.py writes
+    its section): the closed form, every chosen solver's eigenvalues, every time solver of the
+    scene's response among `names` (all where none are named)."""
     th = scene.threshold
     w_cf = float(th.speed(params))
     obj = {"parameter": th.parameter, "closed_form_rad_s": w_cf if math.isfinite(w_cf) else None}
-    md = ["", "## Threshold speed (a root starts to grow)", ""]
     if not math.isfinite(w_cf):
-        return obj, md + ["Closed form: none — every speed is stable."]
+        return obj
     timed = [s for s in scene.response.time_solvers if not names or s in names]
     obj["eigenvalues"] = [eigen_threshold(scene, s, params, w_cf) for s in chosen]
     obj["time_domain"] = [time_threshold(scene, params, s, w_cf, log) for s in timed]
     obj.update(release=th.release, record_s=RECORD_S, bracket=BRACKET, resolution=RESOLUTION)
-
-    def row(source, r):
-        if r["status"] != "ok":
-            return f"| {source} | {r['status']}: {r['reason']} | | | | | |"
-        w = r["threshold_rad_s"]
-        return (f"| {source} | {w:.10g} | {w * 30 / math.pi:.8g} | {r['error_rad_s']:.2g} | "
-                f"{w - w_cf:+.2g} | {'yes' if r['agrees'] else 'NO'} | "
-                f"{r['evaluations']} in {r['wall_s']:.2f} s |")
-    md += [f"Closed form Ω_th = {w_cf:.10g} rad/s ({w_cf * 30 / math.pi:.8g} rpm). "
-           "Eigenvalues: the largest Re λ crossing zero (brentq). Time domain: the rotor "
-           f"released from rest at a deflection of {th.release:g} at constant speed, "
-           f"{RECORD_S:g} s records, the growing root fitted by matrix pencil (error: the fit's "
-           "change from half the record to all of it plus the solver's own, from its tighter "
-           "rerun), the zero of σ located by brentq.", "",
-           "| source | Ω_th [rad/s] | rpm | ± [rad/s] | − closed form | within ± | evaluations |",
-           "|---|---|---|---|---|---|---|"]
-    md += [row(r["solver"], r) for r in obj["eigenvalues"]]
-    md += [row(f"{r['solver']} (time domain)", r) for r in obj["time_domain"]]
-    md += ["", "Time-domain growth rates against the closed form at the measured speed:", "",
-           "| solver | speed [rad/s] | σ [1/s] | ± | closed form σ | whirl [rad/s] | agrees |",
-           "|---|---|---|---|---|---|---|"]
-    md += [f"| {r['solver']} | {p['spin_rad_s']:.10g} | {p['growth_per_s']:.8g} | "
-           f"{p['error']:.2g} | {p['closed_form_growth_per_s']:.8g} | {p['whirl_rad_s']:.8g} | "
-           f"{'yes' if p['agrees'] else 'NO'} |"
-           for r in obj["time_domain"] for p in r["points"] if p["status"] == "ok"]
-    return obj, md
+    return obj

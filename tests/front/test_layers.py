@@ -285,7 +285,10 @@ def test_the_cycle_check_finds_one():
 # file writes: the atomic helpers, plain writes, numpy/json/matplotlib/rerun savers, a
 # Trajectory's or result's `.save`, folder copies, os.open for writing
 WRITE_CALLS = {"write_text", "write_bytes", "write_json", "publish", "atomic_path", "savez",
-               "savez_compressed", "save", "savefig", "dump", "copytree", "copyfile", "copy"}
+               "savez_compressed", "save", "savefig", "dump", "copytree", "copyfile", "copy",
+               "mkdir", "makedirs", "subplots"}
+# Markdown a workflow would compose: a heading, a table row or rule, an image link
+MARKDOWN = re.compile(r"^(#{1,6} |\|[ -]|!\[)")
 
 
 def writes(path):
@@ -315,7 +318,47 @@ def test_workflows_write_no_files():
         + "\n".join(found)
 
 
+def markdown_lines(path):
+    """String literals outside docstrings (f-strings by their first literal part) that start
+    like Markdown."""
+    docs, hits = docstring_lines(path), []
+    for node in ast.walk(ast.parse(path.read_text())):
+        text = (node.values[0].value if isinstance(node, ast.JoinedStr) and node.values
+                and isinstance(node.values[0], ast.Constant) else
+                node.value if isinstance(node, ast.Constant) else None)
+        if isinstance(text, str) and node.lineno not in docs and MARKDOWN.match(text):
+            hits.append(f"{path.relative_to(ROOT)}:{node.lineno}: {text[:60]!r}")
+    return hits
+
+
+def test_workflows_compose_no_markdown():
+    found = [h for p in py_files("compare/workflows") for h in markdown_lines(p)]
+    assert not found, "workflows/ composes Markdown (compose it in compare/output/):\n" \
+        + "\n".join(found)
+
+
 @pytest.mark.parametrize("code", [
+    "def f(rows):\n    return ['## Results', ''] + [f'| {r} |' for r in rows]\n",
+    "def f(n):\n    return f'# Map: {n}'\n",
+    "def f():\n    return '|---|---|'\n",
+    "def f():\n    return '![figure](map.png)'\n"])
+def test_the_markdown_rule_catches_a_seeded_report(code, tmp_path, monkeypatch):
+    root = scratch_root(tmp_path, monkeypatch, "compare/workflows")
+    (root / "compare" / "workflows" / "_layer_probe.py").write_text(code)
+    with pytest.raises(AssertionError, match="_layer_probe"):
+        test_workflows_compose_no_markdown()
+
+
+def test_the_markdown_rule_lets_docstrings_and_plain_text_be(tmp_path, monkeypatch):
+    probe = scratch_root(tmp_path, monkeypatch) / "compare" / "workflows" / "_layer_probe.py"
+    probe.write_text('def f(n):\n    """# not a report: a docstring"""\n'
+                     '    return f"{n} points | 3 solvers", "#1 of 3"\n')
+    assert markdown_lines(probe) == []
+
+
+@pytest.mark.parametrize("code", [
+    "def f(p):\n    p.mkdir(parents=True)\n",
+    "import matplotlib.pyplot as plt\ndef f():\n    return plt.subplots()\n",
     "from compare.atomic import write_text\ndef f(p):\n    write_text(p / 'report.md', '')\n",
     "def f(p):\n    p.write_text('x')\n",
     "def f(p):\n    with open(p, 'w') as fh:\n        fh.write('x')\n",

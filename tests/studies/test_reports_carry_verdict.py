@@ -180,8 +180,7 @@ def test_a_modes_folder_without_shapes_or_campbell_draws_the_frequencies(tmp_pat
     runs = [_modes("exudyn", [5.0, 6.0, 7.0], [1e-6] * 3),
             _modes("mujoco", [5.0, 6.00001, 7.0], [1e-6] * 3)]
     cmp = metrics.frequency_comparisons(runs, {"frequency": 1e-6})
-    r = ModesResult(sc, sc.resolve({}), runs, cmp, summary="3 of 3 agree",
-                    report={"head": ["# h"], "explain": [], "campbell": [], "identify": []})
+    r = ModesResult(sc, sc.resolve({}), runs, cmp, summary="3 of 3 agree", parts={})
     write_modes_folder(tmp_path, r)
     assert r.files["frequencies_figure"] == tmp_path / "frequencies.png"
     assert r.files["recording"] == tmp_path / "frequencies.rrd"

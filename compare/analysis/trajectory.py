@@ -4,8 +4,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..atomic import atomic_path
-
 
 @dataclass
 class Trajectory:
@@ -33,17 +31,13 @@ class Trajectory:
                                               "settings", "stats", "wall_s", "versions",
                                               "invariants")}
 
-    def save(self, path):
-        """NumPy .npz: `t`, one array per channel, `extra.<name>` and `error.<channel>` arrays,
-        `meta` (JSON)."""
-        arrays = {"t": self.t, **self.channels,
-                  **{f"extra.{k}": v for k, v in self.extra.items()},
-                  **{f"error.{k}": v for k, v in self.errors.items()},
-                  "meta": np.array(json.dumps(self.meta(), default=_py))}
-        with atomic_path(path) as tmp:
-            with open(tmp, "wb") as f:
-                np.savez(f, **arrays)
-        return path
+    def arrays(self) -> dict:
+        """What its .npz holds (compare.output.run_folder writes it): `t`, one array per
+        channel, `extra.<name>` and `error.<channel>` arrays, `meta` (JSON)."""
+        return {"t": self.t, **self.channels,
+                **{f"extra.{k}": v for k, v in self.extra.items()},
+                **{f"error.{k}": v for k, v in self.errors.items()},
+                "meta": np.array(json.dumps(self.meta(), default=_py))}
 
     @classmethod
     def load(cls, path):

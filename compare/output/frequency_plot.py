@@ -81,3 +81,30 @@ def write_recording(path, results, recording_id) -> Path | None:
                              columns=rr.Scalars.columns(scalars=np.asarray(m.frequencies_hz,
                                                                            float)))
     return Path(path)
+
+
+def overview_figure(scene_name, runs, campbell):
+    """A bare matplotlib Figure of a modes result (`ModesResult.figure`): the Campbell diagram
+    where the scene sweeps, else each solver's frequencies side by side."""
+    from matplotlib.figure import Figure
+    fig = Figure(figsize=(7.5, 4.8))
+    ax = fig.subplots()
+    if campbell and campbell["lines_hz"]:
+        x = campbell["values"]
+        for k, (s, lines) in enumerate(campbell["lines_hz"].items()):
+            for j, (key, f) in enumerate(lines.items()):
+                ax.plot(x, f, lw=1, ls=["-", "--", ":", "-."][k % 4], color=f"C{j % 10}",
+                        label=f"{s}: {key}")
+        ax.set_xlabel(campbell["parameter"])
+        ax.legend(fontsize=6, ncol=2)
+    else:
+        for i, m in enumerate(runs.values()):
+            ax.plot([i] * len(m.frequencies_hz), m.frequencies_hz, "_", ms=30, mew=2)
+        ax.set_xticks(range(len(runs)), list(runs))
+        ax.set_yscale("log")
+    ax.set_ylabel("frequency [Hz]")
+    ax.grid(alpha=0.3)
+    ax.set_title(scene_name)
+    fig.tight_layout()
+    return fig
+

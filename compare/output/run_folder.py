@@ -5,13 +5,23 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..atomic import write_json
+import numpy as np
+
+from ..atomic import atomic_path, write_json
 
 
 def write_trajectory(folder, tr, name: str | None = None) -> Path:
     """A trajectory as `name`.npz (default: its solver's name), atomically, as soon as it
     exists (a later crash loses nothing)."""
-    return tr.save(Path(folder) / f"{name or tr.solver}.npz")
+    return write_npz(tr, Path(folder) / f"{name or tr.solver}.npz")
+
+
+def write_npz(tr, path) -> Path:
+    """A trajectory's arrays (`Trajectory.arrays`) as one .npz, atomically."""
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as f:
+            np.savez(f, **tr.arrays())
+    return path
 
 
 def write_run_files(result, record: bool = True, report: bool = True) -> dict:

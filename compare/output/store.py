@@ -6,12 +6,13 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..atomic import publish, write_json, write_text
+from .run_folder import write_npz
 
 
 def store_trajectory(store: Path, key: str, tr) -> Path:
     """A time job's trajectory, under its key (written atomically: a stopped job leaves no
     result file)."""
-    return tr.save(Path(store) / f"{key}.npz")
+    return write_npz(tr, Path(store) / f"{key}.npz")
 
 
 def store_modes(folder: Path, result) -> Path:

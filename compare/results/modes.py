@@ -186,27 +186,8 @@ class ModesResult(ComparedResult):
     def figure(self):
         """A matplotlib Figure: the Campbell diagram where the scene sweeps, else each
         solver's frequencies side by side."""
-        from matplotlib.figure import Figure
-        fig = Figure(figsize=(7.5, 4.8))
-        ax = fig.subplots()
-        if self.campbell and self.campbell["lines_hz"]:
-            x = self.campbell["values"]
-            for k, (s, lines) in enumerate(self.campbell["lines_hz"].items()):
-                for j, (key, f) in enumerate(lines.items()):
-                    ax.plot(x, f, lw=1, ls=["-", "--", ":", "-."][k % 4], color=f"C{j % 10}",
-                            label=f"{s}: {key}")
-            ax.set_xlabel(self.campbell["parameter"])
-            ax.legend(fontsize=6, ncol=2)
-        else:
-            for i, m in enumerate(self.runs.values()):
-                ax.plot([i] * len(m.frequencies_hz), m.frequencies_hz, "_", ms=30, mew=2)
-            ax.set_xticks(range(len(self.runs)), list(self.runs))
-            ax.set_yscale("log")
-        ax.set_ylabel("frequency [Hz]")
-        ax.grid(alpha=0.3)
-        ax.set_title(self.scene_name)
-        fig.tight_layout()
-        return fig
+        from ..output.frequency_plot import overview_figure
+        return overview_figure(self.scene_name, self.runs, self.campbell)
 
     plot = figure
 

@@ -302,8 +302,8 @@ def _prefixed(where, fn, *args, **kw):
         raise BadInput(f"{where}: {e}") from None
 
 
-def plan(camp, src="built-in campaign", timeout_s=None, max_output_gib=None, max_steps=None,
-         max_jobs=None):
+def plan_campaign(camp, src="built-in campaign", timeout_s=None, max_output_gib=None,
+                  max_steps=None, max_jobs=None):
     """Validate every case and sweep point up front (bad input stops the campaign before
     anything runs) and list the jobs."""
     max_output_gib = max_output_gib or camp.get("max_output_gib")
@@ -489,7 +489,7 @@ def prepare(source, timeout_s=None, max_output_gib=None, max_steps=None, max_job
         camp, src = source, "campaign"
     else:
         camp, src = load_campaign(source), str(source) if source else "built-in campaign"
-    cases, jobs = plan(camp, src, timeout_s, max_output_gib, max_steps, max_jobs)
+    cases, jobs = plan_campaign(camp, src, timeout_s, max_output_gib, max_steps, max_jobs)
     return Prepared(camp, cases, jobs, plan_maps(camp, src, max_jobs))
 
 

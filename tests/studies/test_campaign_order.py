@@ -6,7 +6,7 @@ from compare.workflows import campaign
 
 
 def test_dispatch_order_of_the_default_campaign():
-    _, jobs = campaign.plan(campaign.load_campaign(None))
+    _, jobs = campaign.plan_campaign(campaign.load_campaign(None))
     order = campaign.dispatch_order(jobs)
     assert sorted(j.label for j in order) == sorted(j.label for j in jobs)
     family = [campaign._scene_module(get_scene(j.scene)) for j in order]

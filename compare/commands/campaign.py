@@ -52,7 +52,8 @@ def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | Non
     if scheduler and executor != "dask":
         raise BadInput("--scheduler needs --executor dask")
     if isinstance(path_or_dict, dict):
-        camp.check_shape(path_or_dict, "campaign")
+        from ..workflows.campaign_plan import check_shape
+        check_shape(path_or_dict, "campaign")
     # everything is validated before the output folder is made or anything runs; planned once
     with checking("checking the campaign, loading the models, planning the jobs …"):
         prepared = camp.prepare(path_or_dict, timeout, max_output_gib, max_steps,
@@ -71,7 +72,8 @@ def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | Non
 
 def main(args) -> int:
     from ..output.progress import busy, progress_view
-    from ..workflows.campaign import Interrupted, load_campaign
+    from ..workflows.campaign import Interrupted
+    from ..workflows.campaign_plan import load_campaign
     # without --out the campaign's folder is logs/campaign/<name> (resumed when run again)
     own = args.out or os.path.join("logs", "campaign",
                                    load_campaign(args.file).get("name", "campaign"))

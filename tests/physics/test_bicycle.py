@@ -112,7 +112,7 @@ def test_growth_rate_map_brackets_the_published_weave_and_capsize_speeds(tmp_pat
 
 def test_listed_in_the_benchmarks_group_and_campaign(capsys):
     from compare.commands import list as list_command
-    from compare.workflows.campaign import load_campaign
+    from compare.workflows.campaign_plan import load_campaign
     list_command.main(None)
     group = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("group")]
     assert any("benchmarks" in ln and "bicycle" in ln for ln in group)

@@ -7,7 +7,8 @@ import pytest
 
 from compare.results import Result
 from compare.scenes import SCENES
-from compare.workflows.campaign import default_campaign, prepare
+from compare.workflows.campaign import prepare
+from compare.workflows.campaign_plan import default_campaign
 from tests.conftest import xval
 
 

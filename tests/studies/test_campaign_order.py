@@ -2,11 +2,11 @@
 family (they would compile the same kernels twice on a fresh clone); within a family the
 frequency cases lead."""
 from compare.scenes import get_scene
-from compare.workflows import campaign
+from compare.workflows import campaign, campaign_plan
 
 
 def test_dispatch_order_of_the_default_campaign():
-    _, jobs = campaign.plan_campaign(campaign.load_campaign(None))
+    _, jobs = campaign_plan.plan_campaign(campaign_plan.load_campaign(None))
     order = campaign.dispatch_order(jobs)
     assert sorted(j.label for j in order) == sorted(j.label for j in jobs)
     family = [campaign._scene_module(get_scene(j.scene)) for j in order]

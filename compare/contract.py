@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import importlib
+import pkgutil
 import sys
 from dataclasses import dataclass, field
 
@@ -239,16 +240,16 @@ ModesResult = LeafModes
 def lazy_exports(package: str, where: dict[str, str]):
     """A package's module `__getattr__` (PEP 562): each name imported from its own submodule on
     first use — a leaf package's capabilities (`regimes`, `modes`, …: a time run imports none
-    of them), the Result types. `where`: name -> submodule (the package's `LAZY`)."""
+    of them), the Result types. `where`: name -> submodule (the package's `LAZY`). A name may
+    not be a submodule's: importing that submodule (from a sibling, a test) would bind the
+    module over the name, and `__getattr__` would never be asked again."""
+    subs = {m.name for m in pkgutil.iter_modules(sys.modules[package].__path__)}
+    clash = sorted(set(where) & subs)
+    if clash:
+        raise ImportError(f"{package}: LAZY names {clash} are also its submodules' names")
+
     def __getattr__(name):
         if name not in where:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
-        importlib.import_module(f"{package}.{where[name]}")
-        # importing a submodule binds its name on the package (`modes` the module, not the
-        # function): bind every capability of each loaded submodule over it
-        pkg = sys.modules[package]
-        for n, sub in where.items():
-            if f"{package}.{sub}" in sys.modules:
-                setattr(pkg, n, getattr(sys.modules[f"{package}.{sub}"], n))
-        return getattr(pkg, name)
+        return getattr(importlib.import_module(f"{package}.{where[name]}"), name)
     return __getattr__

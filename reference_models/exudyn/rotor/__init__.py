@@ -9,7 +9,7 @@ torque fixed in space through compiled user functions. One module per capability
 - `kernels`: the compiled loads and work rates (and why they are compiled);
 - `model`: the engine model, built from the resolved parameters (`build`), and the solver calls;
 - `time`: `simulate`; `batch`: `regimes` (the map's batch path, rotors as branches of one tree);
-- `modes`: `modes`, `whirl_sweep` (the linearised whirl); `response`: `unbalance_response`.
+- `linear`: `modes`, `whirl_sweep` (the linearised whirl); `response`: `unbalance_response`.
 """
 from compare.contract import lazy_exports
 
@@ -17,7 +17,7 @@ from .settings import ADAPTIVE, CHEAP_DT, DEFAULT_SETTINGS, INTEGRATORS, check_s
 from .time import simulate
 
 # the other capabilities load on first use (a time run needs none of them)
-LAZY = {"regimes": "batch", "modes": "modes", "whirl_sweep": "modes",
+LAZY = {"regimes": "batch", "modes": "linear", "whirl_sweep": "linear",
         "unbalance_response": "response"}
 __getattr__ = lazy_exports(__name__, LAZY)
 

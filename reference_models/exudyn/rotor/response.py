@@ -3,8 +3,8 @@ linearisation and Exudyn's own acceleration."""
 import exudyn as exu
 import numpy as np
 
+from .linear import linearised
 from .model import build, rotor, sim_settings, solve, upright
-from .modes import linearised
 from .settings import SOLVERS
 
 

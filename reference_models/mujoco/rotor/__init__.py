@@ -9,7 +9,7 @@ capability:
   (native or Python) and its installation;
 - `model`: the MjModel compiled from the resolved parameters and the data of one point;
 - `time`: `simulate`; `batch`: `regimes` (the map's batch path, one rollout for many points);
-- `modes`: `modes`, `whirl_sweep` (the linearised whirl); `response`: `unbalance_response`.
+- `linear`: `modes`, `whirl_sweep` (the linearised whirl); `response`: `unbalance_response`.
 """
 from compare.contract import lazy_exports
 
@@ -17,7 +17,7 @@ from .settings import CHEAP_DT, DEFAULT_SETTINGS, INTEGRATORS, check_settings
 from .time import simulate
 
 # the other capabilities load on first use (a time run needs none of them)
-LAZY = {"regimes": "batch", "modes": "modes", "whirl_sweep": "modes",
+LAZY = {"regimes": "batch", "modes": "linear", "whirl_sweep": "linear",
         "unbalance_response": "response"}
 __getattr__ = lazy_exports(__name__, LAZY)
 

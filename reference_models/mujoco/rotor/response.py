@@ -1,11 +1,11 @@
 """`unbalance_response`: the steady synchronous tilt of the unbalanced rotor from the
-linearisation (`modes.continuous_A`) and MuJoCo's own acceleration."""
+linearisation (`linear.continuous_A`) and MuJoCo's own acceleration."""
 import mujoco
 import numpy as np
 
 from .callback import Callback
+from .linear import FD_EPS, continuous_A, linearisation_model
 from .model import compile_model
-from .modes import FD_EPS, continuous_A, linearisation_model
 
 HE = 1e-7           # eccentricity step of the input derivative, per unit l
 TRANSVERSE = [0, 1, 3, 4]       # δ_x, δ_y, v_x, v_y: the spin rows do not couple at tilt 0

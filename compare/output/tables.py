@@ -72,8 +72,9 @@ def calibration_tables(d: dict) -> list:
              _g(d["widest_window"]) + (f" ({' vs '.join(at['pair'])} {at['channel']}, "
                                        f"set {at['set']})" if at else ""),
              str(len(d["skipped"]))]]
-    per = [[s, str(o["pairs"]), _g(o["coverage"]), _g(o["sharpness"]),
+    per = [[s, str(o["pairs"]), str(o.get("unresolved", 0)), _g(o["coverage"]),
+            _g(o["sharpness"]),
             "; ".join(f"{n}× {why}" for why, n in o["left_out"].items()) or "—"]
            for s, o in d.get("by_solver", {}).items()]
     return [(CALIBRATION_HEADER, rows),
-            (["solver", "pairs", "coverage", "sharpness", "left out"], per)]
+            (["solver", "pairs", "at round-off", "coverage", "sharpness", "left out"], per)]

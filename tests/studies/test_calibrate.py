@@ -118,3 +118,18 @@ def test_the_json_has_the_commands_keys_and_reads_back():
     assert obj["samples"] == 2 and obj["comparisons"] > 0
     back = Result.from_json(obj)
     assert isinstance(back, CalibrationResult) and "rotor-whirl" in str(back)
+
+
+def test_a_true_error_at_round_off_tests_no_error_bar():
+    # 30 eps of a 300 J channel against an estimate of 10 eps: both runs' rounding, not the
+    # solver's error — unresolved, not a miss; 1e4 eps against the same estimate is a miss
+    from compare.workflows.calibrate import EPS, FLOOR, _coverage
+    floor = FLOOR * EPS * 300
+    rows = [("a", 0, "work", 30 * EPS * 300, 10 * EPS * 300, floor),
+            ("a", 1, "work", 1e4 * EPS * 300, 10 * EPS * 300, floor),
+            ("a", 2, "work", 2 * floor, 4 * floor, floor)]
+    c = _coverage(rows)
+    assert (c["pairs"], c["unresolved"], c["coverage"]) == (3, 1, 0.5)
+    assert [m["set"] for m in c["misses"]] == [1]
+    assert c["sharpness"] == pytest.approx(np.median([1e4 / 10, 0.5]))
+    assert _coverage(rows[:1])["coverage"] is None

@@ -43,18 +43,30 @@ def time_markdown(obj: dict, ref_settings: dict) -> list[str]:
     lines, one table row per rung."""
     ref, key = obj["reference"], obj["key_channel"]
     names, check = ref["solvers"], ref["cross_check_rel"]
-    md = [f"# Work-precision: {obj['scene']}", "",
-          f"Reference: {names[0]} ({_settings_text(ref_settings)}), "
-          f"final {key} = {ref['value']:.15g}"
-          + (f"; {names[1]} agrees to {check:.1e} relative" if check is not None else ""),
+    bm = ref.get("kind") == "benchmark"
+    if bm:              # the problem's own error against its reference (no reference run)
+        head = [f"Reference: {ref['what']}. Each rung's error is the problem's: the largest "
+                f"deviation of the monitored quantities from the reference over the run, in "
+                f"{ref['unit']} (`error`), and that over {ref['scale']:.6g} {ref['unit']} "
+                f"(`rel. error`, which the walk and the summary read); the reference's own "
+                f"error is ~{ref['uncertainty']:g} {ref['unit']}. The figure is the library's "
+                f"accuracy against its CPU time (the median wall time) per solver."]
+    else:
+        head = [f"Reference: {names[0]} ({_settings_text(ref_settings)}), "
+                f"final {key} = {ref['value']:.15g}"
+                + (f"; {names[1]} agrees to {check:.1e} relative" if check is not None else "")]
+    unit = f"error [{ref['unit']}] | " if bm else ""
+    md = [f"# Work-precision: {obj['scene']}", "", *head,
           "", *[f"- {x}" for x in obj["summary_lines"]], "",
-          "| solver | method | setting | rel. error | energy residual [J] | median wall [s] | "
-          "compile [s] | steps | RHS evals | ns / RHS |", "|---" * 10 + "|"]
+          f"| solver | method | setting | {unit}rel. error | energy residual [J] | "
+          "median wall [s] | compile [s] | steps | RHS evals | ns / RHS |",
+          "|---" * (11 if bm else 10) + "|"]
     for r in obj["rows"]:
         knob = r["settings"].get("rtol") if "rtol" in r["settings"] and r["method"] in (
             "dop853", "dopri5", "rk23", "ode23") else r["settings"].get("dt")
         md.append(f"| {r['solver']} | {r['method']} | {fmt_value(knob)} | "
-                  f"{_dash(r['rel_error'], '.2e')} | {_dash(r['energy_residual'], '.2e')} | "
+                  + (f"{_dash(r.get('error'), '.2e')} | " if bm else "")
+                  + f"{_dash(r['rel_error'], '.2e')} | {_dash(r['energy_residual'], '.2e')} | "
                   f"{r['wall_s']:.4g} | "
                   f"{fmt_value(r['compile_s'], 3) if r['compile_s'] else '—'} | {r['steps']} | "
                   f"{r['rhs_evals'] or '—'} | {_dash(r['ns_per_rhs'], '.0f')} |")
@@ -104,7 +116,7 @@ def throughput_markdown(obj: dict, title: str) -> list[str]:
     return md
 
 
-def plot(path, rows, scene, ylabel, summary=None):
+def plot(path, rows, scene, ylabel, summary=None, xlabel="median wall time [s]"):
     """The work-precision figure: error over median wall time per ladder, the summary levels
     and each level's fastest rung starred."""
     plt = plot_style()
@@ -123,7 +135,7 @@ def plot(path, rows, scene, ylabel, summary=None):
             ax.annotate(f"≤ {level:g}: {best['fastest']} {best['method']}",
                         (best["wall_s"], level), textcoords="offset points", xytext=(4, 3),
                         fontsize=7)
-    ax.set_xlabel("median wall time [s]")
+    ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.set_title(f"work-precision: {scene}")
     ax.grid(alpha=0.3, which="both")
@@ -138,16 +150,22 @@ def plot(path, rows, scene, ylabel, summary=None):
     save_figure(fig, path)
 
 
-def _write(out_dir, obj: dict, md: list[str], ylabel: str) -> dict:
+def _write(out_dir, obj: dict, md: list[str], ylabel: str, **kw) -> dict:
     """The figure, report.md (the figure linked at its end) and bench.json; `obj` with its
     report path."""
-    plot(Path(out_dir) / FIGURE, obj["rows"], obj["scene"], ylabel, obj["summary"])
+    plot(Path(out_dir) / FIGURE, obj["rows"], obj["scene"], ylabel, obj["summary"], **kw)
     md = md + ["", f"![work-precision]({FIGURE})"]
     return write_study(out_dir, md, obj, "bench.json", report_in_json=False)
 
 
 def write_time_bench(out_dir, obj: dict, ref_settings: dict) -> dict:
-    """The time bench's folder (error of the final key channel over wall time)."""
+    """The time bench's folder (error of the final key channel over wall time, or a benchmark
+    problem's error against its reference)."""
+    ref = obj["reference"]
+    if ref.get("kind") == "benchmark":      # the library's accuracy against its CPU time
+        return _write(out_dir, obj, time_markdown(obj, ref_settings),
+                      f"{ref['problem']} error (max |deviation|) / {ref['scale']:.3g} "
+                      f"{ref['unit']}", xlabel="CPU time: median wall time of a run [s]")
     return _write(out_dir, obj, time_markdown(obj, ref_settings),
                   f"relative error of final {obj['key_channel']}")
 

@@ -25,8 +25,9 @@ def write_npz(tr, path) -> Path:
 
 
 def write_run_files(result, record: bool = True, report: bool = True) -> dict:
-    """The recording, the report and result.json into `result.out_dir` (its trajectories are
-    in `result.files` already); returns `result.files`, which names them too."""
+    """The recording, the report, a benchmark problem's results files (iftomm/) and result.json
+    into `result.out_dir` (its trajectories are in `result.files` already); returns
+    `result.files`, which names them too."""
     out_dir, files = result.out_dir, result.files
     if record:
         from .recording import write_run_recording
@@ -36,5 +37,9 @@ def write_run_files(result, record: bool = True, report: bool = True) -> dict:
         files["report"] = write_run_report(out_dir, result)
         from .html_report import write_run_html
         write_run_html(out_dir, result)          # report.html beside report.md
+    if result.scene.benchmark is not None:       # an IFToMM problem: its results files
+        from .iftomm import write_results
+        files["iftomm"] = write_results(out_dir, result.scene, result.params,
+                                        result.trajectories)
     write_json(out_dir / "result.json", result.to_json())
     return files

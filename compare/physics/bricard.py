@@ -1,7 +1,8 @@
 """Bricard's mechanism (scene `bricard`; IFToMM Library of Computational Benchmark Problems,
-problem A04, González, Dopico, Lugrís & Cuadrado 2006): five identical uniform thin rods (mass
-m, length L) joined end to end by six revolute joints in a closed loop whose two end joints are
-on the ground, under gravity g along −y, released at rest. The Grübler count gives zero degrees
+problem A04, González, Dopico, Lugrís & Cuadrado 2006): five identical uniform rods (mass m,
+length L, square cross-section of side a; a = 0: thin rods) joined end to end by six revolute
+joints in a closed loop whose two end joints are on the ground, under gravity g along −y,
+released at rest. The Grübler count gives zero degrees
 of freedom; the joint axes (each rod's two axes perpendicular to it and to each other, the
 trihedral Bricard linkage) leave one. Everything every solver of the scene computes alike lives
 here: the geometry, the kinematics in joint angles (screw theory: product of exponentials), the
@@ -23,10 +24,11 @@ import numpy as np
 from ..contract import Channel
 from .rotation import axis_rotation
 
-# the library's values: rod mass (kg), rod length (m), gravity (m/s², along −y)
-PARAMS = (("m", 1.0), ("L", 1.0), ("g", 9.81))
+# the library's values: rod mass (kg), rod length (m), gravity (m/s², along −y), side of the
+# rods' square cross-section (m)
+PARAMS = (("m", 1.0), ("L", 1.0), ("g", 9.81), ("a", 0.1))
 NAMES = tuple(n for n, _ in PARAMS)
-M, LEN, G = range(3)
+M, LEN, G, SIDE = range(4)
 T_END = 10.0
 CHANNELS = (Channel("p3_x", "m"), Channel("p3_y", "m"), Channel("p3_z", "m"),
             Channel("theta1", "rad"), Channel("energy_balance", "J"),
@@ -158,7 +160,9 @@ def _rod_motion(X, Rs, ts, qd, qdd, p):
 
 @nb.njit(cache=True)
 def inertia(q, p):
-    """Each rod's inertia tensor about its centre in space: m L²/12 (I − d dᵀ), d its axis."""
+    """Each rod's inertia tensor about its centre in space (d its axis): a uniform square prism
+    of side a, m (L² + a²)/12 (I − d dᵀ) + m a²/6 d dᵀ (the square's transverse moments are
+    equal, so the section's turn about d does not matter); a = 0: the thin rod."""
     _, Rs, _ = forward(q, p)
     return _inertia(Rs, p)
 
@@ -166,11 +170,18 @@ def inertia(q, p):
 @nb.njit(cache=True)
 def _inertia(Rs, p):
     out = np.zeros((5, 3, 3))
-    k = p[M] * p[LEN] ** 2 / 12.0
+    it, ia = principal_inertia(p)
     for j in range(5):
         d = Rs[j + 1] @ (POINTS[j + 1] - POINTS[j])
-        out[j] = k * (np.eye(3) - np.outer(d, d))
+        out[j] = it * (np.eye(3) - np.outer(d, d)) + ia * np.outer(d, d)
     return out
+
+
+@nb.njit(cache=True)
+def principal_inertia(p):
+    """(transverse, axial) moments of a rod about its centre: m (L² + a²)/12, m (a² + a²)/12."""
+    a2 = p[SIDE] * p[SIDE]
+    return p[M] * (p[LEN] ** 2 + a2) / 12.0, p[M] * a2 / 6.0
 
 
 @nb.njit(cache=True)

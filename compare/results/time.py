@@ -20,7 +20,8 @@ class TimeResult(ComparedResult):
     `.channels[...]`, `.errors[...]` — the solver's own error estimate on the grid —,
     `.status`, `.wall_s`, `.settings`, `.stats`), the pairwise `comparisons` with their
     verdicts, the `findings`; `scene` is the `Scene`, `scene_name` its name. `out_dir` and
-    `files` (solver -> .npz, "recording", "report") once written."""
+    `files` (solver -> .npz, "recording", "report", "iftomm": solver -> results file of a
+    benchmark problem) once written."""
     TYPE = "time"
 
     def __init__(self, scene, params: dict, trajectories: list, comparisons: list,
@@ -84,6 +85,8 @@ class TimeResult(ComparedResult):
         for k in ("recording", "report"):
             if k in self.files:
                 out[k] = str(self.files[k])
+        if "iftomm" in self.files:     # a benchmark problem's results files, one per solver
+            out["files"] = {"iftomm": {s: str(f) for s, f in self.files["iftomm"].items()}}
         return out
 
     @classmethod
@@ -98,6 +101,9 @@ class TimeResult(ComparedResult):
             files[r["solver"]] = path
         files.update({k: Path(folder) / Path(obj[k]).name if folder else Path(obj[k])
                       for k in ("recording", "report") if obj.get(k)})
+        if "iftomm" in obj.get("files", {}):
+            files["iftomm"] = {s: Path(folder) / "iftomm" / Path(f).name if folder else Path(f)
+                               for s, f in obj["files"]["iftomm"].items()}
         return cls(obj["scene"], obj["params"], trs, comparisons_from_json(obj["comparisons"]),
                    [Finding(**f) for f in obj.get("findings", [])], folder, files,
                    {"rows": obj["power"], "summary": obj.get("power_summary", "")}

@@ -299,6 +299,82 @@ class Fit:
     channel_sets: dict = field(default_factory=dict)
 
 
+ERRORS = ("max_abs",)      # the benchmark errors `Benchmark.deviation` computes
+
+
+@dataclass(frozen=True)
+class Benchmark:
+    """The scene is a problem of the IFToMM Library of Computational Benchmark Problems:
+    `problem` its id ("A04"); `columns` the monitored channels its results file lists after t,
+    every `output_dt` seconds (the problem's output step; None: the run's grid);
+    `reference(params, t) -> {channel: array on t}` the reference solution (NaN at times where
+    it holds no value; None where it is not known at these parameters), `reference_name` what
+    it is, `uncertainty` its own error (the channels' unit); `error` the problem's error:
+    "max_abs" — the largest |run − reference| over the monitored channels and the times where
+    the reference holds a value (`deviation`)."""
+    problem: str
+    columns: tuple
+    reference: Callable
+    reference_name: str
+    output_dt: float | None = None
+    uncertainty: float = 0.0
+    error: str = "max_abs"
+
+    def __post_init__(self):
+        if self.error not in ERRORS or not self.columns:
+            raise ValueError(f"benchmark {self.problem}: error in {ERRORS}, columns named")
+
+    def deviation(self, params, t, channels):
+        """The problem's error of a run (`t`, `channels` on it): {"error", "channel", "t",
+        "scale" (the reference's largest |value|), "points" (reference values compared)}, or
+        None where the reference is not known at `params`, holds no value on `t`, or the run
+        has no finite value where it does."""
+        t = np.asarray(t, float)
+        ref = self.reference(params, t)
+        if ref is None:
+            return None
+        best, scale, points = None, 0.0, 0
+        for c in self.columns:
+            r = np.asarray(ref[c], float)
+            held = np.isfinite(r)
+            if not held.any():
+                continue
+            d = np.abs(np.asarray(channels[c], float)[held] - r[held])
+            if not np.all(np.isfinite(d)):
+                return None
+            points += int(held.sum())
+            scale = max(scale, float(np.max(np.abs(r[held]))))
+            i = int(np.argmax(d))
+            if best is None or d[i] > best["error"]:
+                best = {"error": float(d[i]), "channel": c, "t": float(t[held][i])}
+        return best and {**best, "scale": scale, "points": points}
+
+
+def tabulated(times, values: dict, holds: Callable, atol: float = 1e-9) -> Callable:
+    """A reference given as a table: `values` (channel -> values at `times`), valid where
+    `holds(params)`; as `Benchmark.reference`: on a grid t, each tabulated time found on it
+    (within `atol` s) carries its value, every other time NaN."""
+    times = np.asarray(times, float)
+    values = {c: np.asarray(v, float) for c, v in values.items()}
+
+    def reference(params, t):
+        if not holds(params):
+            return None
+        t = np.asarray(t, float)
+        out = {c: np.full(len(t), np.nan) for c in values}
+        if not len(t):
+            return out
+        idx = np.clip(np.searchsorted(t, times), 0, len(t) - 1)
+        for k, tk in enumerate(times):
+            i = min((j for j in (idx[k] - 1, idx[k]) if 0 <= j < len(t)),
+                    key=lambda j: abs(t[j] - tk))
+            if abs(t[i] - tk) <= atol:
+                for c, v in values.items():
+                    out[c][i] = v[k]
+        return out
+    return reference
+
+
 @dataclass(frozen=True)
 class Scene:
     name: str
@@ -543,6 +619,9 @@ class TimeScene(Scene):
     power_in_campaign: ClassVar[bool] = True
     # `xval map` maps its regimes as well as its observables
     mappable: ClassVar[bool] = True
+    # the IFToMM library problem it is (None: none): `xval run --out` writes its results files,
+    # `xval bench` measures against its reference (`bench_reference`)
+    benchmark: Benchmark | None = None
 
     def samples_per_run(self, params) -> float:
         """Output samples per channel of one run at `params` (what a run costs)."""
@@ -552,6 +631,16 @@ class TimeScene(Scene):
         """`time`: of a workflow's two per-kind functions (or values), the one for this scene
         (the scene picks; it may not import the workflows that define them)."""
         return time
+
+    def bench_reference(self, params) -> Benchmark | None:
+        """What `xval bench` measures each rung's error against at `params`: the benchmark
+        problem's reference where it is known there (the problem's own error), else None —
+        the finest rung of the scene's first reference solver, on the key channel's final
+        value."""
+        bm = self.benchmark
+        ref = bm and bm.reference(params, self.output_grid(params))
+        held = ref and any(np.isfinite(np.asarray(ref[c], float)).any() for c in bm.columns)
+        return bm if held else None
 
 
 @dataclass(frozen=True)
@@ -563,6 +652,7 @@ class ModesScene(Scene):
     has_output_grid: ClassVar[bool] = False
     runs_carry_errors: ClassVar[bool] = False    # Modes carry no per-channel error bars
     power_in_campaign: ClassVar[bool] = False
+    benchmark: ClassVar[None] = None             # no IFToMM results files (a time scene's)
 
     @property
     def mappable(self) -> bool:

@@ -7,7 +7,7 @@ import numpy as np
 from ..analysis.verdict import Verdict
 from ..errors import BadInput
 from ..physics import andrews as phys
-from .base import Finding, TimeScene
+from .base import Benchmark, Finding, TimeScene, tabulated
 from .params import Param, positive
 
 SOURCE = ("F. Mazzia, C. Magherini, Test Set for IVP Solvers (release 2.4, 2008), problem "
@@ -79,6 +79,16 @@ def reference_findings(params, trajectories):
     return out
 
 
+# IFToMM library problem A03: the seven angles over 0…0.03 s on the run's grid; its reference
+# the test set's solution at t = 0.03 s, at the test set's own parameters only
+BENCHMARK = Benchmark(
+    problem="A03", columns=phys.ANGLES,
+    reference=tabulated([phys.T_REF], {a: [q] for a, q in zip(phys.ANGLES, phys.Q_REF)},
+                        lambda params: all(params[n] == v for n, v in phys.PARAMS)),
+    reference_name="the IVP Test Set's solution at t = 0.03 s (PSIDE, rtol = atol = 1e-14)",
+    uncertainty=REFERENCE_UNCERTAINTY)
+
+
 # the links drawn: body -> its points in drawing order (K3 as B → E and B → D)
 _LINKS = (("K1", ("O", "P")), ("K2", ("P", "E")), ("K3", ("E", "B", "D")), ("K4", ("G", "E")),
           ("K5", ("A", "G")), ("K6", ("H", "E")), ("K7", ("A", "H")))
@@ -129,5 +139,5 @@ ANDREWS = TimeScene(
     energy_scale_channels=("kinetic_energy",), findings=reference_findings,
     view_channels=("beta", "theta", "energy_balance"), draw_3d=draw_squeezer,
     campaign_cases=({"name": "andrews-squeezer", "campaign": "benchmarks"},),
-    group="benchmarks",
+    group="benchmarks", benchmark=BENCHMARK,
     notes="Energy balance = kinetic + spring − motor work mom·(β − β₀).")

@@ -5,14 +5,16 @@ tolerances (error-controlled methods, factors of 10) walked from the default out
 until the error reaches ~1e-2 (or the run fails), finer until the method's floor (the error stops
 falling, reaches what the reference can resolve, or a rung gets too slow). The error of each run
 is the relative error of the key channel's final value against a reference (the tightest run of
-the first solver, confirmed by the second); the time is the median wall time over `repeats`
-runs (5 × as many for runs under 50 ms), compile time reported apart; the leaf's `rhs_evals`
-and integration time give the cost of one right-hand-side evaluation (ns). A step-size-bound
-explicit method whose step is picked from its stability limit ("auto") has one rung. Every
-run's trajectory is kept in the bench directory. The summary names, for the error levels 1e-3,
-1e-6 and 1e-9, the fastest solver and every other solver's time ratio to it — all measured in
-this one run — and each fixed-step method's observed convergence order (flagged where it falls
-short of the method's order).
+the first solver, confirmed by the second) — or, for a scene that is a benchmark problem whose
+reference is known at the parameters (`Scene.bench_reference`), the problem's own error against
+that reference (relative: over the reference's largest value); the time is the median wall
+time over `repeats` runs (5 × as many for runs under 50 ms), compile time reported apart; the
+leaf's `rhs_evals` and integration time give the cost of one right-hand-side evaluation (ns).
+A step-size-bound explicit method whose step is picked from its stability limit ("auto") has
+one rung. Every run's trajectory is kept in the bench directory. The summary names, for the
+error levels 1e-3, 1e-6 and 1e-9, the fastest solver and every other solver's time ratio to
+it — all measured in this one run — and each fixed-step method's observed convergence order
+(flagged where it falls short of the method's order).
 """
 import numpy as np
 
@@ -158,24 +160,16 @@ def _bench_time(sc, solver_names, overrides, out, repeats, log, vary, max_output
         make_out(out)
     dt_out = params["output_dt"]
     key = sc.key_channel
-
-    # reference: the tightest run of the scene's reference solver (error-controlled at rtol
-    # 1e-13 where it has one, else an eighth of its default step), confirmed by the second the
-    # same way
-    refs = ([solvers.get_solver(n) for n in sc.reference_solvers]
-            or solvers.solvers_for(sc.name)[:2])
     out_dir = bench_dir(out)
-    ref_runs, done = [], {}
-    for s in refs:
-        st = _tightest(s, s.info(sc), dt_out)
-        tr = solvers.simulate(sc, s, params, st)
-        write_trajectory(out_dir, tr, f"reference-{s.name}")
-        ref_runs.append(tr)
-        done[(s.name, repr(sorted(st.items())))] = tr     # a ladder rung equal to it reuses it
-        log(f"reference {s.name}: {key}(end) = {tr.final()[key]:.15g} ({tr.status}, "
-            f"{tr.settings})")
-    ref = ref_runs[0].final()[key]
-    ref_check = (abs(ref_runs[1].final()[key] - ref) / abs(ref)) if len(ref_runs) > 1 else None
+    bm = sc.bench_reference(params)     # the scene answers what the rungs are measured against
+    if bm is not None:
+        reference, measure, ref_settings, done = _benchmark_reference(sc, bm, params, log)
+        what = (f"on problem {bm.problem}'s error (over {reference['scale']:.3g} "
+                f"{reference['unit']})")
+    else:
+        reference, measure, ref_settings, done = _solver_reference(sc, params, out_dir, log)
+        what = f"on final {key}"
+    ref_check = reference["cross_check_rel"]
 
     rows = []
     for s in chosen:
@@ -190,7 +184,7 @@ def _bench_time(sc, solver_names, overrides, out, repeats, log, vary, max_output
                     budget.check_steps(s.name, info, p, st, max_steps)
                 except (ValueError, BadInput):
                     return None
-                row = _run_rung(sc, s, info, label, st, p, params, done, repeats, ref, key,
+                row = _run_rung(sc, s, info, label, st, p, params, done, repeats, measure,
                                 out_dir, f"{s.name}-{label}-{i}", vary, log)
                 # a leaf that clamped the knob (an engine's step ≤ the output interval) to what
                 # an earlier rung ran: the walk goes no coarser instead of repeating it
@@ -204,22 +198,75 @@ def _bench_time(sc, solver_names, overrides, out, repeats, log, vary, max_output
             rows += walk(rungs, start, run, exhaustive=vary is not None)
 
     infos = {s.name: s.info(sc) for s in chosen}
-    summary, lines = summarise(rows, [s.name for s in chosen], f"on final {key}")
-    orders = convergence_orders(rows, 100 * max(FLOOR_ERR, ref_check or 0.0), _fixed_dt,
+    summary, lines = summarise(rows, [s.name for s in chosen], what)
+    floor = reference.get("floor_rel", 0.0)
+    orders = convergence_orders(rows, 100 * max(FLOOR_ERR, ref_check or 0.0, floor), _fixed_dt,
                                 lambda r: infos[r["solver"]].order(r["method"]))
     lines += order_lines(orders, "dt", " s")
     obj = {"scene": sc.name, "params": params, "key_channel": key,
            "vary": vary and {"name": vary[0], "values": vary[1]},
-           "reference": {"solvers": [s.name for s in refs], "value": ref,
-                         "cross_check_rel": ref_check},
+           "reference": reference,
            "repeats": repeats, "rows": rows, "summary": summary, "orders": orders,
            "summary_lines": lines, "result": BenchResult.TYPE}
-    return write_time_bench(out_dir, obj, ref_runs[0].settings)
+    return write_time_bench(out_dir, obj, ref_settings)
 
 
+def _benchmark_reference(sc, bm, params, log):
+    """The benchmark problem's reference: each rung's error is the problem's own (the largest
+    |run − reference| over the monitored channels, `Benchmark.deviation`); `rel_error` (what
+    the walk, the summary and the orders read) is it over the reference's largest |value|.
+    Returns (bench.json's "reference", measure(trajectory) -> row fields, {}, {})."""
+    ref = bm.reference(params, sc.output_grid(params))
+    vals = np.concatenate([np.asarray(ref[c], float) for c in bm.columns])
+    scale = float(np.max(np.abs(vals[np.isfinite(vals)])))
+    unit = sc.unit(bm.columns[0])
+    held = int(np.isfinite(vals).sum())
+    text = (f"IFToMM problem {bm.problem}'s reference: {bm.reference_name}; error = the largest "
+            f"|{', '.join(bm.columns)} − reference| over its {held} values on the grid "
+            f"(relative: over its largest |value| {scale:.6g} {unit})")
+    log(f"reference: {text}")
+
+    def measure(tr):
+        dev = bm.deviation(params, tr.t, tr.channels)
+        if dev is None:
+            return {"rel_error": None, "error": None}
+        return {"rel_error": dev["error"] / scale, "error": dev["error"],
+                "error_at": {"channel": dev["channel"], "t": dev["t"]}}
+    return ({"kind": "benchmark", "what": text, "problem": bm.problem,
+             "error": bm.error, "columns": list(bm.columns), "unit": unit, "scale": scale,
+             "values": held, "uncertainty": bm.uncertainty, "floor_rel": bm.uncertainty / scale,
+             "solvers": [], "value": None, "cross_check_rel": None}, measure, {}, {})
 
 
-def _run_rung(sc, solver, info, label, st, p, params, done, repeats, ref, key, out_dir, name,
+def _solver_reference(sc, params, out_dir, log):
+    """The tightest run of the scene's reference solver (error-controlled at rtol 1e-13 where
+    it has one, else an eighth of its default step), confirmed by the second the same way;
+    each rung's error is its final key channel's relative to it. Returns (bench.json's
+    "reference", measure(trajectory) -> row fields, the reference run's settings, the runs
+    done: a ladder rung equal to one reuses it)."""
+    dt_out, key = params["output_dt"], sc.key_channel
+    refs = ([solvers.get_solver(n) for n in sc.reference_solvers]
+            or solvers.solvers_for(sc.name)[:2])
+    ref_runs, done = [], {}
+    for s in refs:
+        st = _tightest(s, s.info(sc), dt_out)
+        tr = solvers.simulate(sc, s, params, st)
+        write_trajectory(out_dir, tr, f"reference-{s.name}")
+        ref_runs.append(tr)
+        done[(s.name, repr(sorted(st.items())))] = tr     # a ladder rung equal to it reuses it
+        log(f"reference {s.name}: {key}(end) = {tr.final()[key]:.15g} ({tr.status}, "
+            f"{tr.settings})")
+    ref = ref_runs[0].final()[key]
+    ref_check = (abs(ref_runs[1].final()[key] - ref) / abs(ref)) if len(ref_runs) > 1 else None
+
+    def measure(tr):
+        return {"rel_error": abs(tr.final()[key] - ref) / abs(ref)}
+    return ({"kind": "solver", "what": f"the tightest run of {refs[0].name}, final {key}",
+             "solvers": [s.name for s in refs], "value": ref, "cross_check_rel": ref_check},
+            measure, ref_runs[0].settings, done)
+
+
+def _run_rung(sc, solver, info, label, st, p, params, done, repeats, measure, out_dir, name,
               vary, log):
     """One rung: timed runs (a run slower than RUNG_WALL_S is not repeated; one faster than
     SHORT_RUN_S is repeated SHORT_REPEATS × as often: one scheduler hiccup is its whole time),
@@ -230,11 +277,12 @@ def _run_rung(sc, solver, info, label, st, p, params, done, repeats, ref, key, o
 
     tr = repeat_timed(walls, lambda: solvers.simulate(sc, solver, p, st), repeats) or tr
     write_trajectory(out_dir, tr, name)                       # the trajectories stay
-    err = abs(tr.final()[key] - ref) / abs(ref) if tr.status == "ok" else None
+    measured = measure(tr) if tr.status == "ok" else {"rel_error": None}
+    err = measured["rel_error"]
     evals, t_int = tr.stats.get("rhs_evals"), tr.stats.get("integrate_s")
     row = {"solver": solver.name, "method": label, "settings": tr.settings,
            "status": tr.status, "wall_s": float(np.median(walls)),
-           "compile_s": tr.stats.get("compile_s"), "rel_error": err,
+           "compile_s": tr.stats.get("compile_s"), **measured,
            "energy_residual": metrics.energy_residual(tr, sc.energy_channel)
            if sc.energy_channel else None,
            "steps": tr.stats.get("steps"), "rhs_evals": evals, "integrate_s": t_int,
@@ -243,13 +291,10 @@ def _run_rung(sc, solver, info, label, st, p, params, done, repeats, ref, key, o
            **({"vary": {vary[0]: p[vary[0]]}} if vary else {})}
     knob = st.get("rtol") if label in info.adaptive else st.get("dt")
     log(f"  {solver.name} {label} {knob}: err {err if err is None else f'{err:.2e}'} "
-        f"wall {row['wall_s']:.3g} s"
+        + (f"({measured['error']:.2e} abs) " if measured.get("error") is not None else "")
+        + f"wall {row['wall_s']:.3g} s"
         + (f", {row['ns_per_rhs']:.0f} ns/RHS" if row["ns_per_rhs"] else ""))
     return row
-
-
-
-
 
 
 def _fixed_dt(row):

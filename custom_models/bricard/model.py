@@ -8,8 +8,10 @@ central differences with the virtual step Δθ (setting `dtheta`). Then
 
     A θ'' = −(½ A' θ'² + V'),   A = Σ m|v_c|² + ωᵀIω,   ½ A' = Σ m v_c·a_c + ω·Iα,
 
-for q' = J, q'' = J2 (compare.physics.bricard.accel). One compiled `acc(t, q, q', p)` serves
-the shared linear-acceleration driver (custom_models/integrators/linear_acceleration.py).
+for q' = J, q'' = J2 (compare.physics.bricard.accel; I each rod's inertia about its centre,
+a uniform square prism of side a: compare.physics.bricard.principal_inertia). One compiled
+`acc(t, q, q', p)` serves the shared linear-acceleration driver
+(custom_models/integrators/linear_acceleration.py).
 """
 import numba as nb
 import numpy as np

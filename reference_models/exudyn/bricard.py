@@ -1,7 +1,8 @@
 """Exudyn model of Bricard's mechanism (scene `bricard`).
 
 Five `CreateRigidBody` rods (Euler-parameter nodes at the rods' centres, body axes = space axes
-at the start; thin rods: m L²/12 about the two transverse axes, nothing about their own) under
+at the start; uniform square prisms of side a: m (L² + a²)/12 about the two transverse axes,
+m a²/6 about their own, compare.physics.bricard.principal_inertia; a = 0: thin rods) under
 gravity −g ŷ, and six revolute joints at the library's points and axes
 (compare.physics.bricard.POINTS, AXES): five `CreateRevoluteJoint` (ground–rod 1, rod–rod) and
 the loop's last, rod 5 to ground, a `CreateGenericJoint` that keeps the three positions and
@@ -44,12 +45,13 @@ def build(params: dict, s: dict, closing_axes=None):
     """(SystemContainer, mbs, [node per rod], simulation settings) at the library's start."""
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
-    m, L, g = (float(params[n]) for n in phys.NAMES)
+    m, L, g = (float(params[n]) for n in ("m", "L", "g"))
+    i_t, i_a = phys.principal_inertia(phys.pack(params))
     ground = mbs.CreateGround(show=False)
     bodies, nodes = [], []
     for k in range(5):
         d = phys.POINTS[k + 1] - phys.POINTS[k]
-        inertia = m * L * L / 12.0 * (np.eye(3) - np.outer(d, d))
+        inertia = i_t * (np.eye(3) - np.outer(d, d)) + i_a * np.outer(d, d)
         b = mbs.CreateRigidBody(
             inertia=RigidBodyInertia(mass=m, inertiaTensor=inertia),
             referencePosition=list(0.5 * (phys.POINTS[k] + phys.POINTS[k + 1]) * L),

@@ -2,8 +2,10 @@
 
 Model: one kinematic tree of five hinges, world → rod 1 (hinge s0 at P0) → rod 2 (s1 at P1) →
 … → rod 5 (s4 at P4), each body's frame at its joint with the space axes at the start, so the
-hinge angles are the joint angles q0…q4 of compare.physics.bricard themselves; thin rods (m
-L²/12 about the two transverse axes, AXIAL·m L² about their own: MuJoCo needs it positive).
+hinge angles are the joint angles q0…q4 of compare.physics.bricard themselves; uniform square
+prisms of side a (an explicit `inertial`: m (L² + a²)/12 about the two transverse axes, m a²/6
+about their own, compare.physics.bricard.principal_inertia; at least AXIAL·m L² about their own,
+which MuJoCo needs positive: thin rods, a = 0, get that).
 The loop's last joint, rod 5 to the ground about x at P5, is two `connect`s on its axis (at
 P5 and P5 + L/2 x̂): six equations where a hinge is five, and five where the mechanism needs
 four (Grübler's zero against the one degree of freedom) — MuJoCo's soft constraints take the
@@ -27,9 +29,10 @@ INTEGRATORS = ("rk4", "euler", "implicitfast", "implicit")
 # constraint's time constant, solref_factor·dt; measured in tests/engines/test_bricard_engines.py);
 # the knob varies the ratio on its own (order 2)
 KNOBS = {"solref_factor": 2}
-# MuJoCo refuses a moving body with a zero principal inertia (mjMINVAL): each rod gets
-# AXIAL·m L² about its own axis, 1.2e-9 of its transverse inertia (its effect: well below the
-# soft loop's, measured in tests/engines/test_bricard_engines.py)
+# MuJoCo refuses a moving body with a zero principal inertia (mjMINVAL): each rod gets at least
+# AXIAL·m L² about its own axis, 1.2e-9 of a thin rod's transverse inertia — thin rods (a = 0)
+# only, the library's a = 0.1 m gives 1.7e6× more (its effect: well below the soft loop's,
+# measured in tests/engines/test_bricard_engines.py)
 AXIAL = 1e-10
 
 
@@ -47,15 +50,16 @@ def _v(x):
 
 
 def xml(params: dict, s: dict) -> str:
-    m, L, g = (float(params[n]) for n in phys.NAMES)
+    m, L, g = (float(params[n]) for n in ("m", "L", "g"))
+    i_t, i_a = phys.principal_inertia(phys.pack(params))
+    i_a = max(i_a, AXIAL * m * L * L)
     solref, solimp = lc.soft_strings(s)
     integ = lc.MJ_INTEGRATORS[s["integrator"]]
     P = phys.POINTS * L
     tree = ""
     for k in reversed(range(5)):
         d = phys.POINTS[k + 1] - phys.POINTS[k]
-        I_t = m * L * L / 12.0
-        diag = [AXIAL * m * L * L if abs(c) > 0.5 else I_t for c in d]
+        diag = [i_a if abs(c) > 0.5 else i_t for c in d]
         pos = P[k] - (P[k - 1] if k else 0.0)
         tree = (f'<body name="rod{k + 1}" pos="{_v(pos)}">'
                 f'<joint name="q{k}" type="hinge" axis="{_v(phys.AXES[k])}"/>'

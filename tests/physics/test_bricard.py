@@ -1,7 +1,8 @@
-"""Bricard's mechanism (scene `bricard`): the reference integration against conservation of
-energy, the mechanism's symmetries and a second integrator, the scene's tabulated reference
-against a fresh integration, and the custom `lagrange-partial` solver against the reference
-within its own error bar; a 1 % mass error in the solver is a disagreement."""
+"""Bricard's mechanism (scene `bricard`): the rods' inertia against a square prism's closed form,
+the reference integration against conservation of energy, the mechanism's symmetries and a
+second integrator, the scene's tabulated reference against a fresh integration, thin rods
+(a = 0) against an independent thin-rod table, and the custom `lagrange-partial` solver against
+the reference within its own error bar; a 1 % mass error in the solver is a disagreement."""
 import numpy as np
 import pytest
 
@@ -13,7 +14,37 @@ from compare.scenes.benchmarks_bricard import REF_P3, REF_T
 SCENE = get_scene("bricard")
 DEFAULT = SCENE.resolve({})
 P = phys.pack(DEFAULT)
-SHORT = SCENE.resolve({"t_end": "2"})      # past the first turning point (≈ 2.45 s is half)
+SHORT = SCENE.resolve({"t_end": "2"})      # past the first turning point (≈ 2.5 s is half)
+# P3 at t = 0, 1, …, 10 s for thin rods (a = 0), integrated (DOP853 at 1e-12, Radau agreeing
+# to 9e-12 m) while the rods' inertia had no term in a: an independent number for a = 0
+THIN_P3 = np.array([
+    [1.0, 0.50866476023, -0.969892003789, -0.966341177901, 0.532399282557, 0.999999983091,
+     0.484302768902, -0.973152766593, -0.962483804495, 0.555490531461, 0.999999729402],
+    [-1.0, -1.649827063211, -1.219455140948, -1.230661550978, -1.641032210097,
+     -1.000183881295, -1.658252373736, -1.208437127983, -1.242046001418, -1.631884102292,
+     -1.00073538991],
+    [1.0, 0.139035330748, 0.756464579607, 0.742736073473, 0.153506642712, 0.999816101798,
+     0.125099532499, 0.769839853856, 0.728660865181, 0.168477138343, 0.999264339691]]).T
+
+
+def test_each_rods_inertia_is_a_square_prisms():
+    """m = 2 kg, L = 1.5 m, a = 0.2 m, by hand: about the rod's axis m (a² + a²)/12 =
+    2·0.08/12 = 0.0133333…, across it m (L² + a²)/12 = 2·2.29/12 = 0.3816666… (twice); the axial
+    one's direction is the rod's (P_k − P_{k−1} turned by the rod's pose), at a bent
+    configuration; a = 0: the thin rod (nothing axial, m L²/12 = 0.375 across)."""
+    p = phys.pack({"m": 2.0, "L": 1.5, "g": 9.81, "a": 0.2})
+    q, ok = phys.close(0.7, np.zeros(5), p, 1e-15, 50)
+    assert ok
+    _, Rs, _ = phys.forward(q, p)
+    for k, I in enumerate(phys.inertia(q, p)):
+        d = Rs[k + 1] @ (phys.POINTS[k + 1] - phys.POINTS[k])
+        np.testing.assert_allclose(I, I.T, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(np.linalg.eigvalsh(I), [0.0133333333333333, 0.381666666666667,
+                                                           0.381666666666667], rtol=1e-13)
+        np.testing.assert_allclose(I @ d, 0.0133333333333333 * d, rtol=0, atol=1e-14)
+    thin = phys.inertia(q, phys.pack({"m": 2.0, "L": 1.5, "g": 9.81, "a": 0.0}))
+    np.testing.assert_allclose(np.linalg.eigvalsh(thin[2]), [0.0, 0.375, 0.375], rtol=0,
+                               atol=1e-14)
 
 
 def test_the_loop_has_one_degree_of_freedom_where_gruebler_counts_zero():
@@ -37,8 +68,8 @@ def reference_short():
 
 def test_reference_conserves_energy_and_agrees_with_radau(reference_short):
     """DOP853 at 1e-12: the energy balance within 1e-10 J of a 4.55 J peak kinetic energy
-    (measured 2e-11 J to 2 s, 5.1e-11 J to 10 s), the angles within 1e-10 rad of Radau at the
-    same tolerance (measured 9e-12 over 10 s)."""
+    (measured 2.8e-11 J to 2 s, 6.8e-11 J to 10 s), the angles within 1e-10 rad of Radau at the
+    same tolerance (measured 1.1e-11 over 10 s)."""
     t, (Q, QD, sol) = reference_short
     assert sol.success
     ch = phys.channels(Q, QD, P)
@@ -64,7 +95,7 @@ def test_the_whole_table_and_the_period():
     image in the plane x = 0 (P3 at (−L, −L, L)), every rod at its starting height — and back,
     a libration whose turning
     points (θ1' = 0) are 0 and π exactly and fall at whole multiples of the half period
-    (measured: to 9.4e-13 rad and 1e-12 s; half period 2.493154304 s)."""
+    (measured: to 7.7e-13 rad and 7.5e-13 s; half period 2.495855757 s)."""
     t = SCENE.output_grid(DEFAULT)
 
     def turning(t_, y):
@@ -84,6 +115,20 @@ def test_the_whole_table_and_the_period():
     assert ok
     np.testing.assert_allclose(np.cos(q), [-1, 1, -1, 1, -1, 1], rtol=0, atol=1e-12)
     np.testing.assert_allclose(phys.point3(q, P), [-1.0, -1.0, 1.0], rtol=0, atol=1e-12)
+
+
+def test_thin_rods_reproduce_the_thin_rod_table():
+    """a = 0: the thin rods' P3 at t = 0, 1, …, 10 s (measured: to 5e-13 m); the library's
+    a = 0.1 m moves it by up to 0.016 m, 1.6e8× the tolerance here."""
+    thin = {**DEFAULT, "a": 0.0}
+    t = SCENE.output_grid(thin)
+    Q, QD, sol = phys.reference(thin, t)
+    assert sol.success
+    ch = phys.channels(Q, QD, phys.pack(thin))
+    idx = [int(np.argmin(np.abs(t - tk))) for tk in REF_T]
+    got = np.array([[ch[c][i] for c in ("p3_x", "p3_y", "p3_z")] for i in idx])
+    np.testing.assert_allclose(got, THIN_P3, rtol=0, atol=1e-10)
+    assert np.max(np.abs(THIN_P3 - REF_P3)) > 1e-2
 
 
 def _run(params, solver="lagrange-partial"):

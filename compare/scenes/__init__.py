@@ -47,6 +47,7 @@ BUILT_IN = {
     "bicycle": ("benchmarks_bicycle", "BICYCLE"),
     "andrews-squeezer": ("benchmarks_andrews", "ANDREWS"),
     "bricard": ("benchmarks_bricard", "BRICARD"),
+    "n-four-bar": ("benchmarks_nfourbar", "NFOURBAR"),
 }
 
 

@@ -1,0 +1,99 @@
+"""Exudyn model of the N four-bar mechanism (scene `n-four-bar`).
+
+2N + 1 planar rigid bodies (`NodeRigidBody2D`/`ObjectRigidBody2D`, node at the rod's centre,
+m L²/12 about it; gravity −g ŷ as `LoadMassProportional`): cranks 0 … N and couplers 0 … N−1
+at the library's start (every crank at φ0, the couplers level, the velocities of the rigid
+mechanism with B_k's horizontal velocity vx0), joined by `RevoluteJoint2D`s: crank k to the
+ground at (kL, 0), crank k's tip to coupler k's start, coupler k's end to crank k+1's tip.
+6N + 3 coordinates, 6N + 2 constraint equations, independent away from the singular positions
+(one degree of freedom); where every rod is horizontal the constraint Jacobian loses N in rank
+and the solver works on a near-singular iteration matrix there. An index-3 DAE solved by
+generalized-α (position-level constraints: no drift) output interval by output interval with
+the sparse linear solver; the crank and coupler angles and rates are the nodes' rotation
+coordinates.
+"""
+from __future__ import annotations
+
+import math
+
+import exudyn as exu
+import numpy as np
+from exudyn import itemInterface as ii
+
+from compare.contract import LeafResult
+from compare.physics import nfourbar as phys
+
+from .. import loop_common as lc
+
+# Newton's tolerances 1e-7: at the singular position φ = −π (all rods horizontal, the folded
+# branch crossing) the iteration stagnates near a relative residual 2e-9 with the multipliers
+# ~9e3 N (the iteration matrix near-singular), so at 1e-10 (the other loops' value) the solver
+# stops there (measured at t = 0.85 s, tests/engines/test_nfourbar_engines.py); 1e-7 passes it
+# and moves φ by 7e-9 rad before it (against 2.6e-5 rad of the step's own error)
+DEFAULT_SETTINGS = {"integrator": "generalized_alpha", "dt": 1e-3, "spectral_radius": 1.0,
+                    "newton_tol": 1e-7, "newton_abs_tol": 1e-7}
+INTEGRATORS = ("generalized_alpha", "trapezoidal")
+
+
+def check_settings(settings: dict | None, t_out: np.ndarray | None = None) -> dict:
+    """The settings merged and checked before anything runs (ValueError with one line)."""
+    return lc.exudyn_settings(settings, DEFAULT_SETTINGS, INTEGRATORS)
+
+
+def build(params: dict, s: dict):
+    """(SystemContainer, mbs, [node per rod: cranks, then couplers], simulation settings)."""
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    m, L, g, n = float(params["m"]), float(params["L"]), float(params["g"]), int(params["N"])
+    phi, rate = float(params["phi0"]), phys.initial_rate(params)
+    c, sn = math.cos(phi), math.sin(phi)
+    ground = mbs.AddObject(ii.ObjectGround())
+    rods = [((k * L + 0.5 * L * c, 0.5 * L * sn), phi, (-0.5 * L * sn * rate, 0.5 * L * c * rate),
+             rate) for k in range(n + 1)]
+    rods += [((k * L + L * c + 0.5 * L, L * sn), 0.0, (-L * sn * rate, L * c * rate), 0.0)
+             for k in range(n)]
+    nodes, bodies = [], []
+    for (x, y), ang, (vx, vy), w in rods:
+        nd = mbs.AddNode(ii.NodeRigidBody2D(referenceCoordinates=[x, y, ang],
+                                            initialCoordinates=[0, 0, 0],
+                                            initialVelocities=[vx, vy, w]))
+        b = mbs.AddObject(ii.ObjectRigidBody2D(nodeNumber=nd, mass=m, inertia=m * L * L / 12))
+        mm = mbs.AddMarker(ii.MarkerBodyMass(bodyNumber=b))
+        mbs.AddLoad(ii.LoadMassProportional(markerNumber=mm, loadVector=[0, -g, 0]))
+        nodes.append(nd)
+        bodies.append(b)
+
+    def end(b, side):
+        return mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=b,
+                                                   localPosition=[0.5 * side * L, 0.0, 0.0]))
+    for k in range(n + 1):
+        pin = mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=ground,
+                                                  localPosition=[k * L, 0.0, 0.0]))
+        mbs.AddObject(ii.RevoluteJoint2D(markerNumbers=[pin, end(bodies[k], -1)]))
+    for k in range(n):
+        cp = bodies[n + 1 + k]
+        mbs.AddObject(ii.RevoluteJoint2D(markerNumbers=[end(bodies[k], 1), end(cp, -1)]))
+        mbs.AddObject(ii.RevoluteJoint2D(markerNumbers=[end(cp, 1), end(bodies[k + 1], 1)]))
+    mbs.Assemble()
+    ss = lc.ga_simulation_settings(s)
+    ss.linearSolver.solverType = exu.LinearSolverType.EigenSparse
+    return SC, mbs, nodes, ss
+
+
+def _state(mbs, nodes):
+    q = np.array([mbs.GetNodeOutput(nd, exu.OutputVariableType.Rotation)[2] for nd in nodes])
+    qd = np.array([mbs.GetNodeOutput(nd, exu.OutputVariableType.AngularVelocity)[2]
+                   for nd in nodes])
+    return q, qd
+
+
+def simulate(params: dict, t_out: np.ndarray, settings: dict | None = None) -> LeafResult:
+    s = check_settings(settings)
+    t_out = np.asarray(t_out, float)
+    n = int(params["N"])
+    Q, QD, steps, status, t_fail, reason, dt = lc.exudyn_solve(
+        lambda: build(params, s), _state, t_out, s, 2 * n + 1)
+    k = n + 1
+    return LeafResult(channels=phys.channels(Q[:, :k], QD[:, :k], Q[:, k:], QD[:, k:], params),
+                      status=status, t_fail=t_fail, reason=reason,
+                      stats={"steps": steps, "rhs_evals": -1}, settings={**s, "dt": dt})

@@ -261,9 +261,11 @@ class Calibration:
     (else uniformly); `fixed` (name -> value) holds names out of the region (a short horizon);
     `outside` (solver, "*" any -> why): where in the region that solver leaves its domain and
     stops (a set it stops at is skipped with this reason, never counted as agreement);
-    `truth` (solver -> another): whose run is that solver's true answer where it has no
-    tighter discretisation of its own (a closed form of the same model); `campaign`: the sets
-    the default campaign draws (0: none — the scene's runs are too long for its budget)."""
+    `truth` (solver -> another): whose run is that solver's true answer in place of its own
+    far tighter run — where it has none (a closed form of the same model) or where its own
+    refinement grows noisier than the run (a stiff FE mesh, index-3 accelerations);
+    `campaign`: the sets the default campaign draws (0: none — the scene's runs are too long
+    for its budget)."""
     region: dict = field(default_factory=dict)
     fixed: dict = field(default_factory=dict)
     log: tuple = ()

@@ -111,11 +111,27 @@ BLADE_TOLERANCES = {"frequency": 3e-8,
 SHAFT_TOLERANCES = {"frequency": 1e-8, "frequency_by_solver": {"exudyn": 3e-6, "mujoco": 3e-6},
                     "frequency_by_pair": {"exudyn|mujoco": 3e-8},
                     "frequency_one_model": ONE_CHAIN}
+
+
+def aircraft_engine_allowance(params):
+    """The clamped aircraft's custom–engine allowance: the blade's (blade_engine_allowance) over
+    its first ⌈n_modes/4⌉ modes — the aircraft's first n_modes hold each blade mode four
+    times (collective, two cyclic, differential), the support's modes only push blade modes
+    out. At rest (no frame question) custom–engine deviates by 0.50 of it at the defaults
+    (lag differential 1, 1.34e-3) and 0.23–0.50 at the five sets of `xval calibrate
+    helicopter-clamped --samples 5 --seed 11` (docs/scenes/helicopter-clamped.md)."""
+    n = -(-params["n_modes"] // 4)
+    return ROTARY_INERTIA_SAFETY * max(
+        shift for _, _, shift in blade_rotary_inertia_shifts({**params, "n_modes": n}, "blade_"))
+
+
 # The whole aircraft at rest (no frame question; spinning, see mstmm_frames): custom–engine the
 # sections' rotary inertia again. helicopter-clamped at rest and at 36.65 rad/s (the campaign's
 # like-for-like cases): mstmm–fem ≤ 1.7e-6, exudyn–mujoco (one model) ≤ 1.2e-7, custom–engine at
-# rest ≤ 1.34e-3 (lag differential 1)
-CLAMPED_TOLERANCES = {"frequency": 5e-6, "frequency_by_solver": BLADE_ENGINE_ALLOWANCE,
+# rest ≤ 1.34e-3 (lag differential 1): aircraft_engine_allowance
+CLAMPED_TOLERANCES = {"frequency": 5e-6,
+                      "frequency_by_solver": {e: aircraft_engine_allowance for e in ("exudyn",
+                                                                                  "mujoco")},
                       "frequency_by_pair": {"exudyn|mujoco": 5e-7},
                       "frequency_one_model": ONE_CHAIN}
 # helicopter-hover (8 modes), same cases: mstmm–fem ≤ 4.2e-5 (fuselage 1 at speed), exudyn–mujoco
@@ -228,7 +244,11 @@ ROTATING_BEAM = ModesScene(
     campbell=Campbell("speed", 0.0, 40.0, 21, excitation_hz=rotor_speed_hz, frame="rotating",
                       excitations=BLADE_EXCITATIONS),
     mode_shape_3d=mstmm_shapes.rotating_beam,
-    campaign_cases=({"name": "rotating-beam"},), calibration=Calibration(campaign=2),
+    campaign_cases=({"name": "rotating-beam"},),
+    # fem's truth is mstmm (the same rotating beam to its root tolerance), not its own finer
+    # mesh, which moves the low modes away (set 14 of seed 11: lag 1 off mstmm by 1.3e-7 Hz at
+    # the default mesh, 2.4e-6 at ×2, 4.1e-5 at ×4)
+    calibration=Calibration(truth={"fem": "mstmm"}, campaign=2),
     published_timings=(TABLE1_TIMING,),
     notes=BLADE_DOC + "; torsion (GJφ')' − I_α(φ̈ + Ω²φ) = 0 as the paper's eq. 30, or "
     "((GJ + T k_A²)φ')' − I_α(φ̈ + Ω²φ) = 0 with tension_torsion=on.",
@@ -253,7 +273,12 @@ SPINNING_SHAFT = ModesScene(
     campbell=Campbell("spin_ratio", 0.0, 25.0, 26, excitation_hz=shaft_speed_hz, unit="",
                       frame="rotating", whirls=True, excitations=SHAFT_EXCITATIONS),
     mode_shape_3d=mstmm_shapes.spinning_shaft,
-    campaign_cases=({"name": "spinning-shaft"},), calibration=Calibration(campaign=2),
+    campaign_cases=({"name": "spinning-shaft"},),
+    # fem's truth is mstmm (the same Euler–Bernoulli shaft, solved to its root tolerance), not
+    # its own finer mesh: refining moves the low whirls away (set 14 of seed 11: whirl 1 off
+    # mstmm by 5.5e-9 Hz at the default mesh, 8.6e-8 at ×2, 1.3e-6 at ×4 — the stiffness's
+    # conditioning ∝ N⁴)
+    calibration=Calibration(truth={"fem": "mstmm"}, campaign=2),
     notes="frequencies_hz dimensional; extra['omega_star'] = ω/ω₀ (Table 2's 'Hz' is ω*).",
 )
 

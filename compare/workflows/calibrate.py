@@ -181,13 +181,13 @@ def _truth(scene, solver, params, run, cal, cache):
 
 
 def _modes_truth(scene, solver, params, run, cal, cache):
+    other = cal.truth.get(solver.name)          # a declared truth first, as a time scene's
+    if other:
+        if other not in cache:
+            cache[other] = adapter.modes(scene, adapter.get_solver(other), params)
+        return cache[other]
     s = modes_far_tighter(solver.info(scene), solver.preset)
-    if s is not None:
-        return adapter.modes(scene, solver, params, s)
-    other = cal.truth.get(solver.name)
-    if other and other not in cache:
-        cache[other] = adapter.modes(scene, adapter.get_solver(other), params)
-    return cache.get(other)
+    return None if s is None else adapter.modes(scene, solver, params, s)
 
 
 def _time_truth(scene, solver, params, run, cal, cache):
@@ -227,7 +227,23 @@ def evaluate(scene: Scene, chosen: list, params: dict, first: bool = False) -> d
             continue
         out[s.name] = scene.either(time=_time_bars, modes=_mode_bars)(
             scene, s, params, r, cal, cache)
-    return {"runs": runs, "comparisons": scene.verdicts(params, ok), "bars": out}
+    comparisons = scene.verdicts(params, ok)
+    return {"runs": runs, "comparisons": comparisons, "bars": out,
+            "explained": explained(scene, params, comparisons, runs)}
+
+
+def explained(scene: Scene, params: dict, comparisons: list, runs: dict) -> dict:
+    """(a, b, channel) -> why, for each disagreement the scene's `explain_frequencies` verifies
+    as a named difference of the two models (the helicopters' rotor-frame assumption: the other
+    model with it reproduces the mode, the pair agrees on the differential modes and at rest —
+    compare/scenes/mstmm_frames.py); the rest stay disagreements."""
+    if not scene.explain_frequencies or not any(c.verdict == Verdict.DISAGREE
+                                                for c in comparisons):
+        return {}
+    rows, _ = scene.explain_frequencies(
+        params, comparisons, lambda n, p: runs[n] if p == params and n in runs
+        else adapter.modes(scene, adapter.get_solver(n), p), scene.tolerances_for(params))
+    return {(r["a"], r["b"], r["mode"]): r["why"] for r in rows if r["frame"]}
 
 
 def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
@@ -240,6 +256,7 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
     axes, fixed = region(scene)
     defaults = scene.resolve(fixed)
     rows, skipped, disagree, n_cmp, verdicts = [], [], [], 0, {}
+    explained_rows = []
     left_out = {s.name: {} for s in chosen}
     widest = None
     bar = progress.task(f"calibrate {scene.name}", samples, "parameter sets")
@@ -263,7 +280,10 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
             n_cmp += 1
             verdicts[str(c.verdict)] = verdicts.get(str(c.verdict), 0) + 1
             where = {"set": k, "params": changed, "pair": [c.a, c.b], "channel": c.channel}
-            if c.verdict == Verdict.DISAGREE:
+            why = one["explained"].get((c.a, c.b, c.channel))
+            if c.verdict == Verdict.DISAGREE and why:
+                explained_rows.append({**where, "ratio": float(c.ratio), "why": why})
+            elif c.verdict == Verdict.DISAGREE:
                 disagree.append({**where, "ratio": float(c.ratio)})
             bound = c.tolerance * c.scale
             if c.deviation > FLOOR * EPS * c.scale and bound > 0:
@@ -280,7 +300,7 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
                       max(FLOOR * EPS * b["scale"][c], b.get("floor", {}).get(c, 0.0)))
                      for c in b["true"]]
     data = {"scene": scene.name, "samples": samples, "comparisons": n_cmp,
-            "disagree": disagree, **_coverage(rows),
+            "disagree": disagree, "explained": explained_rows, **_coverage(rows),
             "widest_window": widest["window"] if widest else None,
             "skipped": skipped, "seed": seed, "solvers": [s.name for s in chosen],
             "verdicts": verdicts, "widest_at": widest,

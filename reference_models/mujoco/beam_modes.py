@@ -35,6 +35,9 @@ MODES_SETTINGS = {"n_segments": 40, "extrapolate": True, "rotary_inertia": True}
 SHAFT_MODES_SETTINGS = {"n_segments": 40, "extrapolate": True}
 
 HUB_ARMATURE = 1e10     # × the chain's inertia about the spin axis: hub speed held to ~1e-10
+# MuJoCo refuses a moving body's inertia below mjMINVAL (1e-15 kg·m²): a short light segment's
+# token polar inertia (the chain's 1e-9 of its transverse one) is raised to 10 mjMINVAL
+MIN_INERTIA = 1e-14
 _FD_H = 1e-3            # Euler step of transitionFD; the extraction is h-independent
 _FD_EPS = 1e-6
 
@@ -56,7 +59,8 @@ def _model(chain: dict) -> mujoco.MjModel:
     for i, x in enumerate(chain["hinges"]):
         body = parent.add_body(pos=list((x - prev_x) * e_a), mass=float(chain["masses"][i]),
                                ipos=list(0.5 * chain["lengths"][i] * e_a),
-                               inertia=list(map(float, chain["inertia"][i])),
+                               inertia=list(map(float, np.maximum(chain["inertia"][i],
+                                                                  MIN_INERTIA))),
                                explicitinertial=True)
         for _, axis, k in chain["joints"]:
             body.add_joint(type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(np.eye(3)[axis]),

@@ -182,6 +182,18 @@ def test_spinning_shaft_closed_form(engine, spin_ratio):
     np.testing.assert_allclose(r.frequencies_hz * 2 * math.pi / w0, r.extra["omega_star"])
 
 
+@pytest.mark.parametrize("spin_ratio", [0, 3])
+def test_a_short_light_shaft_meets_the_closed_form_in_mujoco(spin_ratio):
+    """L = 0.667 m, m = 1.71 kg/m (a calibration set): each segment's token polar inertia
+    (1e-9 of its transverse one) is below MuJoCo's mjMINVAL and is raised to 1e-14 kg·m²; the
+    whirls still meet the closed form ω* = |λᵢ² ± Ω*| as at the paper's shaft."""
+    p = SPINNING_SHAFT.resolve({"L": "0.667", "m": "1.71", "spin_ratio": str(spin_ratio)})
+    r = mj_shaft.modes(p, {})
+    lam2 = np.array(LAMBDA) ** 2
+    exact = np.sort(np.concatenate([np.abs(lam2 - spin_ratio), lam2 + spin_ratio]))
+    np.testing.assert_allclose(r.extra["omega_star"], exact, rtol=5e-6)
+
+
 @pytest.mark.parametrize("engine", ["exudyn", "mujoco"])
 def test_shaft_whirl_labels(engine):
     """Seen from the ground the isotropic shaft has no gyroscopic term: every mode whirls at

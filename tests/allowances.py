@@ -49,7 +49,7 @@ CASES = {
 }
 CASES["andrews-squeezer"] = [("default", {}, None)]     # the test set's run to t = 0.03 s
 CASES["bricard"] = [("default", {}, None)]     # the library's run to t = 10 s
-CASES["n-four-bar"] = [("default", {}, None)]  # the paper's N = 50 run to t = 10 s
+CASES["n-four-bar"] = [("default", {}, None)]  # the library's N = 40 run to t = 10 s
 CASES["bicycle"] = [(f"speed{v:g}", {"speed": v}, None) for v in (2.0, 5.0, 8.0)]
 LONG = {"sail-deploy": [("full-engines", {}, ["thread-spool-conservative", "exudyn",
                                                "mujoco"])]}

@@ -25,8 +25,8 @@ import numpy as np
 from ..contract import Channel
 
 T_END = 10.0
-N_DEFAULT = 50
-PHI0 = np.pi / 4
+N_DEFAULT = 40
+PHI0 = np.pi / 2      # the library's start: every crank vertical
 CHANNELS = (Channel("phi", "rad"), Channel("phi_dot", "rad/s"), Channel("b0_x", "m"),
             Channel("b0_y", "m"), Channel("kinetic_energy", "J"),
             Channel("potential_energy", "J"), Channel("energy_balance", "J"),

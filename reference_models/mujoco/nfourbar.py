@@ -21,12 +21,12 @@ from compare.physics import nfourbar as phys
 
 from .. import loop_common as lc
 
-# dt 2.5e-4 (bricard's 1e-4 is 4× the time here: 101 hinges, 150 constraint rows)
+# dt 2.5e-4 (bricard's 1e-4 is 4× the time here: 81 hinges, 120 constraint rows)
 DEFAULT_SETTINGS = {"integrator": "rk4", "dt": 2.5e-4, "solref_factor": 4.0,
                     "solimp": (0.9999, 0.9999, 0.001, 0.5, 2.0)}
 INTEGRATORS = ("rk4", "euler", "implicitfast", "implicit")
 # the soft loops move the motion off the rigid mechanism and spread the cranks by an amount
-# that grows as tc^1.2…1.5 (tc = the constraints' time constant, solref_factor·dt, at least
+# that grows as tc^1.2…1.6 (tc = the constraints' time constant, solref_factor·dt, at least
 # 2·dt: MuJoCo's floor; measured in tests/engines/test_nfourbar_engines.py, not bricard's tc²):
 # the knob varies it on its own, declared order 1 (the estimate's floor ratio ½)
 KNOBS = {"solref_factor": 1}

@@ -32,7 +32,7 @@ ENGINE = {"rotor-spinup": "mujoco", "press": "exudyn", "press-cycle": "exudyn",
 CASES["bicycle"], ENGINE["bicycle"] = {}, "exudyn"      # 5 m/s: the weave
 CASES["andrews-squeezer"], ENGINE["andrews-squeezer"] = {}, "mujoco"   # the test set's run
 CASES["bricard"], ENGINE["bricard"] = {"t_end": "2"}, "mujoco"   # to past the first swing
-CASES["n-four-bar"], ENGINE["n-four-bar"] = {"N": "4", "t_end": "2"}, "exudyn"  # 3 singular
+CASES["n-four-bar"], ENGINE["n-four-bar"] = {"N": "4", "t_end": "2"}, "exudyn"  # φ = 0, −π
 PAIRS = [(sc, c) for sc in CASES for c in SCENES[sc].leaves
          if solvers.get_solver(c).engine not in ("exudyn", "mujoco")]
 

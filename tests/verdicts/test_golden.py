@@ -130,7 +130,7 @@ POWER["bicycle"] = "m_B"             # the rear body's (rider's) mass: in M, K0 
 POWER["andrews-squeezer"] = "m2"     # the rod K2: in M(q) and the velocity terms f
 OVERRIDES["bricard"] = {"t_end": "2"}
 POWER["bricard"] = "m"     # every rod's mass: the motion is the same, the energies 1 % off
-OVERRIDES["n-four-bar"] = {"t_end": "2"}     # past φ = 0 (0.29 s) and φ = −π (0.85, 1.8 s)
+OVERRIDES["n-four-bar"] = {"t_end": "2"}     # past φ = 0 (0.72 s) and φ = −π (1.24 s)
 POWER["n-four-bar"] = "g"  # gravity: the mass scales out of the motion, g does not
 
 

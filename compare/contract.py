@@ -129,15 +129,17 @@ def require_positive(settings: dict, keys: tuple, auto_ok: bool = False) -> None
 class Channel(str):
     """A scene's output channel: it is its name (dict keys, JSON, `==` and the leaves see a plain
     string) and carries its SI unit — the unit's one home, read by every plot and table. A
-    plug-in may name its channels with plain strings; they are drawn unitless ([–])."""
+    plug-in may name its channels with plain strings; they are drawn unitless ([–]).
+    `rounding`: the parameter whose size the channel's rounding scales with where that is not
+    its own value (a constraint residual, zero in exact arithmetic, computed from lengths)."""
 
-    def __new__(cls, name: str, unit: str = ""):
+    def __new__(cls, name: str, unit: str = "", rounding: str | None = None):
         self = super().__new__(cls, name)
-        self.unit = unit
+        self.unit, self.rounding = unit, rounding
         return self
 
     def __getnewargs__(self):          # pickled with its unit (pool workers, Dask)
-        return (str(self), self.unit)
+        return (str(self), self.unit, self.rounding)
 
 
 @dataclass

@@ -368,19 +368,28 @@ def _steps(tr: Trajectory) -> float:
     return float(n or len(tr.t))
 
 
+def rounding_scale(channel, tr, params) -> float:
+    """What a channel's rounding scales with: its largest |value|, or the parameter it names
+    (`Channel.rounding`) where that is larger (a loop residual's lengths)."""
+    own = float(np.max(np.abs(tr.channels[channel])))
+    name = getattr(channel, "rounding", None)
+    return max(own, abs(float(params[name]))) if name else own
+
+
 def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) -> dict:
     """What the tighter rerun cannot see, per channel (a running maximum over t):
     - round-off: √(steps of both runs) × machine epsilon × the channel's scale (its largest
-      |value|): each step rounds the state once, independently, so the rounding errors add
-      like a random walk (n × eps was 20× the quaternion rotor's whole error at rtol 1e-11:
-      `tests/verdicts/test_coverage.py` measures the floor's sharpness);
+      |value|, or the length it is computed from: `rounding_scale`): each step rounds the
+      state once, independently, so the rounding errors add like a random walk (n × eps was
+      20× the quaternion rotor's whole error at rtol 1e-11: `tests/verdicts/test_coverage.py`
+      measures the floor's sharpness);
     - an error-controlled rerun's own error: the step-size controller makes the solution jump
       by about its tolerance under any tiny change (rotor-spinup at 3.2 N·m: a 1e-15 change of
       the torque moves `potential` by 2.5e-9 J at rtol 1e-11, the size of the rtol-1e-13
       rerun's own error, which factor 1 took for zero). Measured by one more run at half that
       tolerance: |y_tight − y_tight/2| is the tight run's error (a fixed step's error is smooth
       in the step, and halving it sees it: no third run)."""
-    floor = {c: np.sqrt(_steps(tr) + _steps(ref)) * EPS * np.max(np.abs(tr.channels[c]))
+    floor = {c: np.sqrt(_steps(tr) + _steps(ref)) * EPS * rounding_scale(c, tr, params)
              for c in scene.channels}
     jitter = {c: 0.0 for c in scene.channels}
     if isinstance(tight.get("rtol"), float) and tight["rtol"] != settings.get("rtol"):

@@ -203,7 +203,7 @@ def breakpoints(params: dict, t_out: np.ndarray):
 # ---- observables from a solver's kinematic output --------------------------------------------
 CHANNELS = (Channel("crank_angle", "rad"), Channel("crank_rate", "rad/s"),
             Channel("crank_accel", "rad/s²"), Channel("rocker_angle", "rad"),
-            Channel("slider_x", "m"), Channel("loop_violation", "m"),
+            Channel("slider_x", "m"), Channel("loop_violation", "m", rounding="l2"),
             Channel("energy_balance", "J"))
 
 

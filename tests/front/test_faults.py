@@ -168,9 +168,12 @@ def test_ctrl_c_stops_the_workers_keeps_finished_jobs_and_says_how_to_resume(tmp
     p = popen(["campaign", str(f), "--out", str(out)])
     # every job started (a worker opens its log first; a finished job's log goes when it stayed
     # empty, its .npz stays) and one finished: the two slow ones run
-    wait_for(lambda: (len(list(store.glob("*.npz"))) >= 1
+    # (stored results only: a running job's atomic temporary, `.name.XXXX.npz`, is no result)
+    def stored():
+        return [f for f in store.glob("*.npz") if not f.name.startswith(".")]
+    wait_for(lambda: (len(stored()) >= 1
                       and len({f.stem for f in store.glob("*.log")}
-                              | {f.stem for f in store.glob("*.npz")}) == n)
+                              | {f.stem for f in stored()}) == n)
              or p.poll() is not None)
     assert p.poll() is None
     workers = _children_of(p.pid)
@@ -184,7 +187,7 @@ def test_ctrl_c_stops_the_workers_keeps_finished_jobs_and_says_how_to_resume(tmp
     lines = [ln for ln in se.splitlines() if "interrupted" in ln]
     assert len(lines) == 1 and "resume with: xval campaign" in lines[0]
     assert stopped_in < 15                    # the running jobs were ended, not waited for
-    kept = len(list(store.glob("*.npz")))     # waited for, the two running ones would be kept
+    kept = len(stored())                      # waited for, the two running ones would be kept
     assert 1 <= kept < n and not list(store.glob(".*"))
     assert not (store.parent / ".lock").exists()
     rc, so, se = xval("diff", str(store.parent), str(store.parent), "--out", str(tmp_path / "d"))

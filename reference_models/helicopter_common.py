@@ -264,26 +264,41 @@ def classify(V: np.ndarray, names: list) -> list:
             for i, g in enumerate(pick)]
 
 
+def richardson_pairs(f, kinds, f2, kinds2):
+    """(rows, cols): each root of the fine model paired with the same root of the coarse one,
+    by the least total |Δf| where a pair of two (family, kind) counts double. A cluster's
+    roots move by more than their spacing between N/2 and N, so frequency alone can pair the
+    flap differential root of one with the lag collective of the other (helicopter-clamped's
+    first calibration set: 3.70413/3.72545 Hz and 3.70609/3.70736 Hz tie at 0.02259 Hz either
+    way, the extrapolated flap differential then 3.70305 Hz where the chain's isolated blade,
+    which a reactionless mode must equal, has 3.69702). A mismatch is only penalised, not
+    barred: at rest the four blades' roots are degenerate and their names arbitrary, and a
+    root may change kind between N/2 and N where two kinds mix."""
+    same = np.array([[a[:2] == b[:2] for b in kinds2] for a in kinds])
+    return linear_sum_assignment(np.abs(f[:, None] - f2[None, :]) * np.where(same, 1.0, 2.0))
+
+
 def _frequencies(linearised, params, s, free):
-    """Frequencies (Hz, Richardson-extrapolated from N/2 when asked: pairs by nearest
-    frequency), the extrapolation's change, the (family, kind, sense) of each mode, the
-    seconds spent linearising, the number of coordinates and every root (the finer model's),
-    in ascending order."""
+    """Frequencies (Hz, Richardson-extrapolated from N/2 when asked: `richardson_pairs`), the
+    extrapolation's change, the (family, kind, sense) of each mode, the seconds spent
+    linearising, the number of coordinates and every root (the finer model's), in ascending
+    order."""
     n = bc.checked_segments(s)
     lam, V, names, secs, every = eigen(linearised, params, n, s["psi"], free)
     f = lam.imag / (2 * np.pi)
+    kinds = classify(V, names)
     change = np.zeros_like(f)
     if s["extrapolate"]:
-        lam2, _, _, secs2, _ = eigen(linearised, params, n // 2, s["psi"], free)
+        lam2, V2, names2, secs2, _ = eigen(linearised, params, n // 2, s["psi"], free)
         secs += secs2
         f2 = lam2.imag / (2 * np.pi)
         m = min(len(f), len(f2), 3 * params["n_modes"] + 12)
-        rows, cols = linear_sum_assignment(np.abs(f[:m, None] - f2[None, :m]))
+        rows, cols = richardson_pairs(f[:m], kinds[:m], f2[:m], classify(V2[:, :m], names2))
         ext = f.copy()
         ext[rows] = (4 * f[rows] - f2[cols]) / 3
         change[rows] = ext[rows] - f[rows]
         f = ext
-    return (f, change, classify(V[:, :len(f)], names), secs, len(names), every)
+    return (f, change, kinds, secs, len(names), every)
 
 
 def _on_blades(f, kinds, speed_hz):

@@ -20,6 +20,8 @@ class CalibrationResult(StudyResult):
         d = self.data
         out = [f"disagree: set {x['set']} {' vs '.join(x['pair'])} {x['channel']} "
                f"Δ/bound {x['ratio']:.2g} at {x['params']}" for x in d["disagree"]]
+        out += [f"explained: set {x['set']} {' vs '.join(x['pair'])} {x['channel']} "
+                f"Δ/bound {x['ratio']:.2g}: {x['why']}" for x in d.get("explained", [])]
         out += [f"skipped: set {x['set']} {x['solver']} {x['status']} ({x['reason']})"
                 + (f" — outside its domain: {x['declared']}" if x.get("declared") else "")
                 for x in d["skipped"]]

@@ -317,6 +317,45 @@ def narrow_pairs(L, spin, hub_radius, clamped, grid, known, g, rtol, level=1e-7)
     return extra
 
 
+def blade_stations(b, omega, spin, hub_radius, z0, stations):
+    """The blade's states at `stations` (x from the root) of the mode whose root state is z0
+    (physical units), with a free tip. Carried from the root by the transfer matrix, the
+    root's round-off along the e^{βx} and e^{√(T/EI)x} solutions grows by up to e^{64} over a
+    flexible blade at speed (helicopter-clamped's fourth calibration set: the lag modes came
+    out flap), so: the free-tip basis is carried from the tip to the root as blade_subspace
+    does, U Q_i = Q_{i+1} R_i per segment, the mode's coefficients in the orthonormal bases
+    taken back tip-ward, c_i = R_i⁻¹ c_{i+1} (the growth divided out, not multiplied in)."""
+    scale = np.ones(12)
+    scale[6:] = 1.0 / b["EI_flap"]
+    k = b["m"] * (omega * omega + spin * spin)
+    T0, _, _ = el.centrifugal_tension(0.0, b["m"], spin, hub_radius, b["L"])
+    marks = np.sort(np.asarray(stations, float))[::-1]              # tip first
+    Q = np.zeros((12, 6))
+    Q[:6, :6] = np.eye(6)
+    kept, steps = {}, []
+    x = b["L"]
+    if np.isclose(marks[0], x):
+        kept[marks[0]] = len(steps)
+    for xm in marks:
+        if xm >= x:
+            continue
+        n = max(el.n_segments(b["EI_flap"], k, T0, x - xm), el.n_segments(b["EI_lag"], k, T0,
+                                                                         x - xm))
+        for xa, xb in zip(np.linspace(x, xm, n + 1)[:-1], np.linspace(x, xm, n + 1)[1:]):
+            U = el.rotating_blade(omega, spin, b["L"], hub_radius, b["EI_flap"], b["EI_lag"],
+                                  b["GJ"], b["EA"], b["m"], b["I_alpha"], xa, xb, b["k_A2"])
+            Q, R = np.linalg.qr((U * scale[:, None] / scale[None, :]) @ Q)
+            steps.append((Q, R))
+        kept[xm], x = len(steps), xm
+    Qs = [np.eye(12)[:, :6]] + [q for q, _ in steps]
+    c = Qs[-1].T @ (scale * z0)                    # z0 is at the root, the last mark
+    coef = [None] * len(Qs)
+    coef[-1] = c
+    for i in range(len(steps) - 1, -1, -1):
+        coef[i] = np.linalg.solve(steps[i][1], coef[i + 1])
+    return [Qs[kept[xs]] @ coef[kept[xs]] / scale for xs in stations]
+
+
 def mode_shape(L, omega, spin, hub_radius, clamped, stations=7):
     """Shape vector shared with `fem` (custom_models/mstmm/labels.py): blades × stations ×
     [axial, lag, flap, twist·chord/2] (blade frames), hub [u, θ], fuselage centre [u, θ]."""
@@ -326,11 +365,8 @@ def mode_shape(L, omega, spin, hub_radius, clamped, stations=7):
     b = L["blade"]
     parts = []
     for k in range(4):
-        z0 = Qroot @ x[6 * k:6 * k + 6]
-        for xs in np.linspace(0.0, b["L"], stations):
-            z = z0 if xs == 0 else el.rotating_blade(
-                omega, spin, b["L"], hub_radius, b["EI_flap"], b["EI_lag"], b["GJ"], b["EA"],
-                b["m"], b["I_alpha"], 0.0, xs, b["k_A2"]) @ z0
+        for z in blade_stations(b, omega, spin, hub_radius, Qroot @ x[6 * k:6 * k + 6],
+                                np.linspace(0.0, b["L"], stations)):
             parts.append([z[el.X], z[el.Y], z[el.Z], z[el.TX] * b["chord"] / 2])
     f = L["fuselage"]
     top = z_fus @ x

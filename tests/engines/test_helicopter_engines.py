@@ -98,6 +98,39 @@ def test_differential_modes_are_the_clamped_blade():
         assert min(abs(np.array(diff) / own[name] - 1)) < 1e-7, name
 
 
+def test_richardson_pairs_a_cluster_by_kind():
+    """helicopter-clamped's first calibration set (`sample(scene, 1, 11)`), MuJoCo at N = 40
+    and 20: flap differential 3.70413 / 3.72545 Hz, lag collective 3.70609 / 3.70736 Hz. By
+    frequency alone both pairings cost 0.02259 Hz; a reactionless root must extrapolate to the
+    isolated blade's 3.69702 Hz, which only the pairing within each kind gives."""
+    fine, coarse = np.array([3.70413, 3.70609]), np.array([3.70736, 3.72545])
+    flap, lag = ("flap", "differential", ""), ("lag", "collective", "")
+    rows, cols = hc.richardson_pairs(fine, [flap, lag], coarse, [lag, flap])
+    assert dict(zip(rows.tolist(), cols.tolist())) == {0: 1, 1: 0}
+    assert (4 * fine[0] - coarse[1]) / 3 == pytest.approx(3.69702, abs=2e-5)
+
+
+@pytest.mark.slow
+def test_extrapolated_differential_modes_are_the_extrapolated_blade_off_the_defaults():
+    """At helicopter-clamped's first calibration set (blade lag below 1/rev, the four-blade
+    flap-1 cluster 0.01 Hz wide against a Richardson change of 0.02 Hz) the aircraft's
+    extrapolated differential modes are the chain's isolated blade, extrapolated alike
+    (reactionless: hub, shaft and fuselage at rest). Pairing N with N/2 by frequency alone
+    put flap differential 1 at 3.70305 Hz against the blade's 3.69702 (1.6e-3)."""
+    from compare.workflows.calibrate import sample
+    p = sample(get_scene("helicopter-clamped"), 1, 11)[0][1]
+    r = heli.modes(p, {})
+    blade = beam.modes(get_scene("rotating-beam").resolve(
+        {"L": p["blade_L"], "chord": p["blade_chord"], "thickness": p["blade_thickness"],
+         "rho": p["blade_rho"], "E": p["blade_E"], "G": p["blade_G"],
+         "hub_radius": p["hub_radius"], "speed": p["speed"], "n_modes": 5}), {})
+    own = dict(zip(blade.labels, blade.frequencies_hz))
+    mine = dict(zip(r.labels, r.frequencies_hz))
+    for name in ("flap 1", "lag 1", "flap 2"):
+        fam, k = name.split()
+        assert mine[f"{fam} differential {k}"] / own[name] - 1 == pytest.approx(0, abs=1e-7)
+
+
 @pytest.mark.parametrize("scene, params, fn", [
     ("helicopter-clamped", P, exu_heli.modes), ("helicopter-hover", HP, exu_heli.hover_modes)],
     ids=["clamped", "hover"])

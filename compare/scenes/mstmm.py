@@ -350,7 +350,10 @@ HELICOPTER_CLAMPED = helicopter_scene(
 HELICOPTER_HOVER = helicopter_scene(
     "helicopter-hover",
     "Hovering helicopter, whole aircraft free: first flexible frequencies (Table 4)",
-    "helicopter_hover", 8, mstmm_shapes.helicopter_hover, HOVER_TOLERANCES)
+    "helicopter_hover", 8, mstmm_shapes.helicopter_hover, HOVER_TOLERANCES,
+    # as clamped: fem's doubled mesh is noisier than its run (lag collective 1, 6.4e-7 Hz off
+    # mstmm at ×2 against 5.3e-8 at the first calibration set, 3.8e-5 against 4.8e-7 at the second)
+    calibration=Calibration(truth={"fem": "mstmm"}))
 
 SCENES = (ROTATING_BEAM, SPINNING_SHAFT, HELICOPTER_CLAMPED, HELICOPTER_HOVER)
 

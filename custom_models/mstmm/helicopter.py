@@ -242,6 +242,9 @@ def nullity(L, omega, spin, hub_radius, clamped, level=1e-9):
     return int(np.sum(sv < level * sv[0]))
 
 
+LOW_HZ, LOW_POINTS = 0.01, 56      # 0.01 Hz → the second step (0.15 Hz), ratio 1.05
+
+
 def frequencies(L, spin, hub_radius, clamped, omega_max, rtol=1e-10, step_hz=0.1,
                 cluster_width=0.02, cluster_points=40):
     """All roots in (0, omega_max]: the exact reactionless roots at the isolated-blade
@@ -261,7 +264,11 @@ def frequencies(L, spin, hub_radius, clamped, omega_max, rtol=1e-10, step_hz=0.1
                 omega = r * (1 + 1e-9)
         d = np.prod([(omega - r) / r for r in exact]) if exact else 1.0
         return g0(omega) / d
-    grid = [np.arange(2 * np.pi * step_hz / 2, omega_max, 2 * np.pi * step_hz)]
+    grid = [np.arange(2 * np.pi * step_hz / 2, omega_max, 2 * np.pi * step_hz),
+            # up to the second step, 5 % apart from fem's rigid-body floor 0.01 Hz: the free
+            # aircraft's whole-aircraft pair can sit there 0.02 Hz apart (no sign change in
+            # one 0.1 Hz cell: helicopter-hover's first calibration set, 0.077/0.094 Hz)
+            2 * np.pi * np.geomspace(LOW_HZ, 1.5 * step_hz, LOW_POINTS)]
     for r in iso:               # two tiers: the cluster, and its core (pairs split < 1e-5)
         grid.append(np.linspace(r * (1 - cluster_width), r * (1 + cluster_width),
                                 cluster_points))

@@ -63,10 +63,14 @@ def _may_touch(w, v):
     dip narrower than the grid, which the parabola does not follow)."""
     if abs(v[1]) < 0.2 * min(abs(v[0]), abs(v[2])):
         return True
-    c = np.polyfit(w - w[1], v, 2)
-    if c[0] == 0:
+    # the parabola a x² + b x + v[1] through the three samples (x = w − w[1]), in closed form
+    x0, x2 = w[0] - w[1], w[2] - w[1]
+    s0, s2 = (v[0] - v[1]) / x0, (v[2] - v[1]) / x2
+    a = (s0 - s2) / (x0 - x2)
+    b = s0 - a * x0
+    if a == 0:
         return False
-    vmin = c[2] - c[1] ** 2 / (4 * c[0])
+    vmin = v[1] - b ** 2 / (4 * a)
     return np.sign(vmin) != np.sign(v[1]) or abs(vmin) < 0.5 * abs(v[1])
 
 

@@ -8,6 +8,7 @@ from ..analysis.verdict import Verdict
 from ..errors import BadInput
 from ..physics import andrews as phys
 from .base import Benchmark, Finding, TimeScene, tabulated
+from .drawing import send_strips
 from .params import Param, positive
 
 SOURCE = ("F. Mazzia, C. Magherini, Test Set for IVP Solvers (release 2.4, 2008), problem "
@@ -97,7 +98,6 @@ _LINKS = (("K1", ("O", "P")), ("K2", ("P", "E")), ("K3", ("E", "B", "D")), ("K4"
 def draw_squeezer(rec, params, traj, color, offset):
     """The seven bodies as line strips between their joints and the spring D–C, from the
     solver's angles through the shared layout (compare.physics.andrews.body_poses)."""
-    import rerun as rr
     Q = np.stack([traj.channels[a] for a in phys.ANGLES], axis=1)
     rows = np.nonzero(np.all(np.isfinite(Q), axis=1))[0]
     if not len(rows):
@@ -112,11 +112,7 @@ def draw_squeezer(rec, params, traj, color, offset):
     per = len(_LINKS) + 1
     dark = tuple(int(x * 0.5) for x in color)
     colors = ([tuple(color)] * len(_LINKS) + [dark]) * len(rows)
-    rec.send_columns(f"world/{traj.solver}/links",
-                     indexes=[rr.TimeColumn("sim_time", duration=traj.t[rows])],
-                     columns=rr.LineStrips3D.columns(strips=strips, colors=colors,
-                                                     radii=[4e-4] * len(strips))
-                     .partition([per] * len(rows)))
+    send_strips(rec, f"world/{traj.solver}/links", traj.t[rows], strips, colors, 4e-4, per)
 
 
 def _check(params):

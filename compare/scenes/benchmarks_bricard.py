@@ -10,6 +10,7 @@ import numpy as np
 from ..analysis.verdict import Verdict
 from ..physics import bricard as phys
 from .base import Benchmark, Finding, TimeScene, tabulated
+from .drawing import send_strips
 from .params import Param, positive
 
 SOURCE = ("IFToMM Technical Committee for Multibody Dynamics, Library of Computational "
@@ -95,13 +96,11 @@ BENCHMARK = Benchmark(
     uncertainty=REFERENCE_UNCERTAINTY)
 
 
-ROD_ENDS = tuple((k, k + 1) for k in range(5))
 
 
 def draw_bricard(rec, params, traj, color, offset):
     """The five rods as one line strip through the six joints, placed from the solver's θ1 with
     the loop closed again (compare.physics.bricard.close)."""
-    import rerun as rr
     p = phys.pack(params)
     th = traj.channels["theta1"]
     rows = np.nonzero(np.isfinite(th))[0]
@@ -115,10 +114,8 @@ def draw_bricard(rec, params, traj, color, offset):
         pts = [Rs[max(k, 1)] @ (phys.POINTS[k] * p[phys.LEN]) + ts[max(k, 1)]
                for k in range(6)]
         strips.append(np.array(pts) + offset)
-    rec.send_columns(f"world/{traj.solver}/rods",
-                     indexes=[rr.TimeColumn("sim_time", duration=traj.t[rows])],
-                     columns=rr.LineStrips3D.columns(strips=strips, colors=[tuple(color)] *
-                                                     len(strips), radii=[5e-3] * len(strips)))
+    send_strips(rec, f"world/{traj.solver}/rods", traj.t[rows], strips,
+                [tuple(color)] * len(strips), 5e-3)
 
 
 BRICARD = TimeScene(

@@ -15,6 +15,7 @@ import numpy as np
 from ..analysis.verdict import Verdict
 from ..physics import nfourbar as phys
 from .base import Benchmark, Finding, TimeScene, tabulated
+from .drawing import send_strips
 from .params import Param, positive
 
 SOURCE = ("IFToMM Technical Committee for Multibody Dynamics, Library of Computational "
@@ -130,7 +131,6 @@ BENCHMARK = Benchmark(
 def draw_nfourbar(rec, params, traj, color, offset):
     """The chain as one line strip per output time: ground pins, B_0 … B_N along the couplers
     (the mechanism's own motion from the solver's φ: every crank at φ, couplers level)."""
-    import rerun as rr
     L, n = float(params["L"]), int(params["N"])
     phi = traj.channels["phi"]
     rows = np.nonzero(np.isfinite(phi))[0]
@@ -143,10 +143,8 @@ def draw_nfourbar(rec, params, traj, color, offset):
         for k in range(n + 1):
             pts += [[k * L + L * c, L * s, 0.0], [k * L, 0.0, 0.0], [k * L + L * c, L * s, 0.0]]
         strips.append(np.array(pts[1:]) + offset)
-    rec.send_columns(f"world/{traj.solver}/rods",
-                     indexes=[rr.TimeColumn("sim_time", duration=traj.t[rows])],
-                     columns=rr.LineStrips3D.columns(strips=strips, colors=[tuple(color)] *
-                                                     len(strips), radii=[5e-3] * len(strips)))
+    send_strips(rec, f"world/{traj.solver}/rods", traj.t[rows], strips,
+                [tuple(color)] * len(strips), 5e-3)
 
 
 NFOURBAR = TimeScene(

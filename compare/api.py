@@ -6,9 +6,9 @@ one-line message, before anything runs or is written.
 Files: with `out=FOLDER` a call writes what the command writes into FOLDER itself (a run: the
 .npz per solver, run.rrd, report.md with plots, result.json; FOLDER empty or an earlier result
 of the same command, unless `force=True`).
-Without `out` a run, modes, extremes, power or diff result is held in memory and nothing is
-written; a bench, map or campaign (which store what they compute as they go, to resume from)
-works in a temporary folder that goes away with the result. `result.save(path)` writes the
+Without `out` a run, modes, extremes, power, diff, bench or map result is held in memory and
+nothing is written; a campaign (whose jobs hand their results back through its folder, to
+resume from) uses the command's folder, logs/campaign/<name>. `result.save(path)` writes the
 files then; `xval.load(path)` reads any of them back.
 """
 from __future__ import annotations

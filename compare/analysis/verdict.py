@@ -41,10 +41,14 @@ class Verdict(StrEnum):
         """Whether `xval.assert_agree` accepts it: `agree` only."""
         return self is Verdict.AGREE
 
+    def marginal(self, ratio: float) -> bool:
+        """An agreement that uses more than MARGINAL of its bound."""
+        return self is Verdict.AGREE and ratio > MARGINAL
+
     def shown(self, ratio: float) -> str:
         """As tables print it: `agree (marginal)` above MARGINAL of the bound (a presentation
         of `agree` and its ratio, not a verdict of its own)."""
-        return "agree (marginal)" if self is Verdict.AGREE and ratio > MARGINAL else self
+        return "agree (marginal)" if self.marginal(ratio) else self
 
     @staticmethod
     def worst(verdicts, default=None):

@@ -16,11 +16,9 @@ from .common import (
     STUDY,
     answer,
     log,
-    out_or_temporary,
     overrides,
     parse_sets,
     quiet,
-    removed_on_error,
     stdout_to_stderr,
 )
 from .common import positive_int as positive_int_arg
@@ -36,8 +34,11 @@ def bench(scene: str, solvers=None, *, repeats: int = 3, vary=None, out=None,
     `points=N`: throughput instead — each solver's points per second over N points of the
     scene's first default map. `identify=True`: the identification's speed instead — xval's
     fit of a synthetic record against a plain least_squares loop over the same solver (a scene
-    with a Fit). `out`: the bench's folder (default: a temporary one that goes with the
-    result); an existing one must be empty or hold an earlier bench, unless `force`."""
+    with a Fit). `out`: the bench's folder (default: none, the bench held in memory — its
+    rows, not its trajectories — and `save(path)` writing it); an existing one must be empty or
+    hold an earlier bench, unless `force`."""
+    from ..output import bench_identify as bi
+    from ..output import bench_report as br
     from ..workflows.bench import run_bench, run_throughput
     positive_int("--repeats", repeats)
     if identify and (points is not None or vary is not None):
@@ -47,18 +48,14 @@ def bench(scene: str, solvers=None, *, repeats: int = 3, vary=None, out=None,
         claim_out(str(out), "bench", force)
     if identify:                        # the identification's speed (issue 50, item 5)
         from ..workflows.bench_identify import run_identify_bench
-        out, temporary = out_or_temporary(out)
-        with removed_on_error(temporary):
-            obj = run_identify_bench(scene, names(solvers), overrides(params, kw), out,
-                                     repeats, log=log or quiet, make_out=make_out)
-        return BenchResult(obj, Path(obj["report"]).parent, temporary)
+        obj = run_identify_bench(scene, names(solvers), overrides(params, kw), repeats,
+                                 log=log or quiet)
+        return _result(obj, out, bi.write_identify_bench)
     if points is not None:              # throughput: points per second over the default map
         positive_int("--points", points)
-        out, temporary = out_or_temporary(out)
-        with removed_on_error(temporary):
-            obj = run_throughput(scene, names(solvers), overrides(params, kw), out, points,
-                                 log=log or quiet, make_out=make_out)
-        return BenchResult(obj, Path(obj["report"]).parent, temporary)
+        obj = run_throughput(scene, names(solvers), overrides(params, kw), points,
+                             log=log or quiet)
+        return _result(obj, out, lambda d, o: br.write_throughput(d, o, scene))
     max_output_gib, max_steps = (positive("--max-output-gib", max_output_gib),
                                  positive("--max-steps", max_steps))
     if isinstance(vary, dict):
@@ -66,13 +63,23 @@ def bench(scene: str, solvers=None, *, repeats: int = 3, vary=None, out=None,
             raise BadInput(f"--vary: one parameter, got {len(vary)}")
         (name, values), = vary.items()
         vary = f"{name}={','.join(repr(v) for v in values)}"
-    over = overrides(params, kw)
-    out, temporary = out_or_temporary(out)
-    with removed_on_error(temporary):
-        obj = run_bench(scene, names(solvers), over, out, repeats=repeats, log=log or quiet,
-                        vary=vary, max_output_gib=max_output_gib, max_steps=max_steps,
-                        make_out=make_out)
-    return BenchResult(obj, Path(obj["report"]).parent, temporary)
+    from ..scenes import get_scene
+    obj = run_bench(scene, names(solvers), overrides(params, kw), out, repeats=repeats,
+                    log=log or quiet, vary=vary, max_output_gib=max_output_gib,
+                    max_steps=max_steps, make_out=make_out)
+    write = get_scene(scene).either(time=br.write_time_bench, modes=br.write_modes_bench)
+    return _result(obj, out, write)
+
+
+def _result(obj, out, write) -> BenchResult:
+    """The bench written into `out` (`write(folder, obj)`), or held in memory, `save` writing
+    it then."""
+    from ..output.bench_report import bench_dir
+    if out is None:
+        return BenchResult(obj, writer=lambda d: write(bench_dir(d), obj))
+    make_out(str(out))
+    obj = write(bench_dir(out), obj)
+    return BenchResult(obj, Path(obj["report"]).parent)
 
 
 def main(args) -> int:

@@ -18,8 +18,6 @@ from .common import (
     STRICT,
     emit_json,
     executor_args,
-    out_or_temporary,
-    removed_on_error,
     stdout_to_stderr,
     strict_exit,
     warn_workers,
@@ -36,8 +34,9 @@ def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | Non
     """A campaign (`xval campaign`): a .json/.toml file, a built-in name ("default", "long";
     None is the default campaign) or the campaign as a dict (the file's shape). `out`: the
     campaign's folder (empty, or a campaign folder: its stored results are reused; other files
-    only with `force`); without it a temporary folder, nothing reused. `progress()`: a context
-    giving the progress view, entered once the plan is checked
+    only with `force`); without it logs/campaign/<name>, as the command's (a campaign's
+    jobs hand their results back through its folder, which a rerun resumes from).
+    `progress()`: a context giving the progress view, entered once the plan is checked
     (compare.output.progress.progress_view; default plain lines on stderr); `checking(text)`:
     a context shown while the plan is checked (the command's spinner)."""
     from ..workflows import campaign as camp
@@ -61,13 +60,15 @@ def campaign(path_or_dict=None, *, executor: str = "local", scheduler: str | Non
     if scheduler:                      # reachable before anything is written
         with checking(f"connecting to {scheduler} …"):
             camp.connect(scheduler).close()
-    out, temporary = out_or_temporary(out)
+    if out is None:     # its jobs' store, as the command's: a rerun resumes it
+        out = os.path.join("logs", "campaign", prepared.camp.get("name", "campaign"))
+        claim_out(out, "campaign", force)
     make_out(str(out))
-    with removed_on_error(temporary), (progress or contextlib.nullcontext)() as view:
+    with (progress or contextlib.nullcontext)() as view:
         summary = camp.run_campaign(None, out, executor=executor, scheduler=scheduler,
                                     workers=workers, verbose=verbose, view=view,
-                                    prepared=prepared, folder=None if temporary else out)
-    return CampaignResult(summary, Path(summary["report"]).parent, temporary)
+                                    prepared=prepared, folder=out)
+    return CampaignResult(summary, Path(summary["report"]).parent)
 
 
 def main(args) -> int:

@@ -8,12 +8,10 @@ import contextlib
 import json
 import math
 import os
-import shutil
 import sys
 
 from ..atomic import clean_json, num
 from ..errors import BadInput
-from ..output.folders import check_out, temporary_folder
 from . import arg
 
 # --- arguments --------------------------------------------------------------------------------
@@ -174,32 +172,12 @@ def quiet(msg):
     pass
 
 
-@contextlib.contextmanager
-def removed_on_error(temporary):
-    """A temporary folder does not outlive a call that fails."""
-    try:
-        yield
-    except BaseException:
-        if temporary:
-            shutil.rmtree(temporary, ignore_errors=True)
-        raise
-
-
 def result_folder(args):
     """A run's, modes' or response's folder: `--out DIR`, else a new one under logs/runs/ (the
     scene name checked first: an unknown scene is one line before anything is made)."""
     from ..scenes import get_scene
     from ..workflows.runner import new_run_dir
     return args.out or new_run_dir("logs", get_scene(args.scene).name)
-
-
-def out_or_temporary(out):
-    """(folder, temporary folder or None): `out` checked, or a fresh temporary folder."""
-    if out is None:
-        tmp = temporary_folder()
-        return tmp, tmp
-    check_out(str(out))
-    return str(out), None
 
 
 def mode_lines(run: dict) -> list[str]:
@@ -224,7 +202,7 @@ def verdict_line(comparisons) -> str:
     came closest to its bound."""
     from ..analysis.verdict import Verdict, agree_text
     line = agree_text(c.verdict for c in comparisons)
-    marginal = sum(c.shown == "agree (marginal)" for c in comparisons)
+    marginal = sum(Verdict(c.verdict).marginal(c.ratio) for c in comparisons)
     judged = [c for c in comparisons if c.verdict != Verdict.SKIPPED and c.ratio == c.ratio]
     worst = max(judged, key=lambda c: c.ratio, default=None)
     return (line + (f" ({marginal} marginal)" if marginal else "")

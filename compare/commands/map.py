@@ -20,11 +20,9 @@ from .common import (
     answered,
     executor_args,
     log,
-    out_or_temporary,
     overrides,
     parse_sets,
     quiet,
-    removed_on_error,
     stdout_to_stderr,
     warn_workers,
 )
@@ -44,11 +42,12 @@ def map(scene: str, x: str, y: str | None = None, solvers=None, *,  # noqa: A001
     map traces its boundary in y down to `y_resolution` × the y range (default 1/64, or the
     resolution where coarser).
     `adaptive=False`: every coarse point at the accurate setting (not only those next to a
-    regime change). `out`: the map's folder (default: a temporary one that goes with the
-    result); an existing one must be empty or hold an earlier map, unless `force`. `store`:
+    regime change). `out`: the map's folder (default: none, the map held in memory and
+    `save(path)` writing it); an existing one must be empty or hold an earlier map, unless
+    `force`. `store`:
     where the points are kept by the digest of their inputs, for a rerun to reuse (default:
     the folder's points/)."""
-    from ..workflows.maps import map_to_folder, plan_map
+    from ..workflows.maps import compute_map, map_to_folder, plan_map
     if executor not in ("local", "dask"):
         raise BadInput(f"--executor: {executor!r} is not local or dask")
     if out is not None:
@@ -63,15 +62,24 @@ def map(scene: str, x: str, y: str | None = None, solvers=None, *,  # noqa: A001
                     adaptive=adaptive)
     (log or quiet)(f"map {scene}: ~{plan['estimate']['runs']} runs planned "
                    f"(~{plan['estimate']['seconds']:.3g} s of solver time)")
-    out, temporary = out_or_temporary(out)
+    if out is None:                     # held in memory: `save` writes its files
+        from ..output.map_plot import write_map_outputs
+        obj = compute_map(plan, executor=executor, scheduler=scheduler, workers=workers,
+                          log=log or quiet, store=Path(store) if store else None)
+
+        def write(folder):
+            obj["folder"] = str(folder)
+            done = write_map_outputs(folder, obj, record)
+            done["report"] = done["files"]["report"]
+            return done
+        return MapResult(obj, writer=write)
     make_out(str(out))
-    with removed_on_error(temporary):
-        # points stored by the digest of their inputs: a stopped map resumes
-        obj = map_to_folder(plan, out, executor=executor, scheduler=scheduler,
-                            workers=workers, record=record, log=log or quiet,
-                            store=Path(store) if store else Path(out) / "points")
+    # points stored by the digest of their inputs: a stopped map resumes
+    obj = map_to_folder(plan, out, executor=executor, scheduler=scheduler, workers=workers,
+                        record=record, log=log or quiet,
+                        store=Path(store) if store else Path(out) / "points")
     obj["report"] = obj["files"]["report"]
-    return MapResult(obj, Path(obj["folder"]), temporary)
+    return MapResult(obj, Path(obj["folder"]))
 
 
 def _coarse(text):

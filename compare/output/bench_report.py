@@ -158,10 +158,13 @@ def _write(out_dir, obj: dict, md: list[str], ylabel: str, **kw) -> dict:
     return write_study(out_dir, md, obj, "bench.json", report_in_json=False)
 
 
-def write_time_bench(out_dir, obj: dict, ref_settings: dict) -> dict:
+def write_time_bench(out_dir, obj: dict, ref_settings: dict | None = None) -> dict:
     """The time bench's folder (error of the final key channel over wall time, or a benchmark
-    problem's error against its reference)."""
+    problem's error against its reference); `ref_settings`: the reference run's settings
+    (default: the JSON's)."""
     ref = obj["reference"]
+    if ref_settings is None:
+        ref_settings = ref.get("settings") or {}
     if ref.get("kind") == "benchmark":      # the library's accuracy against its CPU time
         return _write(out_dir, obj, time_markdown(obj, ref_settings),
                       f"{ref['problem']} error (max |deviation|) / {ref['scale']:.3g} "

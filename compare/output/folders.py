@@ -4,7 +4,6 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import tempfile
 from pathlib import Path
 
 from ..atomic import write_json
@@ -90,10 +89,6 @@ def make_out(path):
         os.unlink(probe)
     except OSError as e:
         raise BadInput(f"--out {path}: cannot write there ({e.strerror})") from None
-
-
-def temporary_folder() -> Path:
-    return Path(tempfile.mkdtemp(prefix="xval-"))
 
 
 def _repath(obj, old: str, new: str):

@@ -29,9 +29,8 @@ class _TablesReport:
 class IdentifyResult(_TablesReport, StudyResult):
     TYPE, JSON = "identify", "identify.json"
 
-    def __init__(self, data: dict, out_dir=None, temporary=None, report_md=None, record=None,
-                 curves=None):
-        super().__init__(data, out_dir, temporary, report_md)
+    def __init__(self, data: dict, out_dir=None, report_md=None, record=None, curves=None):
+        super().__init__(data, out_dir, report_md)
         self.record = record          # the fitted record and each solver's model curves:
         self.curves = curves or {}    # in memory only (the figure draws them)
         data.setdefault("summary", self.summary())
@@ -125,8 +124,8 @@ class DetectionResult(_TablesReport, StudyResult):
     `save(path)` writes report.md, detection.json and detection.png."""
     TYPE, JSON = "detection", "detection.json"
 
-    def __init__(self, data: dict, out_dir=None, temporary=None, report_md=None):
-        super().__init__(data, out_dir, temporary, report_md)
+    def __init__(self, data: dict, out_dir=None, report_md=None):
+        super().__init__(data, out_dir, report_md)
         data.setdefault("summary", self.summary())
 
     def summary(self) -> str:

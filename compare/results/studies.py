@@ -2,14 +2,12 @@
 command's `--json` prints (`s["n_failed"]`, `.data`) and prints the lines the command prints
 (`str(s)`, the report's path last).
 
-A study made in memory (extremes, power, diff) writes its files with `save(path)`. The others
-write as they go (a bench's trajectories, a map's and a campaign's stored points, which a
-stopped run resumes from): made without `out` they work in a temporary folder that goes away
-with the result, and `save(path)` copies the folder."""
+A study made without `out` is held in memory and writes its files with `save(path)` (a bench
+or a map through the writer it was made with). Made with `out`, a bench, map or campaign
+writes as it goes (a bench's trajectories, a map's and a campaign's stored points, which a
+stopped run resumes from), and `save(path)` copies its folder."""
 from __future__ import annotations
 
-import shutil
-import weakref
 from pathlib import Path
 
 from ..analysis.verdict import Verdict, agree_text
@@ -21,20 +19,17 @@ class StudyResult(Result):
     """A study's summary: `data` (the JSON), `lines()` (what the command prints), `report`
     (the report's path, once written), `out_dir`."""
 
-    def __init__(self, data: dict, out_dir=None, temporary=None, report_md=None):
+    def __init__(self, data: dict, out_dir=None, report_md=None, writer=None):
         self.data = data
         data["result"] = self.TYPE
         self.report_md = report_md            # a report held in memory (Markdown lines)
         self._dir = Path(out_dir) if out_dir else None
-        self._temporary = temporary           # the temporary folder holding _dir, if any
-        if temporary:
-            weakref.finalize(self, shutil.rmtree, str(temporary), True)
+        # writer(folder) -> data: writes a study held in memory (a bench's, a map's files)
+        self._writer = writer
 
-    out_dir = property(lambda self: None if self._temporary else self._dir)
-    # None while the files are in the temporary folder that goes with the result: a path into
-    # it would name nothing once the result is gone (`save` gives the report its place)
+    out_dir = property(lambda self: self._dir)
     report = property(lambda self: Path(self.data["report"]) if self.data.get("report")
-                      and not self._temporary else None)
+                      and self._dir is not None else None)
 
     def __getitem__(self, key):
         return self.data[key]
@@ -57,8 +52,8 @@ class StudyResult(Result):
         return self.report_md
 
     def lines(self):
-        if self._temporary and self.data.get("report"):
-            return self.summary_lines() + ["report: not kept (made in a temporary folder); "
+        if self._dir is None and self._writer is not None:
+            return self.summary_lines() + ["report: not kept (held in memory); "
                                            "result.save(FOLDER) writes it"]
         return self.summary_lines() + ([f"report: {self.report}"] if self.report else [])
 
@@ -69,8 +64,14 @@ class StudyResult(Result):
         from ..output.study import write_study
         if self._dir is not None:
             dest, self.data = copy_folder(self._dir, path, self.data)
-            self._dir, self._temporary = dest, None
+            self._dir = dest
             return dest
+        if self._writer is not None:
+            from ..output.folders import make_out
+            make_out(str(path))
+            self.data = self._writer(Path(path))
+            self._dir = Path(path)
+            return self._dir
         md = self.markdown()
         if md is not None:
             from ..output.folders import make_out

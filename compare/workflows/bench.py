@@ -22,7 +22,7 @@ from .. import solvers
 from ..analysis import metrics
 from ..errors import BadInput
 from ..leafinfo import ORDERS, Adaptive, Fixed, snap  # noqa: F401  (ORDERS: the tests' table)
-from ..output.bench_report import bench_dir, write_throughput, write_time_bench
+from ..output.bench_report import bench_dir
 from ..output.run_folder import write_trajectory
 from ..results import BenchResult
 from ..scenes import get_scene
@@ -106,13 +106,11 @@ def parse_vary(text, sc):
     return name.strip(), vals
 
 
-def run_throughput(scene_name, solver_names, overrides, out, n_points, log=print,
-                   make_out=None):
+def run_throughput(scene_name, solver_names, overrides, n_points, log=print):
     """`xval bench SCENE --points N`: each solver's points per second on its accurate defaults
-    over N points of the scene's first default map, through the map's batch path."""
+    over N points of the scene's first default map, through the map's batch path (the bench's
+    JSON; compare.output.bench_report.write_throughput writes its folder)."""
     from .maps import throughput
-    if make_out:
-        make_out(out)
     obj = throughput(scene_name, solver_names, overrides, n_points, log=log)
     def more(r):
         return (f"; accurate everywhere {r['accurate_points_per_second']:.1f}, "
@@ -122,14 +120,15 @@ def run_throughput(scene_name, solver_names, overrides, out, n_points, log=print
              f"{r['points_per_second']:.1f} points/s ({r['points_per_core_second']:.1f} per "
              f"core-second, {obj['workers']} workers{more(r)})" for r in obj["rows"]]
     obj["summary_lines"], obj["result"] = lines, BenchResult.TYPE
-    return write_throughput(bench_dir(out), obj, scene_name)
+    return obj
 
 
 def run_bench(scene_name, solver_names, overrides, out, repeats=3, log=print, vary=None,
               max_output_gib=None, max_steps=None, make_out=None):
-    """Everything is checked (names, values, the size of the work) before the bench folder is
-    made; `make_out(out)` creates the output folder (the CLI's, which turns a refusal into one
-    line)."""
+    """The bench's JSON (compare.output.bench_report writes its folder). Everything is checked
+    (names, values, the size of the work) before `make_out(out)` creates the output folder
+    (the CLI's, which turns a refusal into one line); with `out` the rungs' trajectories
+    stream into it as they run, without it (a bench held in memory) they are not kept."""
     sc = get_scene(scene_name)
     if not (isinstance(repeats, int) and repeats >= 1):
         raise BadInput(f"--repeats must be at least 1, got {repeats!r}")
@@ -156,11 +155,11 @@ def _bench_time(sc, solver_names, overrides, out, repeats, log, vary, max_output
         for _, rungs, start in _ladders(pl, s, params["output_dt"], vary):
             st, p = rungs[start]
             budget.check_steps(s.name, s.info(sc), p, st, max_steps)
-    if make_out:
+    if make_out and out is not None:
         make_out(out)
     dt_out = params["output_dt"]
     key = sc.key_channel
-    out_dir = bench_dir(out)
+    out_dir = None if out is None else bench_dir(out)
     bm = sc.bench_reference(params)     # the scene answers what the rungs are measured against
     if bm is not None:
         reference, measure, ref_settings, done = _benchmark_reference(sc, bm, params, log)
@@ -205,10 +204,10 @@ def _bench_time(sc, solver_names, overrides, out, repeats, log, vary, max_output
     lines += order_lines(orders, "dt", " s")
     obj = {"scene": sc.name, "params": params, "key_channel": key,
            "vary": vary and {"name": vary[0], "values": vary[1]},
-           "reference": reference,
+           "reference": {**reference, "settings": ref_settings},
            "repeats": repeats, "rows": rows, "summary": summary, "orders": orders,
            "summary_lines": lines, "result": BenchResult.TYPE}
-    return write_time_bench(out_dir, obj, ref_settings)
+    return obj
 
 
 def _benchmark_reference(sc, bm, params, log):
@@ -251,7 +250,8 @@ def _solver_reference(sc, params, out_dir, log):
     for s in refs:
         st = _tightest(s, s.info(sc), dt_out)
         tr = solvers.simulate(sc, s, params, st)
-        write_trajectory(out_dir, tr, f"reference-{s.name}")
+        if out_dir is not None:
+            write_trajectory(out_dir, tr, f"reference-{s.name}")
         ref_runs.append(tr)
         done[(s.name, repr(sorted(st.items())))] = tr     # a ladder rung equal to it reuses it
         log(f"reference {s.name}: {key}(end) = {tr.final()[key]:.15g} ({tr.status}, "
@@ -276,7 +276,8 @@ def _run_rung(sc, solver, info, label, st, p, params, done, repeats, measure, ou
         walls.append(tr.wall_s)
 
     tr = repeat_timed(walls, lambda: solvers.simulate(sc, solver, p, st), repeats) or tr
-    write_trajectory(out_dir, tr, name)                       # the trajectories stay
+    if out_dir is not None:                                   # the trajectories stay
+        write_trajectory(out_dir, tr, name)
     measured = measure(tr) if tr.status == "ok" else {"rel_error": None}
     err = measured["rel_error"]
     evals, t_int = tr.stats.get("rhs_evals"), tr.stats.get("integrate_s")

@@ -21,8 +21,7 @@ from scipy.optimize import least_squares
 from .. import solvers
 from ..analysis import estimates as est
 from ..errors import BadInput
-from ..output.bench_identify import write_identify_bench
-from ..output.bench_report import bench_dir
+from ..output.bench_identify import summary_lines
 from ..results import BenchResult
 from ..scenes import get_scene
 from .identify import Model, chosen_unknowns
@@ -54,10 +53,9 @@ def plain_fit(scene, solver, fixed, unknowns, scale, rec, chans, sigma, start) -
             "chi2_dof": 2.0 * float(sol.cost) / dof, "values": (sol.x * model.scale).tolist()}
 
 
-def run_identify_bench(scene_name, solver_names, overrides, out, repeats=3, log=print,
-                       make_out=None) -> dict:
-    """The two timings and their rows (`summary_lines`, `rows`, `ratio`); `make_out(out)`
-    after every check passed."""
+def run_identify_bench(scene_name, solver_names, overrides, repeats=3, log=print) -> dict:
+    """The two timings and their rows (`summary_lines`, `rows`, `ratio`): the bench's JSON
+    (compare.output.bench_identify writes its folder)."""
     sc = get_scene(scene_name)
     if sc.fit is None:
         raise BadInput(f"--identify: scene {sc.name!r} declares nothing to identify "
@@ -73,8 +71,6 @@ def run_identify_bench(scene_name, solver_names, overrides, out, repeats=3, log=
     fixed = {k: v for k, v in over.items() if k not in unknowns}
     truth = [float(truth_params[n]) for n in unknowns]
     start = [float(sc.resolve(fixed)[n]) for n in unknowns]
-    if make_out:
-        make_out(out)
     first = chosen[0]
     rec = synthesise(sc.name, first.name, over, None, SEED)
     chans = [c for c in sc.channels if c in rec]
@@ -142,4 +138,5 @@ def run_identify_bench(scene_name, solver_names, overrides, out, repeats=3, log=
            "identify_wall_s": float(np.median(totals)), "rows": rows, "ratio": ratio,
            "start_is_truth": all(_off(a, b, p) == 0.0
                                  for a, b, p in zip(start, truth, periods()))}
-    return write_identify_bench(bench_dir(out), obj)
+    obj["summary_lines"] = summary_lines(obj)
+    return obj

@@ -25,7 +25,6 @@ import numpy as np
 
 from .. import solvers
 from ..analysis import metrics
-from ..output.bench_report import bench_dir, write_modes_bench
 from ..output.bench_report import knob_text as _knob_text
 from ..results import BenchResult
 from ..scenes import Scene
@@ -193,14 +192,13 @@ def against_published(sc, chosen, timing_params, call, repeats):
 
 def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int = 3,
                     log=print, make_out=None) -> dict:
-    """The frequency bench (see the module doc); everything is checked before the bench
-    folder is made."""
+    """The frequency bench's JSON (see the module doc; compare.output.bench_report writes its
+    folder); everything is checked before `make_out(out)` makes the folder."""
     pl = plan(sc, overrides, solver_names or list(sc.bench_solvers))
     chosen, params = list(pl.solvers), pl.params
     timing_params = [[sc.resolve(case) for case in pt.cases] for pt in sc.published_timings]
-    if make_out:
+    if make_out and out is not None:
         make_out(out)
-    out_dir = bench_dir(out)
 
     def call(s, st, p=params):
         return solvers.modes(sc, s, p, st)
@@ -273,4 +271,4 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
            "first_call_s": first_call, "blas_threads": blas, "rows": rows,
            "summary": summary, "orders": orders, "published_timings": published,
            "summary_lines": lines, "result": BenchResult.TYPE}
-    return write_modes_bench(out_dir, obj)
+    return obj

@@ -250,6 +250,15 @@ def map_to_folder(plan, out, settings_for=None, executor="local", scheduler=None
     `out` (or `out_dir`): map.json, map.png, report.md, map.rrd."""
     from ..output.map_plot import write_map_outputs
     out_dir = Path(out_dir or out)
+    result = compute_map(plan, settings_for, executor, scheduler, workers, store, log, salt)
+    result["folder"] = str(out_dir)
+    return write_map_outputs(out_dir, result, record)
+
+
+def compute_map(plan, settings_for=None, executor="local", scheduler=None, workers=None,
+                store=None, log=None, salt=None) -> dict:
+    """Run a planned map with the campaign's executors (process pool or Dask): the map's JSON,
+    held in memory (`store`: where its points are kept for a rerun to reuse, if anywhere)."""
     workers = workers or 2
     if store is not None and salt is None:       # stored points are valid while these hold
         sc = plan["scene"]
@@ -262,8 +271,8 @@ def map_to_folder(plan, out, settings_for=None, executor="local", scheduler=None
         n = len(list(Path(store).glob("*.json"))) if store else 0
         raise Interrupted(f"{n} map points are stored in {store} and will be reused"
                           if store else "map stopped") from None
-    result["folder"], result["result"] = str(out_dir), MapResult.TYPE
-    return write_map_outputs(out_dir, result, record)
+    result["result"] = MapResult.TYPE
+    return result
 
 
 def throughput(scene_name, solver_names, overrides, n_points, workers=2, log=None):

@@ -248,7 +248,7 @@ def test_bench_measures_rk4s_order():
     s = xval.bench("rotor-spinup", "euler-vector", repeats=1, t_end=1)
     rk4 = next(o for o in s["orders"] if o["method"] == "rk4")
     assert abs(rk4["observed"] - 4) < 0.3
-    # made in a temporary folder that goes with the result: no path into it is given out
+    # held in memory: no file written, no path given out, until `save` writes its folder
     assert s.report is None and s.out_dir is None
     assert str(s).splitlines()[-1].startswith("report: not kept")
     assert tempfile.gettempdir() not in str(s)

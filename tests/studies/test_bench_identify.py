@@ -53,7 +53,7 @@ def test_an_unconverged_plain_loop_is_still_reported(tmp_path, monkeypatch):
                         lambda *a, **k: real(*a, max_nfev=2, **k))
     obj = bench_identify.run_identify_bench(
         SCENE, ["quaternion"], {"t_end": "0.5", "defect_angle": "0.3",
-                                "defect_width": "0.1"}, tmp_path, repeats=1,
+                                "defect_width": "0.1"}, repeats=1,
         log=lambda *a: None)
     plain = obj["rows"][-1]
     assert plain["kind"] == "least_squares" and plain["converged"] is False

@@ -134,8 +134,8 @@ def test_bench_report_names_the_problems_reference():
 def test_bench_andrews_rungs_against_the_test_set(tmp_path):
     """A whole bench of one solver: each ok rung's error is the largest |angle − test set|
     at t = 0.03 s of that rung's own trajectory (read back from the bench folder)."""
-    from compare.workflows.bench import run_bench
-    obj = run_bench("andrews-squeezer", ["mujoco"], {}, tmp_path, repeats=1, log=lambda _: None)
+    from compare.api import bench
+    obj = bench("andrews-squeezer", ["mujoco"], repeats=1, out=tmp_path)
     bench = json.loads((tmp_path / "bench.json").read_text())
     assert bench["reference"]["kind"] == "benchmark" and obj["rows"]
     ok = [r for r in bench["rows"] if r["status"] == "ok"]

@@ -5,8 +5,8 @@ from pathlib import Path
 
 import numpy as np
 
+from compare.api import bench
 from compare.workflows import bench_modes
-from compare.workflows.bench import run_bench
 from tests.conftest import xval
 
 
@@ -18,8 +18,8 @@ def test_frequency_bench_small_ladder(tmp_path, monkeypatch):
     is not at the floor. Measured: 24 → 48 → 96 elements give 1.1e-5, 7.2e-7, 4.6e-8, orders
     3.93 and 3.98 (the floor: fem and mstmm agree to ~6e-9, the scene file's measurement)."""
     monkeypatch.setattr(bench_modes, "MESH_FACTORS", (0.5, 1.0, 2.0))
-    obj = run_bench("rotating-beam", ["mstmm", "fem"], {"speed": "40", "n_modes": "3"},
-                    tmp_path, repeats=1, log=lambda *a: None)
+    obj = bench("rotating-beam", ["mstmm", "fem"], speed=40, n_modes=3, repeats=1,
+                out=tmp_path)
     out = Path(obj["report"]).parent
     assert {p.name for p in out.iterdir()} >= {"bench.json", "report.md", "work_precision.png"}
     assert json.loads((out / "bench.json").read_text())["scene"] == "rotating-beam"

@@ -3,7 +3,6 @@ resume, Dask = process pool, work bounded before anything runs."""
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -200,11 +199,11 @@ def test_the_main_guard_is_read_from_the_scripts_source(tmp_path):
 def test_bench_points_runs_the_map_batch_path(tmp_path):
     """`xval bench --points N` runs N points per solver through the map's batch path and writes
     its report (the batch path's values are checked against single runs above)."""
-    from compare.workflows.bench import run_throughput
-    obj = run_throughput("rotor-spinup", ["quaternion"], {}, tmp_path, 4, log=lambda m: None)
-    (row,) = obj["rows"]
+    from compare.api import bench
+    s = bench("rotor-spinup", ["quaternion"], points=4, out=tmp_path)
+    (row,) = s["rows"]
     assert row["solver"] == "quaternion" and row["points"] == 4 and row["points_per_second"] > 0
-    assert Path(obj["report"]).parent == tmp_path and (tmp_path / "bench.json").exists()
+    assert s.report.parent == tmp_path and (tmp_path / "bench.json").exists()
 
 
 @pytest.mark.parametrize("args, words", [
@@ -375,3 +374,19 @@ def test_a_crossing_moved_past_its_bracket_at_the_tighter_setting_is_unconfirmed
     got = maps.compare_boundaries({"a": found, "b": [{**found[0], "unconfirmed": False,
                                                       "error": 0.0}]}, width)
     assert got[0]["verdict"] == "unconfirmed" and why in got[0]["why"][0]
+
+
+def test_a_map_without_out_is_held_in_memory_until_saved(tmp_path, monkeypatch):
+    """The API's map without `out` writes nothing (no temporary folder, nothing under the
+    working folder) and `save` writes what `out=` writes: the same crossings as a map made
+    into a folder."""
+    from compare.api import map as api_map
+    monkeypatch.chdir(tmp_path)
+    kw = dict(solvers=["quaternion"], resolution=0.25, t_end=2, record=False)
+    held = api_map("rotor-spinup", "torque=1:5", **kw)
+    assert held.out_dir is None and held.report is None and not any(tmp_path.iterdir())
+    made = api_map("rotor-spinup", "torque=1:5", out=tmp_path / "made", **kw)
+    saved = held.save(tmp_path / "saved")
+    assert {p.name for p in saved.iterdir()} >= {"map.json", "report.md", "map.png"}
+    assert held.report == saved / "report.md"
+    assert held["boundaries"] == made["boundaries"] and held["boundaries"]["quaternion"]

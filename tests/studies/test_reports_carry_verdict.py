@@ -4,7 +4,6 @@ asserted here are the inputs given (a --set), hand conversions (rad/s → rpm) o
 comparison's own stored parts (error estimate + allowance), never a figure's own output."""
 import math
 import os
-import tempfile
 
 import numpy as np
 import pytest
@@ -68,11 +67,17 @@ def test_an_empty_job_log_is_not_left_behind(tmp_path):
         == "engine banner"
 
 
-def test_a_study_in_a_temporary_folder_prints_no_path_into_it(tmp_path):
-    tmp = tempfile.mkdtemp()
-    s = BenchResult({"summary_lines": ["one line"], "report": f"{tmp}/report.md"}, tmp, tmp)
-    assert s.report is None and s.out_dir is None
-    assert tmp not in str(s) and str(s).splitlines()[-1].startswith("report: not kept")
+def test_a_study_held_in_memory_writes_its_folder_on_save(tmp_path):
+    """A study made without a folder names none until `save` writes one with its writer."""
+    def write(folder):
+        (folder / "report.md").write_text("# bench\n")
+        return {"summary_lines": ["one line"], "report": str(folder / "report.md")}
+    s = BenchResult({"summary_lines": ["one line"]}, writer=write)
+    assert s.report is None and s.out_dir is None and not any(tmp_path.iterdir())
+    assert str(s).splitlines()[-1].startswith("report: not kept")
+    s.save(tmp_path / "b")
+    assert s.report == tmp_path / "b" / "report.md" and s.report.exists()
+    assert str(s).splitlines()[-1] == f"report: {tmp_path / 'b' / 'report.md'}"
 
 
 def test_response_header_lists_the_studys_own_inputs():

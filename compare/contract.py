@@ -131,7 +131,9 @@ class Channel(str):
     string) and carries its SI unit — the unit's one home, read by every plot and table. A
     plug-in may name its channels with plain strings; they are drawn unitless ([–]).
     `rounding`: the parameter whose size the channel's rounding scales with where that is not
-    its own value (a constraint residual, zero in exact arithmetic, computed from lengths)."""
+    its own value (a constraint residual, zero in exact arithmetic, computed from lengths), or
+    a function (channels, params) -> the channel's rounding at each output time (SI), where the
+    configuration amplifies it (a loop's closure near its singular position)."""
 
     def __new__(cls, name: str, unit: str = "", rounding: str | None = None):
         self = super().__new__(cls, name)

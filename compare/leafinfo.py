@@ -1,16 +1,16 @@
 """A leaf as the rest of xval sees it — read once per leaf module, the only place that reads a
 leaf's attributes (`DEFAULT_SETTINGS`, `INTEGRATORS`, `ADAPTIVE`, `AUTO_DT`, `MODES_SETTINGS`,
-`ORDERS`, `KNOBS`, `check_settings`, `regimes`, `unbalance_response`) — and the accuracy
-knobs as types: `Fixed(dt)` or `Adaptive(rtol, atol)`, each with its tighter setting, its step
-count and its ladder (the shape of scipy's `OdeSolver`, which carries its own order, and
-diffrax's step-size controllers); a leaf's other discretisation knobs (`KNOBS`: a
-finite-difference step) as `Knob`s, each varied by the error estimate on
-its own.
+`ORDERS`, `KNOBS`, `KNOB_LIMITS`, `COARSER_DT`, `check_settings`, `regimes`,
+`unbalance_response`) — and the accuracy knobs as types: `Fixed(dt)` or `Adaptive(rtol,
+atol)`, each with its tighter setting, its step count and its ladder (the shape of scipy's
+`OdeSolver`, which carries its own order, and diffrax's step-size controllers); a leaf's
+other discretisation knobs (`KNOBS`: a finite-difference step) as `Knob`s, each varied by the
+error estimate on its own.
 """
 from __future__ import annotations
 
 import importlib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import ModuleType
 
 import numpy as np
@@ -121,9 +121,12 @@ class Knob:
     the order p of its error, ∝ value^p: p > 0 a step that shrinks toward the limit, as a
     finite-difference step; p < 0 a ratio that grows toward it, as MuJoCo's constraint time
     constant over the step): tighter moves it by 2 toward the limit, cutting its error by
-    2^|p|; coarser the other way (`solvers._knob_errors`)."""
+    2^|p|; coarser the other way (`solvers._knob_errors`). `most`: the most halvings a
+    reference run takes (a leaf's `KNOB_LIMITS`; None: no limit) — a finite difference's error
+    is h^p·f⁽ᵖ⁺¹⁾ plus its rounding δ/h^k, so past its round-off optimum a smaller h is worse."""
     name: str
     order: float
+    most: int | None = None
 
     def value(self, settings: dict) -> float | None:
         v = settings.get(self.name)
@@ -158,6 +161,10 @@ class LeafInfo:
     own_check: bool                # the leaf checks settings against the grid itself
     batch_regimes: bool            # the leaf classifies many runs in one batch call
     knobs: tuple = ()              # Knob records: discretisation knobs besides dt / rtol
+    # integrator -> step factors > 1 of the error estimate's coarser members (COARSER_DT: an
+    # explicit step at its stability bound's safety margin, where halving costs 2× the run and
+    # its changes do not converge; `coarser_members`, solvers._coarser_error)
+    coarser_dt: dict = field(default_factory=dict)
 
     @property
     def unbalance_response(self):
@@ -264,16 +271,25 @@ class LeafInfo:
         tight = k.tighter()
         return tight.apply(settings), k.error_factor, tight.text()
 
+    def coarser_members(self, settings: dict) -> list[dict]:
+        """Settings of the error estimate's coarser members (the run is the finest): its fixed
+        step × each factor the leaf declares for the integrator (`COARSER_DT`); [] where it
+        declares none (the estimate halves the step)."""
+        k = self.knob(settings)
+        q = self.coarser_dt.get(settings.get("integrator"), ())
+        return [{**settings, "dt": k.dt * f} for f in q] if isinstance(k, Fixed) else []
+
     def knob_reruns(self, settings: dict) -> list[tuple[Knob, dict]]:
         """Each discretisation knob `settings` set, with the settings that halve it alone (the
         error estimate varies every knob on its own: errors of opposite sign cannot cancel)."""
         return [(k, k.tighter(settings)) for k in self.knobs if k.value(settings)]
 
     def refined(self, settings: dict, halvings: int = 1) -> dict:
-        """`settings` with every discretisation knob halved `halvings` times (a reference run,
-        a map's confirmation: the step or tolerance is tightened apart)."""
+        """`settings` with every discretisation knob halved `halvings` times, no more than its
+        `most` (a reference run, a map's confirmation: the step or tolerance is tightened
+        apart)."""
         for k, _ in self.knob_reruns(settings):
-            settings = k.tighter(settings, halvings)
+            settings = k.tighter(settings, halvings if k.most is None else min(halvings, k.most))
         return settings
 
 
@@ -307,4 +323,6 @@ def _build(leaf: ModuleType) -> LeafInfo:
                     cheap_rtol=dict(getattr(leaf, "CHEAP_RTOL", {})),
                     own_check=_has(leaf, "check_settings"),
                     batch_regimes=_has(leaf, "regimes"),
-                    knobs=tuple(Knob(n, p) for n, p in getattr(leaf, "KNOBS", {}).items()))
+                    knobs=tuple(Knob(n, p, getattr(leaf, "KNOB_LIMITS", {}).get(n))
+                                for n, p in getattr(leaf, "KNOBS", {}).items()),
+                    coarser_dt=dict(getattr(leaf, "COARSER_DT", {})))

@@ -241,18 +241,21 @@ def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
     were checked before (`settings_for`); anything a leaf raises now is recorded as `error`.
     `estimate_error`: the run's own numerical error per channel (`Trajectory.errors`), which the
     verdicts weigh: factor·|Δ| against a tighter rerun, plus what that rerun cannot see
-    (`_unseen_error`), plus each discretisation knob's own (`_knob_errors`). `warm_up=False`
+    (`_unseen_error`), or coarser members where the leaf declares them (`_coarser_error`),
+    plus each discretisation knob's own (`_knob_errors`). `warm_up=False`
     skips the separate compile call (a batch of points warms up once; the tighter rerun never
     needs one). `t_out`: the output grid where the caller has built it (a Plan)."""
     tr = _simulate(scene, solver, params, settings, timeout_s, warm_up, t_out)
     if estimate_error and tr.status == "ok":
         if settings.get("dt") == "auto" and isinstance(tr.settings.get("dt"), (int, float)):
             settings = {**settings, "dt": tr.settings["dt"]}   # the step "auto" chose
-        tight, factor, how = tighter_settings(solver.info(scene), settings)
-        tr.stats["error_estimate_by"] = how
+        tight = None
+        if not _coarser_error(scene, solver, params, settings, tr, timeout_s):
+            tight, factor, how = tighter_settings(solver.info(scene), settings)
+            tr.stats["error_estimate_by"] = how
         if tight is not None:
             ref = _simulate(scene, solver, params, tight, timeout_s, False, tr.t)
-            tr.stats["error_estimate_s"] = ref.wall_s
+            _cost(tr, ref)
             if ref.status == "ok":
                 unseen = _unseen_error(scene, solver, params, settings, tr, ref, tight,
                                        timeout_s)
@@ -266,6 +269,51 @@ def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
         if tr.errors or tight is None:   # the step's own estimate held, or there is none
             _knob_errors(scene, solver, params, settings, tr, timeout_s)
     return tr
+
+
+def _cost(tr, *runs):
+    """Count the error estimate's runs and their seconds in the run's stats (`xval bench`: the
+    cost of an error bar)."""
+    tr.stats["error_estimate_s"] = tr.stats.get("error_estimate_s", 0.0) + sum(
+        r.wall_s for r in runs)
+    tr.stats["error_estimate_runs"] = tr.stats.get("error_estimate_runs", 0) + len(runs)
+
+
+# Richardson's extrapolation is exact only asymptotically: its estimate × this margin (the
+# halving's factor 2 is 1.5 × its order-2 Richardson factor 4/3)
+RICHARDSON_SAFETY = 1.5
+
+
+def _coarser_error(scene, solver, params, settings, tr, timeout_s) -> bool:
+    """A fixed step's error from coarser members where its leaf declares them (`COARSER_DT`:
+    steps q·dt, 1 < q, still inside the explicit stability bound), the run itself the finest
+    member — a fraction of the run's cost where halving costs twice it. Per channel the larger
+    of Richardson's |y_q − y|/(q^p − 1) × RICHARDSON_SAFETY at the coarsest q (an order-p
+    method, asymptotic) and the band's 2 × running maximum of the members' spread (a mode the
+    step does not resolve in phase: sail-deploy's thread spring, whose runs at any step each
+    sit at their own phase of it, as in `_halving_error`; three members, since two can agree
+    by aliasing), plus the round-off floor. False — the caller halves the step — where the
+    leaf declares no member or one did not complete (a step past the stability limit)."""
+    info = solver.info(scene)
+    members = info.coarser_members(settings)
+    if not members:
+        return False
+    runs = [_simulate(scene, solver, params, s, timeout_s, False, tr.t) for s in members]
+    _cost(tr, *runs)
+    if any(r.status != "ok" for r in runs):
+        return False
+    q, p = members[-1]["dt"] / settings["dt"], info.order(settings.get("integrator")) or 1
+    unseen = _unseen_error(scene, solver, params, settings, tr, runs[-1], members[-1],
+                           timeout_s)
+    tr.errors = {}
+    for c in scene.channels:
+        y = tr.channels[c]
+        rich = RICHARDSON_SAFETY * np.abs(runs[-1].channels[c] - y) / (q ** p - 1)
+        band = 2 * np.maximum.accumulate(np.ptp([y] + [r.channels[c] for r in runs], axis=0))
+        tr.errors[c] = np.maximum(rich, band) + unseen[c]
+    tr.stats["error_estimate_by"] = "dt " + ", ".join(f"{s['dt']:g}" for s in members) + \
+        " (coarser: Richardson and the members' band)"
+    return True
 
 
 def _knob_errors(scene, solver, params, settings, tr, timeout_s):
@@ -282,8 +330,7 @@ def _knob_errors(scene, solver, params, settings, tr, timeout_s):
     for knob, tight in solver.info(scene).knob_reruns(settings):
         runs = [_simulate(scene, solver, params, s, timeout_s, False, tr.t)
                 for s in (tight, knob.tighter(settings, -1))]
-        tr.stats["error_estimate_s"] = tr.stats.get("error_estimate_s", 0.0) + sum(
-            r.wall_s for r in runs)
+        _cost(tr, *runs)
         half, double = runs               # tighter, coarser
         by = f"{knob.name} {knob.value(tight):g}"
         if half.status != "ok":
@@ -331,7 +378,7 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
     err = {c: 2 * d1[c] for c in scene.channels}
     coarse = _simulate(scene, solver, params, {**tight, "dt": 4 * tight["dt"]}, timeout_s,
                        False, tr.t)
-    tr.stats["error_estimate_s"] = tr.stats.get("error_estimate_s", 0.0) + coarse.wall_s
+    _cost(tr, coarse)
     if coarse.status != "ok":          # 2·dt past a stability limit: no ratio to read
         return err
     seen = [c for c in scene.channels if np.max(d1[c]) > 10 * float(np.max(unseen[c]))]
@@ -341,7 +388,7 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
         return err
     quarter = _simulate(scene, solver, params, {**tight, "dt": tight["dt"] / 2}, timeout_s,
                         False, tr.t)
-    tr.stats["error_estimate_s"] += quarter.wall_s
+    _cost(tr, quarter)
     tr.stats["error_estimate_by"] += f", dt {tight['dt'] / 2:g} (not asymptotic: {slow[0]})"
     if quarter.status != "ok":
         return err
@@ -357,6 +404,8 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
 
 
 EPS = float(np.finfo(float).eps)
+# the tight run's error over its change on halving the tolerance (`_unseen_error`)
+TIGHT_TAIL = 1 / (1 - 2 ** -0.5)
 
 
 def _steps(tr: Trajectory) -> float:
@@ -373,7 +422,14 @@ def rounding_scale(channel, tr, params) -> float:
     (`Channel.rounding`) where that is larger (a loop residual's lengths)."""
     own = float(np.max(np.abs(tr.channels[channel])))
     name = getattr(channel, "rounding", None)
-    return max(own, abs(float(params[name]))) if name else own
+    return max(own, abs(float(params[name]))) if isinstance(name, str) else own
+
+
+def rounding_model(channel, tr, params):
+    """The channel's own rounding at each output time where it declares a model of it
+    (`Channel.rounding` a function), else 0."""
+    model = getattr(channel, "rounding", None)
+    return np.abs(model(tr.channels, params)) if callable(model) else 0.0
 
 
 def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) -> dict:
@@ -387,20 +443,32 @@ def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) ->
       by about its tolerance under any tiny change (rotor-spinup at 3.2 N·m: a 1e-15 change of
       the torque moves `potential` by 2.5e-9 J at rtol 1e-11, the size of the rtol-1e-13
       rerun's own error, which factor 1 took for zero). Measured by one more run at half that
-      tolerance: |y_tight − y_tight/2| is the tight run's error (a fixed step's error is smooth
-      in the step, and halving it sees it: no third run)."""
-    floor = {c: np.sqrt(_steps(tr) + _steps(ref)) * EPS * rounding_scale(c, tr, params)
+      tolerance: an error-controlled method's error goes as tol^a, a = p/(p + 1) ≥ 1/2 (the
+      worst case `Adaptive.error_factor` takes), so halving the tolerance removes at least
+      1 − 2^-a of it and the tight run's error is at most |y_tight − y_tight/2| / (1 − 2^-½)
+      = 3.41 × the change (`TIGHT_TAIL`; 1 × it left euler-vector's rotor-spinup work 1.03 ×
+      past its pair's bound at a calibration set, its rtol-1e-13 run 1.4e-12 J off rtol 1e-14
+      while the halving moved it 5.2e-13). Where the tolerance no longer governs (the
+      controller at a formulation's rounding floor) the changes are samples of the runs'
+      scatter, and one can fall far short: euler-vector at 3.19999 N·m, 5 s, eight rtol-1e-13
+      runs 4 ulp of rtol apart scatter by 4.6e-9 J of work and one halving's change was up to
+      6.1 × short of that run's own error; so a second run at a quarter of the tolerance, and the
+      larger change counts. A fixed step's error is smooth in the step, and halving it sees
+      it: no further run."""
+    floor = {c: np.maximum(np.sqrt(_steps(tr) + _steps(ref)) * EPS
+                           * rounding_scale(c, tr, params), rounding_model(c, tr, params))
              for c in scene.channels}
     jitter = {c: 0.0 for c in scene.channels}
     if isinstance(tight.get("rtol"), float) and tight["rtol"] != settings.get("rtol"):
-        half = {**tight, "rtol": tight["rtol"] / 2}
-        if isinstance(tight.get("atol"), (int, float)):
-            half["atol"] = tight["atol"] / 2
-        ref2 = _simulate(scene, solver, params, half, timeout_s, False, tr.t)
-        tr.stats["error_estimate_s"] = tr.stats.get("error_estimate_s", 0.0) + ref2.wall_s
-        if ref2.status == "ok":
-            jitter = {c: np.maximum.accumulate(np.abs(ref.channels[c] - ref2.channels[c]))
-                      for c in scene.channels}
+        for cut in (2, 4):
+            finer = {**tight, "rtol": tight["rtol"] / cut}
+            if isinstance(tight.get("atol"), (int, float)):
+                finer["atol"] = tight["atol"] / cut
+            ref2 = _simulate(scene, solver, params, finer, timeout_s, False, tr.t)
+            _cost(tr, ref2)
+            if ref2.status == "ok":
+                jitter = {c: np.maximum(jitter[c], TIGHT_TAIL * np.maximum.accumulate(
+                    np.abs(ref.channels[c] - ref2.channels[c]))) for c in scene.channels}
     return {c: floor[c] + jitter[c] for c in scene.channels}
 
 

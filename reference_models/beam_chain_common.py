@@ -123,7 +123,8 @@ def quadratic_modes(M: np.ndarray, K: np.ndarray, D: np.ndarray, varied=None,
     Re s > 0 beyond round-off (divergence or flutter: an unstable linearisation), and, given
     `varied` (M, K, D linearised at another finite-difference step), the error bound of ζ of
     the `first` roots: eigen round-off (compare.physics.eigen) plus the first-order change
-    `varied` makes (None without `varied`)."""
+    `varied` makes (None without `varied`), and the same bound on the frequency (Hz): what the
+    one linearisation adds to the chain's own discretisation error."""
     n = M.shape[0]
     A = state_matrix(M, K, D)
     s, V = np.linalg.eig(A)          # standard form: ~20x faster than the QZ of (A, B)
@@ -132,13 +133,19 @@ def quadratic_modes(M: np.ndarray, K: np.ndarray, D: np.ndarray, varied=None,
     n_unstable = int(np.sum(s[fin].real > 1e-7 * scale))
     keep = np.nonzero(fin & (s.imag > 1e-9 * scale))[0]
     keep = keep[np.argsort(s[keep].imag)]
-    z_err = None
+    z_err = f_err = None
     if varied is not None:
         W, mine = eigen.left_rows(V), keep[:first]
         d_re, d_abs = eigen.change(state_matrix(*varied) - A, s, V, W, mine)
-        z_err = (eigen.zeta_error(eigen.round_off(A, s, V, W, mine), s[mine])
-                 + eigen.zeta_error(d_abs, s[mine], d_re))
-    return s[keep], V[:n, keep], n_unstable, z_err
+        rounding = eigen.round_off(A, s, V, W, mine)
+        z_err = eigen.zeta_error(rounding, s[mine]) + eigen.zeta_error(d_abs, s[mine], d_re)
+        # the frequency's: the FD step alone (the eigen round-off bound, ~1e3 × the engines'
+        # measured difference at torsion 1, is left to the scenes' round-off floor). The
+        # engines' derivatives are central differences: the change at FD_VARY × the step is
+        # FD_VARY² − 1 = 99 × the error at it (exudyn–mujoco differ by 0.0068–0.0081 of their
+        # summed changes at every mode of 9 sets of both beams: an h² error, not h)
+        f_err = d_abs / (FD_VARY**2 - 1) / (2 * np.pi)
+    return s[keep], V[:n, keep], n_unstable, z_err, f_err
 
 
 def stations(L: float) -> np.ndarray:
@@ -175,7 +182,7 @@ def blade_modes(chain: dict, M, K, D, n_modes: int, varied=None) -> dict:
     """Frequencies (Hz), labels by the family holding most of the hinge-spring energy, shapes
     [flap z, lag y, (chord/2)·twist] at the stations (Re then Im), damping −Re s/|s| and its
     error bound (`quadratic_modes`)."""
-    s, V, n_unstable, z_err = quadratic_modes(M, K, D, varied, n_modes)
+    s, V, n_unstable, z_err, f_err = quadratic_modes(M, K, D, varied, n_modes)
     fam, hinge, k = joint_table(chain)
     families, shapes = [], []
     arm = _arms(chain)
@@ -193,7 +200,7 @@ def blade_modes(chain: dict, M, K, D, n_modes: int, varied=None) -> dict:
     return {"frequencies_hz": s.imag / (2 * np.pi),
             "labels": family_labels(families)[:n_modes], "shapes": shapes,
             "damping": -s.real / np.abs(s), "damping_error": z_err,
-            "n_unstable": n_unstable}
+            "linearisation_error_hz": f_err, "n_unstable": n_unstable}
 
 
 def whirl_sense(u: np.ndarray, v: np.ndarray) -> float:
@@ -214,7 +221,7 @@ def shaft_modes(chain: dict, M, K, D, n_modes: int, varied=None) -> dict:
     forward whirl is the lower branch |λ² − Ω*| (its inertial frequency is λ²ω₀ turning with
     the spin) and the backward the upper λ² + Ω*. Shapes: [u, v] at the stations (Re then
     Im); damping −Re s/|s| and its error bound (`quadratic_modes`)."""
-    s, V, n_unstable, z_err = quadratic_modes(M, K, D, varied, n_modes)
+    s, V, n_unstable, z_err, f_err = quadratic_modes(M, K, D, varied, n_modes)
     fam, hinge, k = joint_table(chain)
     arm = _arms(chain)
     spin = chain["spin"]
@@ -230,7 +237,7 @@ def shaft_modes(chain: dict, M, K, D, n_modes: int, varied=None) -> dict:
     return {"frequencies_hz": s.imag / (2 * np.pi), "labels": labels[:n_modes],
             "sense": np.array(sense[:n_modes]), "shapes": np.array(shapes[:n_modes]),
             "damping": -s.real / np.abs(s), "damping_error": z_err,
-            "n_unstable": n_unstable}
+            "linearisation_error_hz": f_err, "n_unstable": n_unstable}
 
 
 def signed_hz(model: dict) -> np.ndarray:
@@ -269,6 +276,7 @@ SPREAD_NOTE = 5e-3   # Richardson spread above this: the chain is too coarse at 
 # the order of the term the 1/N² extrapolation leaves, at least (the chain's error has odd
 # terms where the segments' ends break the symmetry): 2^3 − 1 = 7
 EXTRAPOLATED_ORDER = 3
+LINEARISATION_SAFETY = 3.0    # the h² law of the varied step holds to ±10 %; the rest margin
 FD_VARY = 10.0       # the engines' finite-difference step × this: the linearisation's own error
 
 
@@ -317,8 +325,12 @@ def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) 
         low = dict(zip([models[1]["labels"][i] for i in range(len(f_low))], f_low))
         # per mode: the two extrapolates' difference (N/4–N/2 against N/2–N), the error of
         # the coarser one; the finer's is (2^p − 1)× smaller where the extrapolation leaves
-        # an order-p ≥ EXTRAPOLATED_ORDER term. A mode the N/4 chain lacks: the extrapolation's
-        # own change (the N chain's error, an upper bound of the extrapolate's)
+        # an order-p ≥ EXTRAPOLATED_ORDER term — claimed only where the extrapolation acts,
+        # the two extrapolates nearer each other than the N chain to its own: short of it
+        # (the blade's flap at 80 rad/s, N = 40: 5.1e-3 apart, the N chain 2.8e-3 from its
+        # extrapolate, whose true error is 2.0e-3, not the 7.2e-4 the 1/7 claimed) the
+        # difference as it is. Never above the extrapolation's own change (the N chain's
+        # error, an upper bound of the extrapolate's), alone where the N/4 chain lacks the mode
         change = np.abs(signed - signed_hz(fine)[idx])
         diff = np.array([abs(low[fine["labels"][i]] - f_all[i]) if fine["labels"][i] in low
                          else np.inf for i in idx])
@@ -326,8 +338,8 @@ def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) 
                      default=0.0)
         extra = {"unextrapolated_hz": fine["frequencies_hz"][idx],
                  "richardson_spread_rel": float(spread),
-                 "frequency_error_hz": np.minimum(diff / (2 ** EXTRAPOLATED_ORDER - 1),
-                                                  change)}
+                 "frequency_error_hz": np.minimum(
+                     diff / np.where(diff <= change, 2 ** EXTRAPOLATED_ORDER - 1, 1), change)}
         if spread > SPREAD_NOTE:
             notes.append(f"discretisation: extrapolations from N/4–N/2 and N/2–N differ by "
                          f"{spread:.1e} here; raise n_segments")
@@ -335,6 +347,13 @@ def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) 
         idx = np.arange(min(n_modes, len(fine["labels"])))
         signed = signed_hz(fine)[idx]
         f = np.abs(signed)
+    if fine.get("linearisation_error_hz") is not None:
+        # what the engine's own linearisation adds (round-off, the FD step): the error two
+        # engines of this one chain do not share; the extrapolate (4f_N − f_N/2)/3 carries
+        # 4/3 of the N chain's and 1/3 of the N/2 chain's, taken alike
+        lin = fine["linearisation_error_hz"][idx]
+        extra["linearisation_error_hz"] = LINEARISATION_SAFETY * lin * (5 / 3 if extrapolate
+                                                                        else 1)
     if "sense" in fine:
         extra["whirl_sense"] = np.where(signed < 0, -1.0, 1.0)
     if fine["n_unstable"]:

@@ -10,7 +10,7 @@ from collections.abc import Callable
 import numpy as np
 
 from compare.contract import LeafModes
-from compare.physics.bicycle import root_labels, roots_text
+from compare.physics.bicycle import damping_shift, root_labels, roots_text
 
 PULSE = (1e-3, 0.02)            # roll torque [N·m] on the rear frame, and how long [s]
 LEAN_CUT = 1e-5                 # rad: a growing record is cut here
@@ -72,6 +72,12 @@ def fitted_modes(free_response: Callable, params: dict, s: dict, note: str) -> L
     half = len(t) // 2
     short = match(lam, pencil([lean[:half], steer[:half]], s["output_dt"]))
     err = 4 / 3 * np.abs(lam - coarse) + 2 * np.abs(lam - short)
+    # the frequency's bar by the same rule on Im λ itself (|δλ| bounds it, 1.1–8 × wider on 7
+    # drawn designs, where Exudyn's weave frequencies are off the equations' by 0.03–0.25 of
+    # this bar; `xval calibrate bicycle`: coverage 1.0, median 0.25). ζ keeps the modulus'
+    # bound: where a fit fails (MuJoCo's weave at ζ = 0.94, its frequency 93 % off) the
+    # three fits' ζ agree while their frequencies do not
+    err_im = 4 / 3 * np.abs(lam.imag - coarse.imag) + 2 * np.abs(lam.imag - short.imag)
     labels = root_labels(lam)
     osc = [i for i in np.argsort(lam.imag) if lam[i].imag > 0]
     return LeafModes(
@@ -80,8 +86,9 @@ def fitted_modes(free_response: Callable, params: dict, s: dict, note: str) -> L
         notes=[note, roots_text(lam, labels)],
         extra={"eigenvalues": np.column_stack([lam.real, lam.imag]),
                "eigenvalue_labels": labels, "eigenvalue_error_per_s": err,
-               "frequency_error_hz": err[osc] / (2 * np.pi),
-               # |δζ| ≤ (|δ Re λ| + |ζ| |δλ|) / |λ| ≤ 2 |δλ| / |λ|
-               "damping_error": 2 * err[osc] / np.abs(lam[osc]),
+               "frequency_error_hz": err_im[osc] / (2 * np.pi),
+               # ζ anywhere within |δλ| of the root (ζ = −cos arg λ: 1/sin(arg λ) sharper
+               # than 2 |δλ|/|λ| near a real root)
+               "damping_error": damping_shift(lam[osc], err[osc]),
                "max_re_per_s": float(np.max(lam.real)), "record_s": float(t[-1] - t[0]),
                "simulate_s": wall + wall2})

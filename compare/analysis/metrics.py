@@ -30,6 +30,8 @@ class Comparison:
     deviation: float = np.nan        # max |Δ| (SI), = max_abs
     error_estimate: float | None = None   # max (err_a + err_b) over the run (SI), if estimated
     allowance: float = np.nan        # the scene's modelling allowance (SI)
+    # b is a closed form (its label), not a solver: `a` judged against it (`against_formula`)
+    formula: bool = False
 
     def __post_init__(self):            # read back from JSON: the string becomes the type
         object.__setattr__(self, "verdict", Verdict(self.verdict))
@@ -125,6 +127,41 @@ def deviation(a: Trajectory, b: Trajectory, channel: str,
     why = f"{wide}; {why}" if wide else why
     return Comparison(a.solver, b.solver, channel, max_abs, float(np.sqrt(np.mean(d**2))), rel,
                       scale, bound / scale, verdict, why, max_abs, err, allow)
+
+
+def against_formula(tr: Trajectory, channel: str, label: str, values, allowance) -> Comparison:
+    """A solver's channel against a closed form's `values` on its grid: |Δ| ≤ the formula's own
+    error `allowance` (SI: what the formula neglects of that solver's model) + the solver's own
+    error estimate. `allowance` a string: why the formula states no error there (outside its
+    domain) — `inconclusive`, never agree."""
+    if tr.status != "ok":
+        return Comparison(tr.solver, label, channel, np.nan, np.nan, np.nan, np.nan, np.nan,
+                          Verdict.SKIPPED, f"not compared: {tr.solver} {tr.status}",
+                          formula=True)
+    x, y = tr.channels[channel], np.asarray(values, float)
+    d = np.abs(x - y)
+    scale = float(max(np.max(np.abs(x)), np.max(np.abs(y)), 1e-300))
+    max_abs = float(np.max(d))
+    at = f"(at t = {tr.t[np.argmax(d)]:.4g} s)"
+    e = tr.errors.get(channel)
+    err = float(np.nanmax(e)) if e is not None else None
+    unit = getattr(channel, "unit", "")
+    if isinstance(allowance, str):
+        return Comparison(tr.solver, label, channel, max_abs, float(np.sqrt(np.mean(d**2))),
+                          max_abs / scale, scale, np.nan, Verdict.INCONCLUSIVE,
+                          f"max|Δ| = {max_abs:.2e} {at}; {label} states no error here: "
+                          f"{allowance}", max_abs, err, np.nan, True)
+    bound = allowance + (err or 0.0)
+    verdict, wide = judged(max_abs, bound, {tr.solver: err} if err is not None else None,
+                           allowance, scale, f" {unit}" if unit else "")
+    why = (f"max|Δ| = {max_abs:.2e} {at} {'>' if verdict == Verdict.DISAGREE else '≤'} "
+           + (f"error estimate {err:.1e} + " if err is not None else "")
+           + f"{label}'s own error {allowance:.1e}"
+           + ("" if err is not None else " (no error estimate)")
+           + f" (Δ/bound {ratio_text(max_abs / bound if bound > 0 else np.inf)})")
+    return Comparison(tr.solver, label, channel, max_abs, float(np.sqrt(np.mean(d**2))),
+                      max_abs / scale, scale, bound / scale, verdict,
+                      f"{wide}; {why}" if wide else why, max_abs, err, allowance, True)
 
 
 def allowance_si(allowance: float | tuple, scale: float) -> float:
@@ -284,11 +321,13 @@ def unpaired_modes(results: list[Modes]) -> list[dict]:
     return out
 
 
-def frequency_errors(m: Modes) -> np.ndarray | None:
+def frequency_errors(m: Modes, linearisation: bool = False) -> np.ndarray | None:
     """A solver's own error estimate per mode (Hz), where its leaf gives one in
     extra["frequency_error_hz"] (a Richardson change N → 2N, a mesh change, a root tolerance,
-    round-off), else None."""
-    e = m.extra.get("frequency_error_hz")
+    round-off), else None; with `linearisation`, only the part a second solver of the same
+    discrete model does not share (extra["linearisation_error_hz"]: its finite-difference
+    step), else None."""
+    e = m.extra.get("linearisation_error_hz" if linearisation else "frequency_error_hz")
     if e is None:
         return None
     e = np.abs(np.asarray(e, float))
@@ -302,52 +341,62 @@ def damping_allowance(tolerances: dict, a: str, b: str) -> float:
     return max([tolerances["damping"]] + [by.get(s, 0.0) for s in (a, b)])
 
 
-def frequency_allowance(tolerances: dict, a: str, b: str) -> float:
+def frequency_allowance(tolerances: dict, a: str, b: str, mode: str | None = None) -> float:
     """The relative allowance of the pair (a, b) on frequencies: the pair's own
     ("frequency_by_pair", "a|b" in either order), else the larger of "frequency" and a
     "frequency_by_solver" entry of its solvers (e.g. a rigid-segment chain whose sections
-    carry rotary inertia the Euler–Bernoulli model has not)."""
+    carry rotary inertia the Euler–Bernoulli model has not) — for a `mode` (label) that the
+    solver's "frequency_by_mode" entry ({label: allowance}) names, that mode's own instead."""
     pairs = tolerances.get("frequency_by_pair", {})
     for k in (f"{a}|{b}", f"{b}|{a}"):
         if k in pairs:
             return pairs[k]
     by_solver = tolerances.get("frequency_by_solver", {})
-    return max([tolerances["frequency"]] + [by_solver.get(s, 0.0) for s in (a, b)])
+    by_mode = tolerances.get("frequency_by_mode", {})
+
+    def of(s):
+        own = by_mode.get(s) or {}
+        return own[mode] if mode in own else by_solver.get(s, 0.0)
+    return max([tolerances["frequency"]] + [of(s) for s in (a, b)])
 
 
 def frequency_comparisons(results: list[Modes], tolerances: dict) -> list[Comparison]:
     """Every pair of solvers, mode by mode, as Comparisons (channel = the mode's label), each
-    pair against its `frequency_allowance` from the scene's `tolerances`. As for time
+    pair against its `frequency_allowance` (of the mode) from the scene's `tolerances`. As for time
     channels, the verdict is |Δ| ≤ allowance + both solvers' error estimates
     (`frequency_errors`), where both give one — except for a pair listed in
     "frequency_one_model" ("a|b"): two solvers of one discrete model (the same segments,
     springs and extrapolation) share its discretisation error, which cancels in their
     difference; their estimates would only hide a difference between them, so such a pair is
-    judged against its own allowance alone."""
+    judged against its own allowance plus only what each one's linearisation adds, where both
+    give it."""
     out = []
     ok = [r for r in results if r.status == "ok"]
     one_model = set(tolerances.get("frequency_one_model", ()))
     for i, a in enumerate(ok):
         for b in ok[i + 1:]:
-            tol = frequency_allowance(tolerances, a.solver, b.solver)
             shared = bool({f"{a.solver}|{b.solver}", f"{b.solver}|{a.solver}"} & one_model)
             for ia, ib in match_modes(list(a.frequencies_hz), a.labels,
                                       list(b.frequencies_hz), b.labels):
+                # a mode's own allowance where both name it alike, else the solvers' largest
+                same = a.labels[ia] if a.labels[ia] and a.labels[ia] == b.labels[ib] else None
+                tol = frequency_allowance(tolerances, a.solver, b.solver, same)
                 fa, fb = a.frequencies_hz[ia], b.frequencies_hz[ib]
                 d = abs(fa - fb)
                 scale = max(abs(fa), abs(fb), 1e-300)
-                ea, eb = frequency_errors(a), frequency_errors(b)
-                own = (None if shared or ea is None or eb is None
+                ea, eb = frequency_errors(a, shared), frequency_errors(b, shared)
+                own = (None if ea is None or eb is None
                        else {a.solver: float(ea[ia]), b.solver: float(eb[ib])})
                 err = sum(own.values()) if own else None
                 bound = tol * scale + (err or 0.0)
                 v, wide = judged(d, bound, own, tol * scale, scale, " Hz")
+                cancels = "one discrete model: its discretisation error cancels"
                 why = (f"{fa:.8g} vs {fb:.8g} Hz: |Δ| {d:.2e} "
                        f"{'>' if v == Verdict.DISAGREE else '≤'} "
-                       + (f"error estimates {err:.1e} + allowance {tol * scale:.1e} Hz"
+                       + (f"{'linearisation ' if shared else ''}error estimates {err:.1e} + "
+                          f"allowance {tol * scale:.1e} Hz" + (f" ({cancels})" if shared else "")
                           if err is not None else f"allowance {tol * scale:.1e} Hz ("
-                          + ("one discrete model: its discretisation error cancels" if shared
-                             else "no error estimate") + ")"))
+                          + (cancels if shared else "no error estimate") + ")"))
                 out.append(Comparison(
                     a.solver, b.solver, a.labels[ia] or f"mode {ia + 1}", d, d, d / scale,
                     scale, bound / scale, v, f"{wide}; {why}" if wide else why, d, err,

@@ -57,7 +57,7 @@ def time_markdown(obj: dict, ref_settings: dict) -> list[str]:
                 + (f"; {names[1]} agrees to {check:.1e} relative" if check is not None else "")]
     unit = f"error [{ref['unit']}] | " if bm else ""
     md = [f"# Work-precision: {obj['scene']}", "", *head,
-          "", *[f"- {x}" for x in obj["summary_lines"]], "",
+          "", *[f"- {x}" for x in obj["summary_lines"]], "", *error_bar_lines(obj),
           f"| solver | method | setting | {unit}rel. error | energy residual [J] | "
           "median wall [s] | compile [s] | steps | RHS evals | ns / RHS |",
           "|---" * (11 if bm else 10) + "|"]
@@ -71,6 +71,21 @@ def time_markdown(obj: dict, ref_settings: dict) -> list[str]:
                   f"{fmt_value(r['compile_s'], 3) if r['compile_s'] else '—'} | {r['steps']} | "
                   f"{r['rhs_evals'] or '—'} | {_dash(r['ns_per_rhs'], '.0f')} |")
     return md
+
+
+def error_bar_lines(obj: dict) -> list[str]:
+    """The cost of an error bar (`error_bars`: each solver's run with its estimate, per
+    verdict over their comparisons); none for a bench without it."""
+    cost = obj.get("error_bars")
+    if not cost:
+        return []
+    per = (f"{cost['runs_per_verdict']:.3g} runs, {cost['seconds_per_verdict']:.3g} s per "
+           "verdict" if cost["verdicts"] else "no pair compared")
+    return [f"Cost of the error bars at these parameters: {cost['runs']} runs, "
+            f"{cost['seconds']:.3g} s for {cost['verdicts']} verdicts ({per}).", "",
+            "| solver | runs | run [s] | estimate [s] | estimate by |", "|---|---|---|---|---|",
+            *[f"| {n} | {b['runs']} | {b['run_s']:.3g} | {b['estimate_s']:.3g} | "
+              f"{b['by'] or b['status']} |" for n, b in cost["by_solver"].items()], ""]
 
 
 def modes_markdown(obj: dict) -> list[str]:

@@ -73,17 +73,24 @@ def _deviations(rec, result, colors):
     against (the two error estimates over time plus the allowance)."""
     trs = {t.solver: t for t in result.trajectories}
     for c in result.comparisons:
-        a, b = trs[c.a], trs[c.b]
         if c.verdict == Verdict.SKIPPED:
             continue
-        d = np.abs(a.channels[c.channel] - b.channels[c.channel])
+        a = trs[c.a]
+        if c.formula:          # a solver against a closed form (FormulaCheck) and its own error
+            fc = next(f for f in result.scene.formula_checks
+                      if f.label == c.b and f.channel == c.channel)
+            d = np.abs(a.channels[c.channel] - fc.formula(result.params, a.t))
+            errs = [a.errors.get(c.channel)]
+        else:
+            b = trs[c.b]
+            d = np.abs(a.channels[c.channel] - b.channels[c.channel])
+            errs = [a.errors.get(c.channel), b.errors.get(c.channel)]
         ent = pair_entity(c.channel, c.a, c.b)
         _series(rec, ent, a.t, np.log10(np.maximum(d, 1e-300)), f"{c.a}~{c.b}",
-                colors[c.b])
-        bound = np.full(len(a.t), c.allowance)
-        ea, eb = a.errors.get(c.channel), b.errors.get(c.channel)
-        if ea is not None and eb is not None:
-            bound = bound + ea + eb
+                colors[c.a if c.formula else c.b])
+        bound = np.full(len(a.t), c.allowance)       # NaN where the formula states none
+        if all(e is not None for e in errs):
+            bound = bound + sum(errs)
         _series(rec, f"{ent}/bound", a.t, np.log10(np.maximum(bound, 1e-300)),
                 f"bound {c.a}~{c.b}", (0, 0, 0), width=1.0)
 

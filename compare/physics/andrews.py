@@ -21,7 +21,7 @@ from ..contract import Channel
 
 ANGLES = ("beta", "theta", "gamma", "phi", "delta", "omega", "epsilon")
 CHANNELS = (*(Channel(a, "rad") for a in ANGLES), Channel("energy_balance", "J"),
-            Channel("kinetic_energy", "J"))
+            Channel("kinetic_energy", "J"), Channel("spring_energy", "J"))
 
 # the test set's parameter names and values (SI: kg, m, kg·m², N/m, N·m), in its order
 PARAMS = (
@@ -284,7 +284,8 @@ def energy(q, qd, p):
 
 def energy_channels(Q, QD, p) -> dict:
     """The energy balance T + V_spring − mom·(β − β₀) − E₀ (J; zero for an exact solution: the
-    motor torque's work is mom·Δβ) and T, from any solver's angles and rates on its grid."""
+    motor torque's work is mom·Δβ), T and V_spring, from any solver's angles and rates on its
+    grid."""
     Q, QD = np.asarray(Q, float), np.asarray(QD, float)
     n = len(Q)
     T, V = np.full(n, np.nan), np.full(n, np.nan)
@@ -292,7 +293,8 @@ def energy_channels(Q, QD, p) -> dict:
         if np.all(np.isfinite(Q[i])) and np.all(np.isfinite(QD[i])):
             T[i], V[i] = energy(np.ascontiguousarray(Q[i]), np.ascontiguousarray(QD[i]), p)
     work = p[MOM] * (Q[:, 0] - Q[0, 0])
-    return {"energy_balance": T + V - work - (T[0] + V[0]), "kinetic_energy": T}
+    return {"energy_balance": T + V - work - (T[0] + V[0]), "kinetic_energy": T,
+            "spring_energy": V}
 
 
 def channels(Q, QD, p) -> dict:

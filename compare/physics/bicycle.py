@@ -77,6 +77,25 @@ def eigenvalues(p: dict, v: float, mats=None) -> np.ndarray:
     return lam[np.lexsort((-lam.imag, -lam.real))]
 
 
+def damping_shift(lam, r):
+    """The largest change of ζ = −Re λ/|λ| a root `lam` can take moving anywhere within `r`
+    [1/s] of it: ζ depends on arg λ alone, which moves by at most asin(r/|λ|) (anything, up
+    to 2, once r ≥ |λ|) — exact where |δζ| ≤ 2 r/|λ| is up to 1/sin(arg λ) too wide (near-real
+    roots)."""
+    lam = np.atleast_1d(np.asarray(lam, complex))
+    r = np.broadcast_to(np.asarray(r, float), lam.shape)
+    out = np.full(lam.shape, 2.0)
+    for i, (x, ri) in enumerate(zip(lam, r)):
+        a, th = abs(x), abs(np.angle(x))                # ζ's sign is arg's; |arg| in [0, π]
+        if a == 0 or ri >= a:
+            continue
+        al = np.arcsin(ri / a)
+        c = [np.cos(th - al), np.cos(th + al)] + ([1.0] if th - al <= 0 else []) \
+            + ([-1.0] if th + al >= np.pi else [])
+        out[i] = max(abs(ci - np.cos(th)) for ci in c)
+    return out
+
+
 def growth_rate(p: dict, v: float, mats=None) -> float:
     """The largest real part of the roots (> 0: a motion grows)."""
     return float(np.max(eigenvalues(p, v, mats).real))

@@ -21,7 +21,10 @@ import numpy as np
 
 from ..contract import Channel
 
-CHANNELS = (Channel("hub_rate", "rad/s"), Channel("deployed_length", "m"),
+# deployed_length is a polyline length from node positions at L_c + s from the axis: it rounds
+# with L_c where L_c exceeds the length (early in the payout, where two models that pay out
+# alike differ by that rounding alone)
+CHANNELS = (Channel("hub_rate", "rad/s"), Channel("deployed_length", "m", rounding="L_c"),
             Channel("tip_angle", "rad"), Channel("angular_momentum", "kg·m²/s"),
             Channel("energy_balance", "J"))
 
@@ -259,3 +262,46 @@ def root_lag(params: dict, omega: float) -> float:
     hangs where the centrifugal pull m Ω² L_c sinθ balances the Coriolis push 2 m Ω r ω cosθ,
     tan θ = 2 r ω / (Ω L_c) (independent of its distance from Q)."""
     return math.atan2(2 * params["r"] * params["omega_spool"], abs(omega) * params["L_c"])
+
+
+def formula18_lag(params: dict, t) -> tuple:
+    """The lumped formula 18 (`formula18_discrete`) with the thread's quasi-steady lag put back:
+    (Ω [rad/s] on t, x on t: the lag's solvability, no quasi-steady lag where |x| > 1).
+
+    Formula 18 holds the released thread rigid, straight and radial. A thread paid out at r·ω
+    from Q trails the radial by θ; node j at s_j along it from Q is then at
+    R_j² = L_c² + 2 L_c s_j cosθ + s_j² from the axis, 2 m_j L_c s_j (1 − cosθ) less inertia per
+    blade, and its velocity r·ω along the thread carries −m_j r ω L_c sinθ about the axis.
+    θ balances the moments about Q on the straight thread (weights S1 = Σ m_j s_j,
+    S2 = Σ m_j s_j²): the centrifugal pull Ω² L_c S1 sinθ and the despin's Euler force
+    |Ω̇| (S2 + L_c S1 cosθ) against the Coriolis push 2 Ω r ω S1, i.e. A sinθ + B cosθ = C with
+    A = Ω² L_c, B = |Ω̇| L_c, C = 2 Ω r ω − |Ω̇| S2/S1, x = C/√(A² + B²) (at Ω̇ = 0:
+    sinθ = 2 r ω/(Ω L_c)). Ω and Ω̇ = Ω İ/I (İ = 4 r ω Σ m_j (L_c + s_j)) are the formula's;
+    Ω = (H₀ + 2 sgn(Ω₀) r ω L_c sinθ Σ m_j) / I(θ). No transient, stretch or curvature."""
+    n, l0, m, _ = thread(params)
+    L, r, w, Lc, J = params["L"], params["r"], params["omega_spool"], params["L_c"], params["J_hub"]
+    t = np.asarray(t, float)
+    f = formula18_discrete(params, t)
+    H0 = (J + 2 * m.sum() * Lc**2) * params["Omega0"]
+    out, xs = np.empty_like(t), np.empty_like(t)
+    phi = np.minimum(w * t, L / r)
+    bs = np.minimum(np.floor(phi * n * r / L + 1e-12).astype(np.int64), n - 1)
+    for b in np.unique(bs):                      # the instants of one boundary node at once
+        i = np.nonzero(bs == b)[0]
+        s = (r * phi[i] - l0 * b)[:, None] + l0 * (b - np.arange(b + 1))
+        mm, stored = m[:b + 1], m[b + 1:].sum() * Lc**2
+        pay = np.where(r * w * t[i] < L, r * w, 0.0)
+        om = np.abs(f[i])
+        I_rigid = J + 2 * (np.sum(mm * (Lc + s) ** 2, axis=1) + stored)
+        om_dot = om * 4 * pay * np.sum(mm * (Lc + s), axis=1) / I_rigid
+        S1, S2 = np.sum(mm * s, axis=1), np.sum(mm * s * s, axis=1)
+        A, B = om**2 * Lc, om_dot * Lc
+        C = 2 * om * pay - np.where(S1 > 0, om_dot * S2 / np.where(S1 > 0, S1, 1.0), 0.0)
+        R = np.hypot(A, B)
+        x = np.where(R > 0, C / np.where(R > 0, R, 1.0), np.where(C == 0, 0.0, np.inf))
+        th = np.arcsin(np.clip(x, -1.0, 1.0)) - np.arctan2(B, A)
+        I = J + 2 * (np.sum(mm * (Lc**2 + 2 * Lc * s * np.cos(th)[:, None] + s * s), axis=1)
+                     + stored)
+        rel = 2 * np.sign(params["Omega0"]) * pay * Lc * np.sin(th) * mm.sum()
+        out[i], xs[i] = (H0 + rel) / I, x
+    return out, xs

@@ -19,6 +19,7 @@ from .base import (  # noqa: F401  (the scene types, for plug-ins)
     Campbell,
     Extreme,
     Finding,
+    FormulaCheck,
     Linearisation,
     MapSpec,
     ModesScene,

@@ -7,7 +7,13 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..analysis.metrics import damping_comparisons, first_crossing, frequency_comparisons, pairwise
+from ..analysis.metrics import (
+    against_formula,
+    damping_comparisons,
+    first_crossing,
+    frequency_comparisons,
+    pairwise,
+)
 from ..contract import Channel
 from ..errors import BadInput
 from ..physics.whirl import FRAMES
@@ -189,6 +195,23 @@ class AllowanceCase:
     name: str
     when: Callable
     tolerances: dict
+
+
+@dataclass(frozen=True)
+class FormulaCheck:
+    """A closed form judged against each solver's `channel` (a `TimeScene`'s
+    `formula_checks`): |channel − formula(params, t)| ≤ the formula's own error + the solver's
+    error estimate (`compare.analysis.metrics.against_formula`), a comparison of its own in the
+    run's verdicts (`b` = `label`, `formula` true). `error(params, t, solver)`: the formula's
+    error against that solver's model, max |Δ| over `t` in SI, derived from what the formula
+    neglects (its derivation next to it in the scene file and on the scene's page); a string
+    where the formula states no error (outside its domain: `inconclusive`). `solvers`: those
+    judged (empty: all)."""
+    channel: str
+    label: str
+    formula: Callable
+    error: Callable
+    solvers: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -394,6 +417,7 @@ class Scene:
     # (tests/verdicts/test_allowances.py). "by_pair" {"a|b": {channel: allowance}} gives a pair its
     # own (engine–engine: both engines share one model), "by_solver" {solver: {…}} every pair
     # with that solver; modes scenes: "frequency", "frequency_by_pair", "frequency_by_solver"
+    # and per mode "frequency_by_mode" {solver: {label: allowance}}
     # (compare.analysis.metrics.allowance / frequency_allowance). Any entry may be a function
     # of the resolved parameters, f(params) -> allowance, derived from the modelling difference
     # it names; `tolerances_for(params)` evaluates them (read allowances only through it)
@@ -555,7 +579,8 @@ class Scene:
         damping ratios too where the scene has an allowance for them ("damping")."""
         tol = self.tolerances_for(params)
         if not self.is_modes:
-            return pairwise(runs, tol, self.power_scales(runs))
+            return pairwise(runs, tol, self.power_scales(runs)) + self.formula_verdicts(
+                params, runs)
         return frequency_comparisons(runs, tol) + (damping_comparisons(runs, tol)
                                                     if "damping" in tol else [])
 
@@ -624,6 +649,22 @@ class TimeScene(Scene):
     # the IFToMM library problem it is (None: none): `xval run --out` writes its results files,
     # `xval bench` measures against its reference (`bench_reference`)
     benchmark: Benchmark | None = None
+    # closed forms judged against each solver's channel (FormulaCheck): verdicts of their own
+    formula_checks: tuple = ()
+
+    def formula_verdicts(self, params, runs) -> list:
+        """Each `formula_checks` entry against each run it judges (`against_formula`)."""
+        out = []
+        for fc in self.formula_checks:
+            for tr in runs:
+                if fc.solvers and tr.solver not in fc.solvers:
+                    continue
+                ok = tr.status == "ok"
+                out.append(against_formula(
+                    tr, next(c for c in self.channels if c == fc.channel), fc.label,
+                    fc.formula(params, tr.t) if ok else None,
+                    fc.error(params, tr.t, tr.solver) if ok else None))
+        return out
 
     def samples_per_run(self, params) -> float:
         """Output samples per channel of one run at `params` (what a run costs)."""

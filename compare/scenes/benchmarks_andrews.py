@@ -37,10 +37,14 @@ def _param(name, value):
 
 PARAMS = tuple(_param(n, v) for n, v in phys.PARAMS)
 
-# Both loops are closed exactly in every solver's model here (minimal coordinates) or to the
-# engines' constraint tolerance; the solvers' own errors are in their estimates, so the
-# allowance is 1e-9 of scale (the estimates' own inaccuracy).
-TOLERANCES = {**{a: 1e-9 for a in phys.ANGLES}, "energy_balance": 1e-9, "kinetic_energy": 1e-9}
+# No modelling difference between any two solvers: lagrange-partial and Exudyn solve the same
+# rigid mechanism with both loops closed (minimal coordinates; index-3 to Newton's tolerance,
+# inside its estimate), and MuJoCo's soft loops differ from it by what its estimate measures
+# (its constraint time constant, a knob of its error bar: coverage 1.00). So every pair is
+# judged by the error bars alone (an allowance of 1e-9 of scale, "the estimates' own
+# inaccuracy", left windows of 1.1e3 where both bars were 1.5e-12 rad and 2.4e3 where
+# lagrange-partial and MuJoCo met to 9.5e-11 rad of ω within bars of 6.4e-10, `xval calibrate`)
+TOLERANCES = {**{a: 0.0 for a in phys.ANGLES}, "energy_balance": 0.0, "kinetic_energy": 0.0}
 
 # the test set's values against our reference integration (index-1 form, scipy DOP853 and Radau
 # at rtol = atol = 1e-12, which agree with each other to 7e-13 rad): they differ by at most
@@ -68,7 +72,7 @@ def reference_findings(params, trajectories):
         err = np.array([abs(float(tr.errors[a][i])) if a in tr.errors else np.nan
                         for a in phys.ANGLES])
         worst = int(np.argmax(np.abs(dev)))
-        bar = err + TOLERANCES[phys.ANGLES[0]] * np.abs(phys.Q_REF) + REFERENCE_UNCERTAINTY
+        bar = err + REFERENCE_UNCERTAINTY
         if not np.all(np.isfinite(err)):
             verdict = Verdict.INCONCLUSIVE
         else:
@@ -132,7 +136,11 @@ ANDREWS = TimeScene(
     params=PARAMS + (positive("t_end", phys.T_REF, "s", "horizon (test set: 0.03 s)", hi=1.0),
                      positive("output_dt", 1e-4, "s", "output grid")),
     channels=phys.CHANNELS, tolerances=TOLERANCES, key_channel="beta", check=_check,
-    energy_scale_channels=("kinetic_energy",), findings=reference_findings,
+    # the balance weighed against the energies it balances: the spring's too — where the
+    # drawn spring holds the crank against the motor (KE 1.4e-9 J after 3 ms, V ≈ 1e-1 J),
+    # MuJoCo's soft loops take up 9e-10 J of it in the first step, a model difference that
+    # the kinetic energy alone called a 100 % drift
+    energy_scale_channels=("kinetic_energy", "spring_energy"), findings=reference_findings,
     view_channels=("beta", "theta", "energy_balance"), draw_3d=draw_squeezer,
     campaign_cases=({"name": "andrews-squeezer", "campaign": "benchmarks"},),
     group="benchmarks", benchmark=BENCHMARK,

@@ -20,6 +20,7 @@ import numpy as np
 
 from .. import solvers
 from ..analysis import metrics
+from ..analysis.verdict import Verdict
 from ..errors import BadInput
 from ..leafinfo import ORDERS, Adaptive, Fixed, snap  # noqa: F401  (ORDERS: the tests' table)
 from ..output.bench_report import bench_dir
@@ -202,12 +203,40 @@ def _bench_time(sc, solver_names, overrides, out, repeats, log, vary, max_output
     orders = convergence_orders(rows, 100 * max(FLOOR_ERR, ref_check or 0.0, floor), _fixed_dt,
                                 lambda r: infos[r["solver"]].order(r["method"]))
     lines += order_lines(orders, "dt", " s")
-    obj = {"scene": sc.name, "params": params, "key_channel": key,
+    cost = error_bar_cost(pl, log) if vary is None else None
+    if cost and cost["verdicts"]:
+        lines.append(f"error bars: {cost['runs_per_verdict']:.3g} runs, "
+                     f"{cost['seconds_per_verdict']:.3g} s per verdict ({cost['runs']} runs, "
+                     f"{cost['seconds']:.3g} s for {cost['verdicts']} verdicts)")
+    obj = {"error_bars": cost,"scene": sc.name, "params": params, "key_channel": key,
            "vary": vary and {"name": vary[0], "values": vary[1]},
            "reference": {**reference, "settings": ref_settings},
            "repeats": repeats, "rows": rows, "summary": summary, "orders": orders,
            "summary_lines": lines, "result": BenchResult.TYPE}
     return obj
+
+
+def error_bar_cost(pl, log=print) -> dict:
+    """What the verdicts' error bars cost at the bench's parameters: each solver run once at its
+    default settings with its error estimate (`solvers.simulate`), the runs and seconds that
+    took (the run, its estimate's reruns), and over the scene's comparisons of those runs the
+    runs and seconds per verdict (None where no pair is compared: one solver)."""
+    sc, by = pl.scene, {}
+    runs = [solvers.simulate(sc, s, pl.params, pl.settings[s.name], t_out=pl.t_out,
+                             estimate_error=sc.error_estimate) for s in pl.solvers]
+    for tr in runs:
+        by[tr.solver] = {"status": tr.status, "runs": 1 + tr.stats.get("error_estimate_runs", 0),
+                         "run_s": tr.wall_s, "estimate_s": tr.stats.get("error_estimate_s", 0.0),
+                         "by": tr.stats.get("error_estimate_by")}
+        log(f"error bar {tr.solver}: {by[tr.solver]['runs']} runs, run {tr.wall_s:.3g} s + "
+            f"estimate {by[tr.solver]['estimate_s']:.3g} s ({by[tr.solver]['by']})")
+    ok = [tr for tr in runs if tr.status == "ok"]
+    n = sum(c.verdict != Verdict.SKIPPED for c in sc.verdicts(pl.params, ok)) if ok else 0
+    total = sum(b["runs"] for b in by.values())
+    secs = sum(b["run_s"] + b["estimate_s"] for b in by.values())
+    return {"by_solver": by, "verdicts": n, "runs": total, "seconds": secs,
+            "runs_per_verdict": total / n if n else None,
+            "seconds_per_verdict": secs / n if n else None}
 
 
 def _benchmark_reference(sc, bm, params, log):

@@ -232,6 +232,14 @@ def evaluate(scene: Scene, chosen: list, params: dict, first: bool = False) -> d
             "explained": explained(scene, params, comparisons, runs)}
 
 
+def _rounds_with(scene: Scene, c, params: dict) -> float:
+    """The size a comparison's round-off scales with: its scale, or the parameter its channel
+    names (`Channel.rounding`: a length the channel is computed from) where that is larger."""
+    name = next((getattr(ch, "rounding", None) for ch in scene.channels if ch == c.channel),
+                None)
+    return max(c.scale, abs(float(params[name]))) if isinstance(name, str) else c.scale
+
+
 def explained(scene: Scene, params: dict, comparisons: list, runs: dict) -> dict:
     """(a, b, channel) -> why, for each disagreement the scene's `explain_frequencies` verifies
     as a named difference of the two models (the helicopters' rotor-frame assumption: the other
@@ -286,7 +294,7 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
             elif c.verdict == Verdict.DISAGREE:
                 disagree.append({**where, "ratio": float(c.ratio)})
             bound = c.tolerance * c.scale
-            if c.deviation > FLOOR * EPS * c.scale and bound > 0:
+            if c.deviation > FLOOR * EPS * _rounds_with(scene, c, params) and bound > 0:
                 window = bound / c.deviation
                 if widest is None or window > widest["window"]:
                     widest = {**where, "window": float(window), "deviation": float(c.deviation),

@@ -140,7 +140,8 @@ def critical_speeds(scene: Scene, solver: solvers.Solver, params: dict, values: 
     return out
 
 
-def entry(cb, params, name, exc, value, whirl, error=None, slope=None) -> dict:
+def entry(cb, params, name, exc, value, whirl, error=None, slope=None,
+          linearisation=None) -> dict:
     """One critical speed as a ROSS user reads it: the sweep value, the speed in rad/s and
     rpm, the crossing's frequency in Hz and rad/s (in `frame`, where the lines crossed the
     excitation), the excitation, the mode's whirl ("forward"/"backward"; None: no whirl); its
@@ -148,7 +149,7 @@ def entry(cb, params, name, exc, value, whirl, error=None, slope=None) -> dict:
     (Hz per unit: what turns a frequency allowance into one on the speed)."""
     speed_hz = cb.excitation_hz(params, value)
     return {"name": name, "value": float(value), "unit": cb.unit, "error": error,
-            "slope_hz": slope,
+            "slope_hz": slope, "linearisation_error": linearisation,
             "speed_rad_s": 2 * np.pi * speed_hz, "speed_rpm": 60 * speed_hz,
             "frequency_hz": exc.order * speed_hz,
             "frequency_rad_s": 2 * np.pi * exc.order * speed_hz,
@@ -186,6 +187,8 @@ def _crossing(scene, solver, params, values, i, g, key, f0, shapes, exc, seen, n
         whirl["last"] = campbell.whirl(m, exc.frame, cb.excitation_hz(params, v))[j]
         errors = metrics.frequency_errors(m)
         whirl["error_hz"] = None if errors is None else float(errors[j])
+        lin = metrics.frequency_errors(m, linearisation=True)
+        whirl["linearisation_hz"] = None if lin is None else float(lin[j])
         return m.frequencies_hz[j] - exc.order * cb.excitation_hz(params, v)
     lo, hi = values[i], values[i + 1]
     v0 = _linear(values, g, i)                                 # linear, from the lines
@@ -213,9 +216,9 @@ def _crossing(scene, solver, params, values, i, g, key, f0, shapes, exc, seen, n
     # the crossing's error: the mode's frequency error over the gap's slope across the step,
     # plus the root's own tolerance (1e-9 relative)
     slope = abs((g[i + 1] - g[i]) / (hi - lo))
-    error = (None if whirl.get("error_hz") is None or slope == 0 else
-             whirl["error_hz"] / slope + 1e-9 * abs(v))
-    return v, whirl.get("last"), error, slope
+    error, lin = ((None if whirl.get(k) is None or slope == 0 else
+                   whirl[k] / slope + 1e-9 * abs(v)) for k in ("error_hz", "linearisation_hz"))
+    return v, whirl.get("last"), error, slope, lin
 
 
 def _same_mode(runs: list, c) -> bool:
@@ -259,8 +262,10 @@ def critical_speed_comparisons(sc: Scene, params: dict, entries: dict) -> list:
                 allow = (metrics.frequency_allowance(tol, a, b) * ea["frequency_hz"]
                          / min(slopes) if slopes else 0.0)
                 shared = bool({f"{a}|{b}", f"{b}|{a}"} & one_model)
-                own = (None if shared or ea.get("error") is None or eb.get("error") is None
-                       else {a: ea["error"], b: eb["error"]})
+                # one discrete model: only what each one's linearisation adds (as frequencies)
+                key = "linearisation_error" if shared else "error"
+                own = (None if ea.get(key) is None or eb.get(key) is None
+                       else {a: ea[key], b: eb[key]})
                 err = sum(own.values()) if own else None
                 bound = allow + (err or 0.0)
                 v, wide = metrics.judged(d, bound, own, allow, scale, f" {ea['unit']}"

@@ -223,7 +223,8 @@ def estimated(comparisons: list, sens: dict, by: str) -> list[Power]:
     change D per relative change cannot flip below (B − Δ₀)/D and must flip at (B + Δ₀)/D:
     `epsilon` is the latter (what the verdicts are sure to detect) over the solver's agreeing
     comparisons, `bracket` both ends; `xval power` confirms with runs."""
-    names = list(dict.fromkeys(x for c in comparisons for x in (c.a, c.b)))
+    names = list(dict.fromkeys(x for c in comparisons for x in (c.a, c.b)
+                               if not (c.formula and x == c.b)))   # a closed form: no solver
     rows = []
     for name, d in sens.items():
         for s in names:

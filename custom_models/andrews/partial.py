@@ -22,6 +22,10 @@ DEFAULT_SETTINGS = {"integrator": "linacc", "dt": 1e-6, "theta": 1.4, "dbeta": 1
                     "newton_tol": 1e-8, "closure_tol": 1e-13, "max_iter": 30}
 # the virtual step's central differences: an O(Δβ²) error the time step's halving cannot see
 KNOBS = {"dbeta": 2}
+# its round-off optimum: the closure, solved to ~1e-15 rad, rounds the differences as δ/Δβ²,
+# so a reference run halves Δβ once (at a drawn set the distance to Exudyn at dt/16 is 3.3e-11,
+# 1.4e-11, 3.9e-11, 4.5e-11, 5.7e-10 rad in β at Δβ/1, /2, /4, /8, /16)
+KNOB_LIMITS = {"dbeta": 1}
 REASONS = {**FAIL_REASONS, **LA_REASONS,
            model.FAIL_CLOSURE: "singular: the loop closure's Newton iteration found no "
                                "assembly near the last one (dependent-angle Jacobian singular)"}

@@ -5,8 +5,15 @@ and with tension_torsion on the torsion geometric stiffness ∫T k_A² φ'²).
 
 Flap and lag: Hermite cubic elements with centrifugal geometric stiffness ∫T y'y'. Torsion and
 extension: quadratic elements. Convergence: every family is solved on n and 2n elements and
-Richardson-extrapolated with the h⁴ rate of both element types; the note states the largest
-relative change between the extrapolated and the fine values (the error estimate).
+Richardson-extrapolated with the h⁴ rate of both element types. The error estimate, per mode,
+is built from that extrapolate's distance to the one from n/2 and n elements
+(`richardson_pair`: the coarser extrapolate's discretisation error, 63 × the finer's in their
+h⁶ regime). Flap and lag frequencies are their eigenvectors' Rayleigh quotients from the
+curvatures (beam.bending_rayleigh): the solver's own eigenvalues carry the round-off of K·x,
+∝ the stiffness's conditioning (n⁴), which dominated the low modes (lag 1 of rotating-beam:
+n and 2n elements off mstmm by 2e-9 and up to 1e-7 of the frequency; the extrapolate up to
+1.6e-8) — a doubled mesh measured that round-off, not the discretisation; the quotient's
+extrapolate is within 2e-13.
 """
 import numpy as np
 
@@ -54,6 +61,16 @@ def family_problem(b, spin, r_h, family, n_el):
 def family_modes(b, spin, r_h, family, n_el, count):
     K, M, sample = family_problem(b, spin, r_h, family, n_el)
     lam, V = lowest_modes(K, M, count, shift=2 * spin**2)
+    if family in ("flap", "lag"):
+        # each eigenvalue as its vector's Rayleigh quotient, from the curvatures (beam.py):
+        # the solver's own carries the round-off of K·x, ∝ the conditioning (n⁴)
+        from .beam import bending_rayleigh
+        L, m = b["L"], b["m"]
+        tension = lambda x: m * spin**2 * (r_h * (L - x) + 0.5 * (L**2 - x**2))  # noqa: E731
+        X = np.vstack([np.zeros((2, V.shape[1])), V])
+        lam = bending_rayleigh(np.linspace(0.0, L, n_el + 1),
+                               b["EI_flap"] if family == "flap" else b["EI_lag"], m, X,
+                               tension) - (spin**2 if family == "lag" else 0.0)
     return np.sign(lam) * np.sqrt(np.abs(lam)), V, sample
 
 
@@ -75,14 +92,47 @@ def solve(b, spin, r_h, n_modes, n_el, richardson=True, stations=13):
         n_f = max(n_el, k * int(np.ceil(8 * count / k)))
         meshes[fam] = n_f
         w, V, sample = family_modes(b, spin, r_h, fam, n_f, count)
+        bar = np.zeros(len(w))
         if richardson:
             w2, V, sample = family_modes(b, spin, r_h, fam, 2 * n_f, count)
-            ext = w2 + (w2 - w) / 15.0              # h⁴ convergence of both element types
-            err = max(err, float(np.max(np.abs(ext - w2) / np.abs(ext))))
-            w = ext
-        rows += [(w[i], fam, i + 1, sample(V[:, i])) for i in range(len(w))]
+            half = family_modes(b, spin, r_h, fam, n_f // 2, count)[0]
+            # torsion and extension (no quotient: their conditioning ∝ n² only) keep the
+            # round-off of their lowest mode as every mode's floor
+            w, bar = richardson_pair(half, w, w2, lowest=0 if fam in ("flap", "lag") else 1)
+            err = max(err, float(np.max(bar / np.abs(w))))
+        rows += [(w[i], fam, i + 1, sample(V[:, i]), bar[i]) for i in range(len(w))]
     rows.sort(key=lambda r: r[0])
     return rows[:n_modes], err, meshes
+
+
+ROUND_OFF_SAFETY = 3.0
+H6 = 2.0**6 - 1      # the extrapolates' own error goes as h⁶: the n/2–n one's is 63 × the n–2n's
+# what a Rayleigh quotient (beam.bending_rayleigh) keeps of round-off, relative: measured ≤ 1.8e-13
+# on the blade's flap 1 and lag 1 at 96 elements (11 sets), where the solver's own λ was 1e-8 off
+QUOTIENT_ROUND_OFF = 1e3 * np.finfo(float).eps
+
+
+def richardson_pair(half, w, w2, rate=15.0, lowest=0, carry=0):
+    """The h⁴ extrapolate of the n and 2n meshes' ω (rate 2⁴ − 1 for both element types) and
+    its error estimate per mode, × ROUND_OFF_SAFETY: the larger of
+    - its discretisation error: its distance to the n/2–n extrapolate / 63 (the h⁶ term;
+      measured 60–67 × between the two at rotating-beam's flap 3 and spinning-shaft's whirl 5,
+      and, the round-off gone, equal to the true error at flap 2 and 3 of 11 sets);
+    - its round-off: QUOTIENT_ROUND_OFF where ω is a Rayleigh quotient; where it is not (an
+      unsymmetric state-space solve: a spinning anisotropic shaft), `lowest` > 0 takes the
+      largest distance of the `lowest` modes (2 for the shaft's two bending planes: there the
+      discretisation error is least and the round-off, ∝ the conditioning, largest) to every
+      mode, scaled by (ω_low/ω_k)^carry (0: as it is; a whirl σ = ±ν − Ω is shifted from the ν
+      that carries it).
+    The safety: where round-off dominated, the distance was 0.45–1.1 × the true error."""
+    ext = w2 + (w2 - w) / rate
+    dist = np.abs(ext - (w + (w - half) / rate))
+    floor = QUOTIENT_ROUND_OFF * np.abs(ext)
+    if lowest:
+        low = np.argsort(np.abs(ext))[:lowest]
+        floor = np.maximum(floor, np.max(dist[low] * np.abs(ext[low]) ** carry)
+                           / np.abs(ext) ** carry)
+    return ext, ROUND_OFF_SAFETY * np.maximum(dist / H6, floor)
 
 
 def modes(params: dict, settings: dict) -> LeafModes:
@@ -96,7 +146,7 @@ def modes(params: dict, settings: dict) -> LeafModes:
     rows, err, meshes = solve(b, params["speed"], params["hub_radius"], params["n_modes"], n_el,
                               s["richardson"], n_st)
     shapes = []
-    for _, fam, _, y in rows:
+    for _, fam, _, y, _ in rows:
         step = (2 if s["richardson"] else 1) * meshes[fam] // (n_st - 1)
         col = {"axial": 0, "lag": 1, "flap": 2, "torsion": 3}[fam]
         sh = np.zeros((n_st, 4))
@@ -104,10 +154,10 @@ def modes(params: dict, settings: dict) -> LeafModes:
         sh = sh.ravel()
         shapes.append(sh / sh[np.argmax(np.abs(sh))])
     return LeafModes(frequencies_hz=np.array([r[0] for r in rows]) / (2 * np.pi),
-                       labels=[f"{fam} {i}" for _, fam, i, _ in rows], shapes=np.array(shapes),
+                       labels=[f"{fam} {i}" for _, fam, i, _, _ in rows], shapes=np.array(shapes),
                        settings=dict(s, elements=meshes),
-                       # the mesh change (largest relative over the modes) on every mode
-                       extra={"frequency_error_hz": err * np.array([r[0] for r in rows])
+                       # per mode: the two extrapolates' distance (richardson_pair)
+                       extra={"frequency_error_hz": np.array([r[4] for r in rows])
                               / (2 * np.pi)} if s["richardson"] else {},
                        notes=[f"Richardson error estimate {err:.1e} (elements per family "
-                              f"{meshes} and twice that)"])
+                              f"{meshes}, half and twice that)"])

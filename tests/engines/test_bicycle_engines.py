@@ -9,6 +9,7 @@ from scipy.optimize import brentq
 
 from compare import solvers
 from compare.scenes import get_scene
+from compare.scenes.benchmarks_bicycle import _contact_shifts
 
 SCENE = get_scene("bicycle")
 EXUDYN = solvers.get_solver("exudyn")
@@ -70,13 +71,14 @@ MUJOCO = solvers.get_solver("mujoco")
 
 
 def test_mujoco_weave_is_the_papers_within_the_soft_contact_allowance():
-    """MuJoCo's soft contacts move its roots (the scene's allowance for it, 2.5e-3 relative on
-    the weave frequency and absolute on ζ); its own bars are far smaller."""
+    """MuJoCo's soft contacts move its roots (the scene's allowance for it, the contacts' lag:
+    relative on the weave frequency and absolute on ζ); its own bars are far smaller."""
     lam, err, m = _roots(MUJOCO, 5.0)
     weave = AT_5[1]
+    f_rel, d_zeta = _contact_shifts(SCENE.resolve({"speed": "5"}))
     assert m.labels == ["weave"]
-    assert abs(m.frequencies_hz[0] * 2 * np.pi - weave.imag) <= 2.5e-3 * weave.imag
-    assert abs(m.damping[0] + weave.real / abs(weave)) <= 2.5e-3
+    assert abs(m.frequencies_hz[0] * 2 * np.pi - weave.imag) <= f_rel * weave.imag
+    assert abs(m.damping[0] + weave.real / abs(weave)) <= d_zeta
     # every real root off the paper's by < 0.5 % of its size
     for x in lam[lam.imag == 0]:
         assert np.min(np.abs(np.array(AT_5) - x)) <= 5e-3 * abs(x)

@@ -427,3 +427,13 @@ def test_payout_and_breakpoints():
     assert np.allclose(t[rel > 0], [j * L / (n * rw) for j in range(1, n)], rtol=1e-12)
     assert t[end] == pytest.approx([t_full], rel=1e-12)
     assert np.array_equal(np.sort(out[out >= 0]), np.arange(len(grid(80.0))))
+
+
+def test_a_hub_at_rest_is_refused_in_one_line():
+    """Ω₀ = 0: no centrifugal tension to unroll the threads (and the release law's closed
+    forms divide by Ω₀): one line, exit 2, before anything runs."""
+    from tests.conftest import xval
+    rc, _, err = xval("run", "sail-deploy", "--set", "Omega0=0", "--set", "t_end=0.2")
+    assert rc == 2 and err.strip().splitlines() == [
+        "xval: error: Omega0: 0 rad/s leaves the threads without centrifugal tension (a "
+        "deployment needs a spinning hub; give a non-zero initial spin)"]

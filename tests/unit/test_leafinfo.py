@@ -41,6 +41,23 @@ def test_a_step_knob_halves_and_a_ratio_knob_doubles():
     assert info.knob_reruns({"h": None, "s": 0}) == []      # unset knobs are not varied
 
 
+def test_a_reference_refines_a_knob_no_further_than_its_declared_limit():
+    """y = 1 + a·h² + δ/h² (a central difference rounded by δ): its error is least at
+    h* = (δ/a)^¼, so a reference run at h/16 is worse than at h/2 where h is near h*; a leaf
+    declares the halvings (`KNOB_LIMITS`) and `refined` stops there, while the error estimate
+    still halves the knob once."""
+    info = _info(KNOBS={"h": 2, "s": -4}, KNOB_LIMITS={"h": 1})
+    s = {"h": 0.1, "s": 4.0}
+    assert info.refined(s, 4) == {**s, "h": 0.05, "s": 64.0}
+    assert {k.name: t for k, t in info.knob_reruns(s)}["h"] == {**s, "h": 0.05}
+    a, delta = 1.0, 1e-4 ** 4                    # h* = 1e-4, the run's step 2h*
+
+    def err(h):
+        return a * h * h + delta / (h * h)
+    h = 2e-4
+    assert err(h / 2) < err(h / 16) and err(h / 2) < err(h)
+
+
 def _estimate(monkeypatch, knobs, output, settings):
     """The knob part of the error estimate of a stand-in run at `settings`."""
     info = _info(KNOBS=knobs)

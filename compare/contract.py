@@ -144,6 +144,13 @@ class Channel(str):
         return (str(self), self.unit, self.rounding)
 
 
+def rounds_with(channel, own: float, params: dict) -> float:
+    """The size a channel's rounding scales with: `own` (its values' size), or the parameter
+    the channel names (`Channel.rounding`, a plain channel names none) where that is larger."""
+    name = getattr(channel, "rounding", None)
+    return max(own, abs(float(params[name]))) if isinstance(name, str) else own
+
+
 @dataclass
 class LeafResult:
     """What `simulate(params, t_out, settings)` returns.

@@ -24,7 +24,7 @@ from types import ModuleType
 import numpy as np
 
 from .analysis.trajectory import Modes, Trajectory
-from .contract import LeafModes, LeafResult
+from .contract import LeafModes, LeafResult, rounds_with
 from .errors import BadInput
 from .leafinfo import LeafInfo, leaf_info
 from .scenes import PLUGIN_SOLVERS, SCENES, Scene, get_scene
@@ -271,6 +271,12 @@ def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
     return tr
 
 
+def _band(*runs) -> np.ndarray:
+    """2 × the running maximum of the runs' spread: the width of the band runs wander in where
+    their changes do not converge (any two members, the truth included, differ by up to it)."""
+    return 2 * np.maximum.accumulate(np.ptp(runs, axis=0))
+
+
 def _cost(tr, *runs):
     """Count the error estimate's runs and their seconds in the run's stats (`xval bench`: the
     cost of an error bar)."""
@@ -309,7 +315,7 @@ def _coarser_error(scene, solver, params, settings, tr, timeout_s) -> bool:
     for c in scene.channels:
         y = tr.channels[c]
         rich = RICHARDSON_SAFETY * np.abs(runs[-1].channels[c] - y) / (q ** p - 1)
-        band = 2 * np.maximum.accumulate(np.ptp([y] + [r.channels[c] for r in runs], axis=0))
+        band = _band(y, *(r.channels[c] for r in runs))
         tr.errors[c] = np.maximum(rich, band) + unseen[c]
     tr.stats["error_estimate_by"] = "dt " + ", ".join(f"{s['dt']:g}" for s in members) + \
         " (coarser: Richardson and the members' band)"
@@ -344,8 +350,8 @@ def _knob_errors(scene, solver, params, settings, tr, timeout_s):
                  if double.status == "ok" else np.inf)
             r = max(r, 2.0 ** -abs(knob.order))
             err = (d1 * (1 / (1 - r) + r) if r < 1 else
-                   2 * np.maximum.accumulate(np.ptp([y, half.channels[c]] + (
-                       [double.channels[c]] if double.status == "ok" else []), axis=0)))
+                   _band(y, half.channels[c],
+                         *([double.channels[c]] if double.status == "ok" else [])))
             tr.errors[c] = tr.errors.get(c, 0.0) + err
 
 
@@ -396,8 +402,7 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
         d2 = float(np.max(np.abs(half.channels[c] - quarter.channels[c])))
         r = d2 / np.max(d1[c])
         if r >= 1 and d2 >= np.max(d0[c]) / 4:
-            runs = np.array([tr.channels[c], half.channels[c], quarter.channels[c]])
-            err[c] = 2 * np.maximum.accumulate(np.ptp(runs, axis=0))
+            err[c] = _band(tr.channels[c], half.channels[c], quarter.channels[c])
         elif 0.5 < r < 1 and c in slow:
             err[c] = d1[c] / (1 - r)
     return err
@@ -420,9 +425,7 @@ def _steps(tr: Trajectory) -> float:
 def rounding_scale(channel, tr, params) -> float:
     """What a channel's rounding scales with: its largest |value|, or the parameter it names
     (`Channel.rounding`) where that is larger (a loop residual's lengths)."""
-    own = float(np.max(np.abs(tr.channels[channel])))
-    name = getattr(channel, "rounding", None)
-    return max(own, abs(float(params[name]))) if isinstance(name, str) else own
+    return rounds_with(channel, float(np.max(np.abs(tr.channels[channel]))), params)
 
 
 def rounding_model(channel, tr, params):

@@ -208,7 +208,7 @@ def _bench_time(sc, solver_names, overrides, out, repeats, log, vary, max_output
         lines.append(f"error bars: {cost['runs_per_verdict']:.3g} runs, "
                      f"{cost['seconds_per_verdict']:.3g} s per verdict ({cost['runs']} runs, "
                      f"{cost['seconds']:.3g} s for {cost['verdicts']} verdicts)")
-    obj = {"error_bars": cost,"scene": sc.name, "params": params, "key_channel": key,
+    obj = {"scene": sc.name, "params": params, "key_channel": key, "error_bars": cost,
            "vary": vary and {"name": vary[0], "values": vary[1]},
            "reference": {**reference, "settings": ref_settings},
            "repeats": repeats, "rows": rows, "summary": summary, "orders": orders,

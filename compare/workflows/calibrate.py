@@ -22,6 +22,7 @@ import numpy as np
 from .. import solvers as adapter
 from ..analysis.metrics import frequency_errors, match_modes
 from ..analysis.verdict import Verdict
+from ..contract import rounds_with
 from ..errors import BadInput
 from ..output import progress
 from ..results.calibrate import CalibrationResult
@@ -235,9 +236,8 @@ def evaluate(scene: Scene, chosen: list, params: dict, first: bool = False) -> d
 def _rounds_with(scene: Scene, c, params: dict) -> float:
     """The size a comparison's round-off scales with: its scale, or the parameter its channel
     names (`Channel.rounding`: a length the channel is computed from) where that is larger."""
-    name = next((getattr(ch, "rounding", None) for ch in scene.channels if ch == c.channel),
-                None)
-    return max(c.scale, abs(float(params[name]))) if isinstance(name, str) else c.scale
+    channel = next((ch for ch in scene.channels if ch == c.channel), c.channel)
+    return rounds_with(channel, c.scale, params)
 
 
 def explained(scene: Scene, params: dict, comparisons: list, runs: dict) -> dict:

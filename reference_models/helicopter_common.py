@@ -39,10 +39,12 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from compare.contract import LeafModes, merge_settings
+from compare.physics import eigen
 from compare.physics.mstmm import helicopter_layout
 from reference_models import beam_chain_common as bc
 
 MODES_SETTINGS = {"n_segments": 40, "extrapolate": True, "psi": 0.0}
+FD_VARY = bc.FD_VARY       # the finite-difference step × this: the linearisation's own error
 SPIN = ("drive", "spin", 0)                # the coordinate held at speed Ω
 TINY_MASS, TINY_INERTIA = 1e-9, 1e-12      # the massless frames (drive, blade roots)
 
@@ -187,15 +189,40 @@ GROWTH_TOL = 1e-3
 RIGID_BODY = 1e-3       # |s| [1/s] below: the free aircraft's rigid-body roots (noise ≤ 1.1e-4)
 
 
-def roots(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False):
+def _state(K, D):
+    m = K.shape[0]
+    return np.block([[np.zeros((m, m)), np.eye(m)], [K, D]])
+
+
+def roots(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False,
+          vary: bool = False):
     """Every root s of p̈ = K p + D ṗ with Im s ≥ 0 — oscillating, real (growing or decaying)
     and rigid-body alike — and its eigenvector in multi-blade coordinates, the coordinate
-    names and the seconds the engine spent linearising."""
+    names, the seconds the engine spent linearising and, with `vary`, per root (|δs| the
+    engine's finite-difference step × FD_VARY makes — first order, a cluster by its Gershgorin
+    discs: compare.physics.eigen.change —, the eigen solve's round-off bound), else None."""
     K, D, names, secs = mbc_matrices(linearised, params, n, psi, free)
     m = len(names)
-    lam, V = np.linalg.eig(np.block([[np.zeros((m, m)), np.eye(m)], [K, D]]))
+    A = _state(K, D)
+    lam, V = np.linalg.eig(A)
     keep = lam.imag >= 0
-    return lam[keep], V[:m, keep], names, secs
+    moved = None
+    if vary:            # the oscillating roots only: the free aircraft's rigid-body roots are
+        K2, D2, _, secs2 = mbc_matrices(         # nearly defective, their dual rows huge
+            lambda *a: linearised(*a, fd_scale=FD_VARY), params, n, psi, free)
+        secs += secs2
+        idx = np.nonzero(_is_mode(lam) & keep)[0]
+        W = eigen.left_rows(V)
+        moved = np.full((2, len(lam)), np.nan)
+        moved[:, idx] = (eigen.change(_state(K2, D2) - A, lam, V, W, idx)[1],
+                         eigen.round_off(A, lam, V, W, idx))
+        moved = moved[:, keep]
+    return lam[keep], V[:m, keep], names, secs, moved
+
+
+def _is_mode(lam):
+    """The oscillating roots that are modes: Im s > 0 beyond round-off, not rigid-body."""
+    return (lam.imag > 1e-9 * np.max(np.abs(lam))) & (np.abs(lam) > RIGID_BODY)
 
 
 def growing(lam: np.ndarray) -> np.ndarray:
@@ -204,16 +231,26 @@ def growing(lam: np.ndarray) -> np.ndarray:
     return np.sort(g)[::-1]
 
 
-def eigen(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False):
+def oscillating(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False,
+                vary: bool = False):
     """The oscillating roots (Im > 0, ascending) and their eigenvectors in multi-blade
-    coordinates, the coordinate names, the seconds the engine spent linearising, and every
-    root (`roots`: real ones included, for the stability finding). Rigid-body roots
-    (|s| < RIGID_BODY) are not modes."""
-    lam, V, names, secs = roots(linearised, params, n, psi, free)
-    scale = np.max(np.abs(lam))
-    sel = (lam.imag > 1e-9 * scale) & (np.abs(lam) > RIGID_BODY)
+    coordinates, the coordinate names, the seconds the engine spent linearising, every root
+    (`roots`: real ones included, for the stability finding) and, with `vary`, each
+    oscillating root's linearisation error (Hz): the change the step × FD_VARY makes over
+    1 − 1/FD_VARY, plus the eigen solve's round-off bound, else None. The aircraft's finite
+    differences are bound by rounding, not by their h² truncation as the beams' chains are
+    (beam_chain_common.quadratic_modes): M is ill-conditioned by the 1e-9 kg frames, and at
+    helicopter-clamped's defaults and its 71 rad/s calibration set Exudyn's roots move ~10 ×
+    more at step/10 than at step × 10, where they move by its difference from MuJoCo on 18
+    of 20 roots; the other two, 1.2e-7 of lag collective 1 and 1.3e-7 of a shaft mode, are
+    the eigen round-off (3.6e-7 Hz of each engine's bound against 7.4e-7 Hz apart). Rigid-body
+    roots (|s| < RIGID_BODY) are not modes."""
+    lam, V, names, secs, moved = roots(linearised, params, n, psi, free, vary)
+    sel = _is_mode(lam)
     order = np.argsort(lam.imag[sel])
-    return lam[sel][order], V[:, sel][:, order], names, secs, lam
+    err = None if moved is None else (
+        (moved[0] / (1 - 1 / FD_VARY) + moved[1])[sel][order] / (2 * np.pi))
+    return lam[sel][order], V[:, sel][:, order], names, secs, lam, err
 
 
 BLADE_SHARE = 0.3   # a mode whose blades hold this share of |p|² is named after the blades
@@ -281,15 +318,16 @@ def richardson_pairs(f, kinds, f2, kinds2):
 def _frequencies(linearised, params, s, free):
     """Frequencies (Hz, Richardson-extrapolated from N/2 when asked: `richardson_pairs`), the
     extrapolation's change, the (family, kind, sense) of each mode, the seconds spent
-    linearising, the number of coordinates and every root (the finer model's), in ascending
-    order."""
+    linearising, the number of coordinates, every root (the finer model's) and each
+    frequency's linearisation error (what one engine's finite differences add, which the
+    other engine of this one model does not share), in ascending order."""
     n = bc.checked_segments(s)
-    lam, V, names, secs, every = eigen(linearised, params, n, s["psi"], free)
+    lam, V, names, secs, every, lin = oscillating(linearised, params, n, s["psi"], free, True)
     f = lam.imag / (2 * np.pi)
     kinds = classify(V, names)
     change = np.zeros_like(f)
     if s["extrapolate"]:
-        lam2, V2, names2, secs2, _ = eigen(linearised, params, n // 2, s["psi"], free)
+        lam2, V2, names2, secs2, _, _ = oscillating(linearised, params, n // 2, s["psi"], free)
         secs += secs2
         f2 = lam2.imag / (2 * np.pi)
         m = min(len(f), len(f2), 3 * params["n_modes"] + 12)
@@ -298,7 +336,8 @@ def _frequencies(linearised, params, s, free):
         ext[rows] = (4 * f[rows] - f2[cols]) / 3
         change[rows] = ext[rows] - f[rows]
         f = ext
-    return (f, change, kinds, secs, len(names), every)
+        lin = lin * 5 / 3        # 4/3 of the N model's and 1/3 of the N/2 one's, taken alike
+    return (f, change, kinds, secs, len(names), every, bc.LINEARISATION_SAFETY * lin)
 
 
 def _on_blades(f, kinds, speed_hz):
@@ -332,10 +371,13 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
     change: the discretisation error estimate), the stability finding: `finding` ('stable' or
     'unstable'), `unstable` (Re s of every growing root, 1/s, also in the notes),
     `max_re_per_s` (the largest Re s of any root), `real_roots_per_s` (the non-oscillating
-    roots beyond the rigid-body ones)."""
+    roots beyond the rigid-body ones), `linearisation_error_hz` (what the engine's finite
+    differences add: the error the two engines of this model do not share); `roots_hz`,
+    `roots_error_hz`, `roots_linearisation_error_hz`: every fixed-frame root up to the highest
+    one reported, ascending and unnamed (compare.analysis.metrics.by_root)."""
     s = merge_settings(settings, MODES_SETTINGS, ())
     t0 = time.perf_counter()
-    f, change, kinds, secs, n_dof, every = _frequencies(linearised, params, s, free)
+    f, change, kinds, secs, n_dof, every, lin = _frequencies(linearised, params, s, free)
     grow = growing(every)
     real = np.sort(every.real[(np.abs(every.imag) <= 1e-9 * np.max(np.abs(every)))
                               & (np.abs(every) > RIGID_BODY)])
@@ -345,6 +387,8 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
     order = np.argsort(blade_f)
     k = params["n_modes"]
     kinds = [kinds[i] for i in order]
+    up = np.argsort(f)                 # the roots up to the highest one reported, unnamed
+    up = up[f[up] <= np.max(f[order][:k])]
     return LeafModes(frequencies_hz=blade_f[order][:k], labels=_labels(kinds)[:k],
                        settings=s, notes=notes,
                        extra={"finding": "unstable" if len(grow) else "stable",
@@ -355,5 +399,8 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
                               "whirl": [w for _, _, w in kinds][:k],
                               "richardson_change_hz": change[order][:k],
                               "frequency_error_hz": np.abs(change[order][:k]),
+                              "linearisation_error_hz": lin[order][:k],
+                              "roots_hz": f[up], "roots_error_hz": np.abs(change[up]),
+                              "roots_linearisation_error_hz": lin[up],
                               "linearise_s": secs, "modes_s": time.perf_counter() - t0,
                               "n_dof": n_dof + 1})

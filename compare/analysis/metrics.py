@@ -302,13 +302,16 @@ def _mode(labels, i):
     return repr(labels[i]) if i < len(labels) and labels[i] else f"mode {i + 1}"
 
 
-def unpaired_modes(results: list[Modes]) -> list[dict]:
+def unpaired_modes(results: list[Modes], tolerances: dict | None = None) -> list[dict]:
     """Per pair of solvers that ran, each mode `match_modes` leaves unpaired, with why: listed,
-    never silently dropped from the comparison."""
+    never silently dropped from the comparison (a pair compared root by root, `by_root`, has
+    none)."""
     out = []
     ok = [r for r in results if r.status == "ok"]
     for n, a in enumerate(ok):
         for b in ok[n + 1:]:
+            if by_root(a, b, tolerances):
+                continue
             why: dict = {}
             match_modes(list(a.frequencies_hz), a.labels, list(b.frequencies_hz), b.labels,
                         why)
@@ -360,6 +363,52 @@ def frequency_allowance(tolerances: dict, a: str, b: str, mode: str | None = Non
     return max([tolerances["frequency"]] + [of(s) for s in (a, b)])
 
 
+# A leaf's oscillating roots (Hz, ascending) before it shifts them into the frame it reports
+# in and names them (the helicopter engines: fixed-frame roots, each shown on the blades by ±Ω
+# as its name says), with "roots_error_hz" and "roots_linearisation_error_hz" beside them
+ROOTS = "roots_hz"
+
+
+def by_root(a: Modes, b: Modes, tolerances: dict | None) -> bool:
+    """Are two solvers compared root by root (`ROOTS`, in order), not mode by mode? Where both
+    give their roots and the scene lists the pair as one discrete model ("frequency_one_model"):
+    one model has one set of roots, while a root whose shape mixes two families is named — and
+    so shifted into the rotor frame, or left out of the first n — either way by two
+    linearisations of it (helicopter-hover, calibration set 5: the 2.70625 Hz root, 'fuselage
+    2' for Exudyn and 'flap cyclic 2' at 6.26700 Hz for MuJoCo; at set 4 one engine names two
+    roots differently from one process to the next)."""
+    one_model = set((tolerances or {}).get("frequency_one_model", ()))
+    return (bool({f"{a.solver}|{b.solver}", f"{b.solver}|{a.solver}"} & one_model)
+            and all(ROOTS in m.extra for m in (a, b)))
+
+
+def root_comparisons(a: Modes, b: Modes, tolerances: dict) -> list[Comparison]:
+    """Two solvers of one discrete model root by root in ascending order (channel "root k"):
+    |Δ| ≤ the pair's allowance + what each one's linearisation adds to that root, as for its
+    modes (`frequency_comparisons`). A pair of roots closer than their difference may swap
+    places: then each is compared with its twin, no further off."""
+    ra, rb = (np.asarray(m.extra[ROOTS], float) for m in (a, b))
+    ea, eb = (m.extra.get("roots_linearisation_error_hz") for m in (a, b))
+    tol = frequency_allowance(tolerances, a.solver, b.solver)
+    out = []
+    for k in range(min(len(ra), len(rb))):
+        fa, fb = ra[k], rb[k]
+        d, scale = abs(fa - fb), max(abs(fa), abs(fb), 1e-300)
+        own = None if ea is None or eb is None else {a.solver: float(ea[k]),
+                                                     b.solver: float(eb[k])}
+        err = sum(own.values()) if own else 0.0
+        bound = tol * scale + err
+        v, wide = judged(d, bound, own, tol * scale, scale, " Hz")
+        why = (f"roots {fa:.8g} vs {fb:.8g} Hz: |Δ| {d:.2e} "
+               f"{'>' if v == Verdict.DISAGREE else '≤'} linearisation error estimates "
+               f"{err:.1e} + allowance {tol * scale:.1e} Hz (one discrete model: its "
+               "discretisation error cancels)")
+        out.append(Comparison(a.solver, b.solver, f"root {k + 1}", d, d, d / scale, scale,
+                              bound / scale, v, f"{wide}; {why}" if wide else why, d,
+                              err if own else None, tol * scale))
+    return out
+
+
 def frequency_comparisons(results: list[Modes], tolerances: dict) -> list[Comparison]:
     """Every pair of solvers, mode by mode, as Comparisons (channel = the mode's label), each
     pair against its `frequency_allowance` (of the mode) from the scene's `tolerances`. As for time
@@ -369,12 +418,15 @@ def frequency_comparisons(results: list[Modes], tolerances: dict) -> list[Compar
     springs and extrapolation) share its discretisation error, which cancels in their
     difference; their estimates would only hide a difference between them, so such a pair is
     judged against its own allowance plus only what each one's linearisation adds, where both
-    give it."""
+    give it — root by root where both give their roots (`by_root`)."""
     out = []
     ok = [r for r in results if r.status == "ok"]
     one_model = set(tolerances.get("frequency_one_model", ()))
     for i, a in enumerate(ok):
         for b in ok[i + 1:]:
+            if by_root(a, b, tolerances):
+                out += root_comparisons(a, b, tolerances)
+                continue
             shared = bool({f"{a.solver}|{b.solver}", f"{b.solver}|{a.solver}"} & one_model)
             for ia, ib in match_modes(list(a.frequencies_hz), a.labels,
                                       list(b.frequencies_hz), b.labels):

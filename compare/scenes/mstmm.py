@@ -155,21 +155,31 @@ def aircraft_engine_allowance(params):
 
 # The whole aircraft at rest (no frame question; spinning, see mstmm_frames): custom–engine the
 # sections' rotary inertia again. helicopter-clamped at rest and at 36.65 rad/s (the campaign's
-# like-for-like cases): mstmm–fem ≤ 1.7e-6, exudyn–mujoco (one model) ≤ 1.2e-7, custom–engine at
-# rest ≤ 1.34e-3 (lag differential 1): aircraft_engine_allowance
+# like-for-like cases): mstmm–fem ≤ 1.7e-6, custom–engine at rest ≤ 1.34e-3 (lag differential
+# 1): aircraft_engine_allowance. The engines (one model) are compared root by root
+# (metrics.by_root) within their linearisation estimates — the finite differences' rounding
+# and the eigen round-off (reference_models/helicopter_common.oscillating) — over the floor
+# of two eigen solves, as the beams' chains: at the defaults and calibration sets 1 and 18
+# (Ω 61 and 71 rad/s) they differ by ≤ 0.26 of those estimates (7.9e-6 relative at 71 rad/s,
+# where the 5e-7 fitted at the defaults failed 16 ×)
+ONE_AIRCRAFT = {"exudyn|mujoco": 1e-11}
+ONE_AIRCRAFT_WIDER = {"exudyn|mujoco": "the round-off floor of two eigen solves, not a model "
+                      "difference: root by root the engines differ within their linearisation "
+                      "estimates (finite-difference rounding, eigen round-off)"}
 CLAMPED_TOLERANCES = {"frequency": 5e-6,
                       "frequency_by_solver": {e: aircraft_engine_allowance for e in ("exudyn",
                                                                                   "mujoco")},
-                      "frequency_by_pair": {"exudyn|mujoco": 5e-7},
-                      "frequency_one_model": ONE_CHAIN}
-# helicopter-hover (8 modes), same cases: mstmm–fem ≤ 4.2e-5 (fuselage 1 at speed), exudyn–mujoco
-# ≤ 6.0e-7, custom–engine at rest ≤ 1.62e-4 (flap cyclic 2: the 8 modes at rest hold no lag
-# mode); at speed the 8 hold lag differential 1, where the sections' rotary inertia gives
-# 1.3e-3 as on the clamped aircraft (a differential mode: no frame question) — the blade's
-# allowance
+                      "frequency_by_pair": ONE_AIRCRAFT,
+                      "frequency_one_model": ONE_CHAIN, "wider": ONE_AIRCRAFT_WIDER}
+# helicopter-hover (8 modes), same cases: mstmm–fem ≤ 4.2e-5 (fuselage 1 at speed),
+# custom–engine at rest ≤ 1.62e-4 (flap cyclic 2: the 8 modes at rest hold no lag mode); at
+# speed the 8 hold lag differential 1, where the sections' rotary inertia gives 1.3e-3 as on
+# the clamped aircraft (a differential mode: no frame question) — the blade's allowance. The
+# engines as on the clamped aircraft: ≤ 0.64 of their linearisation estimates at the defaults
+# and sets 4, 5, 14, 18 (they differed by up to 2.9e5 × the 3e-6 fitted before, by name)
 HOVER_TOLERANCES = {"frequency": 1e-4, "frequency_by_solver": BLADE_ENGINE_ALLOWANCE,
-                    "frequency_by_pair": {"exudyn|mujoco": 3e-6},
-                    "frequency_one_model": ONE_CHAIN}
+                    "frequency_by_pair": ONE_AIRCRAFT,
+                    "frequency_one_model": ONE_CHAIN, "wider": ONE_AIRCRAFT_WIDER}
 
 
 # The paper's computing times (mean of 3 runs): Table 1, the five modes at 0, 20 and 40 rad/s,

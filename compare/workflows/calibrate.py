@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import solvers as adapter
-from ..analysis.metrics import frequency_errors, match_modes
+from ..analysis.metrics import ROOTS, frequency_errors, match_modes
 from ..analysis.verdict import Verdict
 from ..contract import rounds_with
 from ..errors import BadInput
@@ -139,7 +139,9 @@ def modes_far_tighter(info, preset: dict) -> dict | None:
 
 def mode_bars(m, ref) -> dict:
     """Per mode of run `m`: its estimate (plus what the truth `ref` knows of itself) and its
-    true error |f − f_ref|, modes paired as bench_modes pairs them; or a status saying why
+    true error |f − f_ref|, modes paired as bench_modes pairs them — where both runs give
+    their roots (`metrics.ROOTS`), root by root: a mixed root may be named, and shifted into
+    the rotor frame, one way by the run and another by its truth; or a status saying why
     there is none."""
     if ref is None:
         return {"status": "no tighter discretisation of its own and no declared truth"}
@@ -148,6 +150,14 @@ def mode_bars(m, ref) -> dict:
     est, known = frequency_errors(m), frequency_errors(ref)
     if est is None:
         return {"status": "no frequency error estimate"}
+    if all(ROOTS in r.extra for r in (m, ref)):     # root by root, whatever each run named
+        fr, fm = ref.extra[ROOTS], m.extra[ROOTS]
+        k = min(len(fr), len(fm))
+        est, known = m.extra["roots_error_hz"][:k], ref.extra["roots_error_hz"][:k]
+        return {"status": "ok",
+                "estimate": {f"root {i + 1}": float(est[i] + known[i]) for i in range(k)},
+                "true": {f"root {i + 1}": float(abs(fm[i] - fr[i])) for i in range(k)},
+                "scale": {f"root {i + 1}": float(abs(fr[i])) for i in range(k)}}
     known = np.zeros(len(ref.frequencies_hz)) if known is None else known
     fr, fm = list(ref.frequencies_hz), list(m.frequencies_hz)
     pairs = match_modes(fr, ref.labels, fm, m.labels)

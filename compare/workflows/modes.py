@@ -437,7 +437,7 @@ def run_modes(scene_name, solver_names, overrides, log=print, campbell_sweep=Tru
         log(f"{sc.name}: {s.name} …")
         results.append(_at_rest(sc, params, solvers.modes(sc, s, params)))
     comparisons = sc.verdicts(params, results)
-    unpaired = metrics.unpaired_modes(results)
+    unpaired = metrics.unpaired_modes(results, sc.tolerances_for(params))
     incomplete = [{"solver": r.solver, "status": r.status, "reason": r.reason}
                   for r in results if r.status != "ok"]
     # what the report needs beyond the JSON (compare/output/modes_report.py composes it): the

@@ -73,9 +73,11 @@ def links(params: dict, n: int, free: bool = False):
     return out, names
 
 
-def linearised(params: dict, n: int, psi: float = 0.0, free: bool = False):
+def linearised(params: dict, n: int, psi: float = 0.0, free: bool = False,
+               fd_scale: float = 1.0):
     """A_q = ∂q̈/∂q and A_v = ∂q̈/∂q̇ about steady spin at rotor azimuth ψ (drive removed), in
-    the model's own coordinates, the coordinate names and the seconds of the linearisation."""
+    the model's own coordinates, the coordinate names and the seconds of the linearisation;
+    the finite-difference step × fd_scale."""
     lk, names = links(params, n, free)
     nq = len(lk)
     d = names.index(hc.SPIN)
@@ -100,7 +102,9 @@ def linearised(params: dict, n: int, psi: float = 0.0, free: bool = False):
         jointPositionOffsetVector=[0.0] * nq, jointVelocityOffsetVector=[0.0] * nq))
     mbs.Assemble()
     t0 = time.perf_counter()
-    M, K, D = (np.asarray(x, float) for x in mbs.ComputeLinearizedSystem()[:3])
+    ss = exu.SimulationSettings()
+    ss.staticSolver.newton.numericalDifferentiation.relativeEpsilon *= fd_scale
+    M, K, D = (np.asarray(x, float) for x in mbs.ComputeLinearizedSystem(ss)[:3])
     secs = time.perf_counter() - t0
     keep = [i for i in range(nq) if i != d]
     M, K, D = (X[np.ix_(keep, keep)] for X in (M, K, D))

@@ -66,8 +66,9 @@ def _inverse_dynamics(model, data, out):
     return out - data.qfrc_passive
 
 
-def jacobians(model, data):
-    """(∂q̈/∂q, ∂q̈/∂q̇) at data's state by central differences of the inverse dynamics."""
+def jacobians(model, data, eps=_FD_EPS):
+    """(∂q̈/∂q, ∂q̈/∂q̇) at data's state by central differences (step `eps`) of the inverse
+    dynamics."""
     if model.nq != model.nv:               # a ball or free joint: qpos is not qvel's tangent
         raise ValueError("jacobians: hinge and slide joints only")
     mujoco.mj_forward(model, data)             # q̈₀ in data.qacc, M factorised in data.qLD
@@ -77,27 +78,28 @@ def jacobians(model, data):
         df = np.empty((model.nv, model.nv))    # row i: ∂f_inv/∂x_i
         for i in range(model.nv):
             x0 = x[i]
-            x[i] = x0 + _FD_EPS
+            x[i] = x0 + eps
             fp = _inverse_dynamics(model, data, out)
-            x[i] = x0 - _FD_EPS
-            df[i] = (fp - _inverse_dynamics(model, data, out)) / (2 * _FD_EPS)
+            x[i] = x0 - eps
+            df[i] = (fp - _inverse_dynamics(model, data, out)) / (2 * eps)
             x[i] = x0
         mujoco.mj_solveM(model, data, df, df.copy())    # row i: M⁻¹ ∂f_inv/∂x_i
         jac.append(-df.T)
     return jac
 
 
-def linearised(params: dict, n: int, psi: float = 0.0, free: bool = False):
+def linearised(params: dict, n: int, psi: float = 0.0, free: bool = False,
+               fd_scale: float = 1.0):
     """A_q = ∂q̈/∂q and A_v = ∂q̈/∂q̇ about steady spin at rotor azimuth ψ (drive removed), in
     the model's own coordinates (blades rotating, shaft bending rotating, the rest fixed), the
-    coordinate names and the seconds spent linearising."""
+    coordinate names and the seconds spent linearising; the finite-difference step × fd_scale."""
     model, names = build(params, n, free)
     data = mujoco.MjData(model)
     spin = model.joint("spin")
     data.qpos[spin.qposadr[0]] = psi
     data.qvel[spin.dofadr[0]] = params["speed"]
     t0 = time.perf_counter()
-    Aq, Av = jacobians(model, data)
+    Aq, Av = jacobians(model, data, _FD_EPS * fd_scale)
     secs = time.perf_counter() - t0
     keep = [i for i in range(model.nv) if i != spin.dofadr[0]]
     return Aq[np.ix_(keep, keep)], Av[np.ix_(keep, keep)], [names[i] for i in keep], secs

@@ -36,6 +36,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.linalg import lu_factor, lu_solve
 from scipy.optimize import linear_sum_assignment
 
 from compare.contract import LeafModes, merge_settings
@@ -90,13 +91,16 @@ def _chain(bodies, parent, start, axis, L, n, m_line, inertia, joints, tag, sign
     return parent, prev * e
 
 
-def tree(params: dict, n: int, free: bool = False) -> list:
+def tree(params: dict, n: int, free: bool = False, sections: float = 1.0) -> list:
     """The aircraft as bodies (parents before children). Clamped: the tree grows from the
     tail's far end (parent −1 is the ground); free: from the fuselage on six joints, the
-    tail boom hanging from its rear face. N hinges per blade and tail, N/2 on the shaft."""
+    tail boom hanging from its rear face. N hinges per blade and tail, N/2 on the shaft.
+    `sections`: the factor on the sections' rotary inertia about their bending axes, which
+    the Euler–Bernoulli beams of the paper's model have not (torsion keeps its own)."""
     lay = helicopter_layout(params)
     t, f, s, b = lay["tail"], lay["fuselage"], lay["shaft"], lay["blade"]
-    half = t["I_alpha"] / 2
+    on = sections
+    half = on * t["I_alpha"] / 2
     out: list = []
 
     def tail_chain(parent, start, sign):
@@ -118,14 +122,14 @@ def tree(params: dict, n: int, free: bool = False) -> list:
         fus = len(out) - 1
     out.append(Body(fus, s["bottom"] - f["rear"], TINY_MASS, np.zeros(3), [TINY_INERTIA] * 3,
                     joints=spin))
-    rot = s["I_p"] / 2
+    rot = on * s["I_p"] / 2
     top, tip = _chain(out, len(out) - 1, np.zeros(3), 2, s["L"], max(n // 2, 2), s["m"],
                       lambda ell: _inertia(s["m"], ell, s["I_p"], rot, rot, 2),
                       (("bend_x", 0, s["EI"]), ("bend_y", 1, s["EI"]), ("torsion", 2, s["GJ"])),
                       "shaft")
     out.append(Body(top, s["top"] - (s["bottom"] + tip), lay["hub"]["m"],
                     np.array([0.0, 0.0, -s["top"][2]]), lay["hub"]["I"]))
-    hub, centre, rho = len(out) - 1, -s["top"], params["blade_rho"]
+    hub, centre, rho = len(out) - 1, -s["top"], on * params["blade_rho"]
 
     def blade_inertia(ell):
         return _inertia(b["m"], ell, b["I_alpha"], rho * b["I_flap"], rho * b["I_lag"], 0)
@@ -195,27 +199,41 @@ def _state(K, D):
 
 
 def roots(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False,
-          vary: bool = False):
+          vary: int = 0):
     """Every root s of p̈ = K p + D ṗ with Im s ≥ 0 — oscillating, real (growing or decaying)
     and rigid-body alike — and its eigenvector in multi-blade coordinates, the coordinate
-    names, the seconds the engine spent linearising and, with `vary`, per root (|δs| the
-    engine's finite-difference step × FD_VARY makes — first order, a cluster by its Gershgorin
-    discs: compare.physics.eigen.change —, the eigen solve's round-off bound), else None."""
+    names, the seconds the engine spent linearising and, for the lowest `vary` oscillating
+    roots, (|δs| the engine's finite-difference step × FD_VARY makes — first order, a cluster
+    by its Gershgorin discs: compare.physics.eigen.change —, the eigen solve's round-off
+    bound, |δs| the sections' rotary inertia makes, first order: the change on removing it),
+    NaN for the others; None where `vary` is 0. The sections' shift is taken at rest only:
+    there, removing them leaves the paper's beams exactly (Exudyn without them meets mstmm on
+    the differential modes to 1e-7); spinning, a rigid segment keeps its torsion inertia's
+    centrifugal moment on flap, which the paper's blade has not (helicopter-hover at its
+    defaults: flap differential 1 moves 9.0e-4 without them, while mstmm sits 3.8e-5 from
+    the engine with them)."""
     K, D, names, secs = mbc_matrices(linearised, params, n, psi, free)
     m = len(names)
     A = _state(K, D)
     lam, V = np.linalg.eig(A)
     keep = lam.imag >= 0
     moved = None
-    if vary:            # the oscillating roots only: the free aircraft's rigid-body roots are
-        K2, D2, _, secs2 = mbc_matrices(         # nearly defective, their dual rows huge
-            lambda *a: linearised(*a, fd_scale=FD_VARY), params, n, psi, free)
+    if vary:     # the oscillating roots only (the free aircraft's rigid-body roots are nearly
+        K2, D2, _, secs2 = mbc_matrices(       # defective, their dual rows huge), their dual
+            lambda *a: linearised(*a, fd_scale=FD_VARY), params, n, psi, free)   # rows alone
         secs += secs2
         idx = np.nonzero(_is_mode(lam) & keep)[0]
-        W = eigen.left_rows(V)
-        moved = np.full((2, len(lam)), np.nan)
-        moved[:, idx] = (eigen.change(_state(K2, D2) - A, lam, V, W, idx)[1],
-                         eigen.round_off(A, lam, V, W, idx))
+        idx = idx[np.argsort(lam[idx].imag)][:vary]
+        W = lu_solve(lu_factor(V), np.eye(len(lam))[:, idx], trans=1).T
+        lam_v, V_v = lam[idx], V[:, idx]
+        moved = np.full((3, len(lam)), np.nan)
+        moved[:2, idx] = (eigen.change(_state(K2, D2) - A, lam_v, V_v, W)[1],
+                          eigen.round_off(A, lam_v, V_v, W))
+        if params["speed"] == 0:          # the sections' own shift: at rest only (`roots`)
+            K3, D3, _, secs3 = mbc_matrices(
+                lambda *a: linearised(*a, sections=0.0), params, n, psi, free)
+            secs += secs3
+            moved[2, idx] = eigen.change(_state(K3, D3) - A, lam_v, V_v, W)[1]
         moved = moved[:, keep]
     return lam[keep], V[:m, keep], names, secs, moved
 
@@ -232,12 +250,13 @@ def growing(lam: np.ndarray) -> np.ndarray:
 
 
 def oscillating(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False,
-                vary: bool = False):
+                vary: int = 0):
     """The oscillating roots (Im > 0, ascending) and their eigenvectors in multi-blade
     coordinates, the coordinate names, the seconds the engine spent linearising, every root
-    (`roots`: real ones included, for the stability finding) and, with `vary`, each
-    oscillating root's linearisation error (Hz): the change the step × FD_VARY makes over
-    1 − 1/FD_VARY, plus the eigen solve's round-off bound, else None. The aircraft's finite
+    (`roots`: real ones included, for the stability finding) and, for the lowest `vary`, each
+    oscillating root's linearisation error (Hz; NaN beyond): the change the step × FD_VARY
+    makes over 1 − 1/FD_VARY, plus the eigen solve's round-off bound — and the first-order
+    shift its sections' rotary inertia makes (Hz; `roots`). The aircraft's finite
     differences are bound by rounding, not by their h² truncation as the beams' chains are
     (beam_chain_common.quadratic_modes): M is ill-conditioned by the 1e-9 kg frames, and at
     helicopter-clamped's defaults and its 71 rad/s calibration set Exudyn's roots move ~10 ×
@@ -248,11 +267,16 @@ def oscillating(linearised, params: dict, n: int, psi: float = 0.0, free: bool =
     lam, V, names, secs, moved = roots(linearised, params, n, psi, free, vary)
     sel = _is_mode(lam)
     order = np.argsort(lam.imag[sel])
-    err = None if moved is None else (
-        (moved[0] / (1 - 1 / FD_VARY) + moved[1])[sel][order] / (2 * np.pi))
-    return lam[sel][order], V[:, sel][:, order], names, secs, lam, err
+    err = sections = None
+    if moved is not None:
+        moved = moved[:, sel][:, order] / (2 * np.pi)
+        err, sections = moved[0] / (1 - 1 / FD_VARY) + moved[1], moved[2]
+        sections = None if np.isnan(sections).all() else sections
+    return lam[sel][order], V[:, sel][:, order], names, secs, lam, err, sections
 
 
+MODEL_DIFFERENCE = ("the sections' rotary inertia about their bending axes (blades, shaft, "
+                    "tail), which the Euler–Bernoulli beams have not")
 BLADE_SHARE = 0.3   # a mode whose blades hold this share of |p|² is named after the blades
 
 
@@ -318,26 +342,31 @@ def richardson_pairs(f, kinds, f2, kinds2):
 def _frequencies(linearised, params, s, free):
     """Frequencies (Hz, Richardson-extrapolated from N/2 when asked: `richardson_pairs`), the
     extrapolation's change, the (family, kind, sense) of each mode, the seconds spent
-    linearising, the number of coordinates, every root (the finer model's) and each
+    linearising, the number of coordinates, every root (the finer model's), each
     frequency's linearisation error (what one engine's finite differences add, which the
-    other engine of this one model does not share), in ascending order."""
+    other engine of this one model does not share) and the first-order shift of its
+    sections' rotary inertia, in ascending order."""
     n = bc.checked_segments(s)
-    lam, V, names, secs, every, lin = oscillating(linearised, params, n, s["psi"], free, True)
+    # the linearisation error of the roots Richardson pairs, which hold every one reported
+    m = 3 * params["n_modes"] + 12
+    lam, V, names, secs, every, lin, sections = oscillating(linearised, params, n, s["psi"],
+                                                            free, m)
     f = lam.imag / (2 * np.pi)
     kinds = classify(V, names)
     change = np.zeros_like(f)
     if s["extrapolate"]:
-        lam2, V2, names2, secs2, _, _ = oscillating(linearised, params, n // 2, s["psi"], free)
+        lam2, V2, names2, secs2, *_ = oscillating(linearised, params, n // 2, s["psi"], free)
         secs += secs2
         f2 = lam2.imag / (2 * np.pi)
-        m = min(len(f), len(f2), 3 * params["n_modes"] + 12)
+        m = min(len(f), len(f2), m)
         rows, cols = richardson_pairs(f[:m], kinds[:m], f2[:m], classify(V2[:, :m], names2))
         ext = f.copy()
         ext[rows] = (4 * f[rows] - f2[cols]) / 3
         change[rows] = ext[rows] - f[rows]
         f = ext
         lin = lin * 5 / 3        # 4/3 of the N model's and 1/3 of the N/2 one's, taken alike
-    return (f, change, kinds, secs, len(names), every, bc.LINEARISATION_SAFETY * lin)
+    return (f, change, kinds, secs, len(names), every, bc.LINEARISATION_SAFETY * lin,
+            sections)
 
 
 def _on_blades(f, kinds, speed_hz):
@@ -374,10 +403,13 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
     roots beyond the rigid-body ones), `linearisation_error_hz` (what the engine's finite
     differences add: the error the two engines of this model do not share); `roots_hz`,
     `roots_error_hz`, `roots_linearisation_error_hz`: every fixed-frame root up to the highest
-    one reported, ascending and unnamed (compare.analysis.metrics.by_root)."""
+    one reported, ascending and unnamed (compare.analysis.metrics.by_root);
+    `model_difference_hz` (at rest): how far the sections' rotary inertia moves each mode,
+    first order (the paper's Euler–Bernoulli beams have none: metrics.model_allowance)."""
     s = merge_settings(settings, MODES_SETTINGS, ())
     t0 = time.perf_counter()
-    f, change, kinds, secs, n_dof, every, lin = _frequencies(linearised, params, s, free)
+    f, change, kinds, secs, n_dof, every, lin, sections = _frequencies(linearised, params, s,
+                                                                         free)
     grow = growing(every)
     real = np.sort(every.real[(np.abs(every.imag) <= 1e-9 * np.max(np.abs(every)))
                               & (np.abs(every) > RIGID_BODY)])
@@ -400,6 +432,9 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
                               "richardson_change_hz": change[order][:k],
                               "frequency_error_hz": np.abs(change[order][:k]),
                               "linearisation_error_hz": lin[order][:k],
+                              **({} if sections is None else {
+                                  "model_difference_hz": sections[order][:k],
+                                  "model_difference": MODEL_DIFFERENCE}),
                               "roots_hz": f[up], "roots_error_hz": np.abs(change[up]),
                               "roots_linearisation_error_hz": lin[up],
                               "linearise_s": secs, "modes_s": time.perf_counter() - t0,

@@ -102,11 +102,15 @@ def measure_modes(results, scene):
             r = rows.setdefault((c.a, c.b, channel), {
                 "a": c.a, "b": c.b, "channel": channel, "max_abs": 0.0, "scale": 1.0,
                 "error_estimate": None, "left": 0.0, "worst_mode": None, "beyond": -np.inf})
-            beyond = c.max_rel - (c.error_estimate or 0.0) / c.scale
+            # a model difference the run estimates for the mode itself (metrics.model_allowance:
+            # with the scene's allowance 0 here, all of the comparison's) counts as an estimate
+            own = (c.error_estimate or 0.0) + (c.allowance if np.isfinite(c.allowance) else 0.0)
+            beyond = c.max_rel - own / c.scale
             if c.max_rel >= r["max_abs"]:
                 r.update(max_abs=c.max_rel, worst_mode=c.channel)
             r["beyond"] = max(r["beyond"], beyond)
-            r["estimated"] = r.get("estimated", True) and c.error_estimate is not None
+            r["estimated"] = r.get("estimated", True) and (c.error_estimate is not None
+                                                            or c.allowance > 0)
     for r in rows.values():
         beyond, estimated = r.pop("beyond"), r.pop("estimated")
         r["left"] = max(0.0, beyond)

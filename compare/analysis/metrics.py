@@ -409,6 +409,29 @@ def root_comparisons(a: Modes, b: Modes, tolerances: dict) -> list[Comparison]:
     return out
 
 
+# A first-order estimate s of a model difference (relative) as an allowance: what it neglects
+# grows as s² (the blade's rotary inertia: 1.32–1.35 s² left on lag 1 after the predicted
+# shift, compare/scenes/mstmm.py), and ×2 for the mode shape's own change with it
+FIRST_ORDER_SAFETY, SECOND_ORDER = 2.0, 2.0
+
+
+def first_order_allowance(s):
+    """The allowance of a model difference whose first-order estimate is `s` (relative)."""
+    return FIRST_ORDER_SAFETY * (s + SECOND_ORDER * s**2)
+
+
+def model_allowance(m: Modes, other: Modes, i: int) -> float:
+    """The relative allowance of run `m`'s mode i against a solver whose model lacks what
+    `m` names in extra["model_difference"] (e.g. the sections' rotary inertia of a
+    rigid-segment chain against Euler–Bernoulli beams): `first_order_allowance` of the shift
+    `m` estimates for that mode itself (extra["model_difference_hz"]); 0 where the other
+    model has the same feature (it gives such an estimate too) or `m` gives none."""
+    md = m.extra.get("model_difference_hz")
+    if md is None or "model_difference_hz" in other.extra:
+        return 0.0
+    return first_order_allowance(abs(float(md[i])) / abs(m.frequencies_hz[i]))
+
+
 def frequency_comparisons(results: list[Modes], tolerances: dict) -> list[Comparison]:
     """Every pair of solvers, mode by mode, as Comparisons (channel = the mode's label), each
     pair against its `frequency_allowance` (of the mode) from the scene's `tolerances`. As for time
@@ -430,9 +453,11 @@ def frequency_comparisons(results: list[Modes], tolerances: dict) -> list[Compar
             shared = bool({f"{a.solver}|{b.solver}", f"{b.solver}|{a.solver}"} & one_model)
             for ia, ib in match_modes(list(a.frequencies_hz), a.labels,
                                       list(b.frequencies_hz), b.labels):
-                # a mode's own allowance where both name it alike, else the solvers' largest
+                # a mode's own allowance where both name it alike, else the solvers' largest;
+                # a model difference one of them estimates for this mode itself, if larger
                 same = a.labels[ia] if a.labels[ia] and a.labels[ia] == b.labels[ib] else None
-                tol = frequency_allowance(tolerances, a.solver, b.solver, same)
+                tol = max(frequency_allowance(tolerances, a.solver, b.solver, same),
+                          model_allowance(a, b, ia), model_allowance(b, a, ib))
                 fa, fb = a.frequencies_hz[ia], b.frequencies_hz[ib]
                 d = abs(fa - fb)
                 scale = max(abs(fa), abs(fb), 1e-300)

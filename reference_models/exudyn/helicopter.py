@@ -43,12 +43,12 @@ def _merge(link, pos, rot, mass, com, inertia):
     link.update(mass=m, com=c, inertia=J)
 
 
-def links(params: dict, n: int, free: bool = False):
+def links(params: dict, n: int, free: bool = False, sections: float = 1.0):
     """The tree's links (type, parent, offset, rotation, mass, com, inertia, stiffness) and,
-    per link, its coordinate name."""
+    per link, its coordinate name (`sections`: hc.tree's)."""
     out, names = [], []
     home = {}             # body index -> (its last link, its pose in that link's frame)
-    for i, b in enumerate(hc.tree(params, n, free)):
+    for i, b in enumerate(hc.tree(params, n, free, sections)):
         if b.parent < 0:
             parent, pos, rot = -1, np.asarray(b.pos, float), b.rot
         else:
@@ -74,11 +74,11 @@ def links(params: dict, n: int, free: bool = False):
 
 
 def linearised(params: dict, n: int, psi: float = 0.0, free: bool = False,
-               fd_scale: float = 1.0):
+               fd_scale: float = 1.0, sections: float = 1.0):
     """A_q = ∂q̈/∂q and A_v = ∂q̈/∂q̇ about steady spin at rotor azimuth ψ (drive removed), in
     the model's own coordinates, the coordinate names and the seconds of the linearisation;
-    the finite-difference step × fd_scale."""
-    lk, names = links(params, n, free)
+    the finite-difference step × fd_scale (`sections`: hc.tree's)."""
+    lk, names = links(params, n, free, sections)
     nq = len(lk)
     d = names.index(hc.SPIN)
     q0, v0 = [0.0] * nq, [0.0] * nq

@@ -34,15 +34,20 @@ def _quat(R):
     return [float(v) for v in q]
 
 
-def build(params: dict, n: int, free: bool = False):
-    """The MjModel and, per degree of freedom, its coordinate name (part, family, index)."""
+def build(params: dict, n: int, free: bool = False, sections: float = 1.0):
+    """The MjModel and, per degree of freedom, its coordinate name (part, family, index).
+    `sections` (hc.tree's) ≠ 1 is written into the compiled model's body inertias: the
+    compiler refuses a body whose inertia breaks the triangle inequality, as a segment
+    without its section's rotary inertia may (a thick shaft's polar inertia exceeds its
+    segments' m ℓ²/6), while the dynamics take any."""
     spec = mujoco.MjSpec()
     spec.option.gravity = [0.0, 0.0, 0.0]
     names: list = []
     made: list = []
-    for b in hc.tree(params, n, free):
+    bodies = hc.tree(params, n, free)
+    for i, b in enumerate(bodies):
         parent = spec.worldbody if b.parent < 0 else made[b.parent]
-        body = parent.add_body(pos=[float(v) for v in b.pos], quat=_quat(b.rot),
+        body = parent.add_body(name=f"b{i}", pos=[float(v) for v in b.pos], quat=_quat(b.rot),
                                mass=float(b.mass), ipos=[float(v) for v in b.com],
                                inertia=[float(v) for v in b.inertia], explicitinertial=True)
         for name, kind, axis, k in b.joints:
@@ -52,7 +57,11 @@ def build(params: dict, n: int, free: bool = False):
                 j.armature, j.name = SPIN_ARMATURE, "spin"
             names.append(name)
         made.append(body)
-    return spec.compile(), names
+    model = spec.compile()
+    if sections != 1.0:
+        for i, b in enumerate(hc.tree(params, n, free, sections)):
+            model.body(f"b{i}").inertia = b.inertia
+    return model, names
 
 
 def _inverse_dynamics(model, data, out):
@@ -89,11 +98,12 @@ def jacobians(model, data, eps=_FD_EPS):
 
 
 def linearised(params: dict, n: int, psi: float = 0.0, free: bool = False,
-               fd_scale: float = 1.0):
+               fd_scale: float = 1.0, sections: float = 1.0):
     """A_q = ∂q̈/∂q and A_v = ∂q̈/∂q̇ about steady spin at rotor azimuth ψ (drive removed), in
     the model's own coordinates (blades rotating, shaft bending rotating, the rest fixed), the
-    coordinate names and the seconds spent linearising; the finite-difference step × fd_scale."""
-    model, names = build(params, n, free)
+    coordinate names and the seconds spent linearising; the finite-difference step × fd_scale
+    (`sections`: hc.tree's)."""
+    model, names = build(params, n, free, sections)
     data = mujoco.MjData(model)
     spin = model.joint("spin")
     data.qpos[spin.qposadr[0]] = psi

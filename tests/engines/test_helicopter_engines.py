@@ -18,13 +18,14 @@ import reference_models.mujoco.beam_modes as beam
 import reference_models.mujoco.helicopter as heli
 from compare import solvers
 from compare.scenes import get_scene
-from compare.scenes.mstmm import BLADE_ENGINE_ALLOWANCE
 from reference_models import helicopter_common as hc
 from tests.conftest import table_counts
 
 P = get_scene("helicopter-clamped").resolve()
 HP = get_scene("helicopter-hover").resolve()
-ALLOW = BLADE_ENGINE_ALLOWANCE["mujoco"]
+# the blade sections' rotary inertia at the defaults: lag 1 −1.34e-3 by the closed form
+# (compare.scenes.mstmm.blade_rotary_inertia_shifts), which the paper's blade has not
+ALLOW = 1.5e-3
 
 
 def _mstmm(scene, params, n):
@@ -181,8 +182,8 @@ def _with_negative_stiffness(rate):
     """MuJoCo's linearisation with q̈_x = rate² x added on the fuselage's free x translation:
     the aircraft's rigid x-translation (p = e_x, K e_x = D e_x = 0 in an inertial frame) then
     grows exactly as e^(rate·t) — a real root the oscillating-roots filter hid."""
-    def lin(params, n, psi=0.0, free=False, fd_scale=1.0):
-        Aq, Av, names, secs = heli.linearised(params, n, psi, free, fd_scale)
+    def lin(params, n, psi=0.0, free=False, **kw):
+        Aq, Av, names, secs = heli.linearised(params, n, psi, free, **kw)
         i = names.index(("fuselage", "free", 0))
         Aq = Aq.copy()
         Aq[i, i] += rate**2
@@ -366,7 +367,7 @@ def test_all_modes_named_at_once_as_one_by_one(free, speed):
     p = dict(HP if free else P)
     if speed is not None:
         p["speed"] = speed
-    lam, V, names, _, _, _ = hc.oscillating(heli.linearised, p, 8, 0.0, free)
+    lam, V, names, *_ = hc.oscillating(heli.linearised, p, 8, 0.0, free)
     names_all = hc.classify(V, names)
     assert len(names_all) == V.shape[1] > 50
     assert names_all == [_classify_one(V[:, i], names) for i in range(V.shape[1])]

@@ -269,11 +269,10 @@ def frequencies(L, spin, hub_radius, clamped, omega_max, rtol=1e-10, step_hz=0.1
             # aircraft's whole-aircraft pair can sit there 0.02 Hz apart (no sign change in
             # one 0.1 Hz cell: helicopter-hover's first calibration set, 0.077/0.094 Hz)
             2 * np.pi * np.geomspace(LOW_HZ, 1.5 * step_hz, LOW_POINTS)]
-    for r in iso:               # two tiers: the cluster, and its core (pairs split < 1e-5)
-        grid.append(np.linspace(r * (1 - cluster_width), r * (1 + cluster_width),
-                                cluster_points))
-        grid.append(np.linspace(r * (1 - cluster_width / 8), r * (1 + cluster_width / 8),
-                                cluster_points))
+    for r in iso:     # three tiers: the cluster, its core (pairs split < 1e-5), and the core's
+        for tier in (1, 8, 64):       # (helicopter-clamped's tenth calibration set at rest:
+            w = cluster_width / tier  # four roots within 7e-5, a light blade on heavy support)
+            grid.append(np.linspace(r * (1 - w), r * (1 + w), cluster_points))
     grid = np.unique(np.concatenate(grid))
     grid = grid[(grid > 0) & (grid <= omega_max)]
     # keep the samples off the exact roots (g is 0/0 there)

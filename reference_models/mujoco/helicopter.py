@@ -2,8 +2,10 @@
 `reference_models/helicopter_common.py` (the route, multi-blade coordinates, is described
 there) as nested bodies, linearised by central differences (ε = 1e-6) of its inverse dynamics.
 
-The drive is a hinge about z with a large armature (its speed held; its row and column are
-then dropped); the massless frames carry 1e-9 kg (MuJoCo wants a physical body).
+The drive is a hinge about z with a large armature; its speed is held — its row and column
+are taken out of M before M is inverted, as Exudyn deletes them (the armature alone left the
+rotor coupled to a finite drive inertia: 1.4e-7 of a root at 66 rad/s) — and the massless
+frames carry 1e-9 kg (MuJoCo wants a physical body).
 Linearisation: M(q) q̈(q, q̇) = f(q, q̇), so with f_inv = RNE(q, q̇, a = q̈₀) − passive(q, q̇)
 (MuJoCo's stage functions; armature·q̈₀ is constant) A_q = −M⁻¹ ∂f_inv/∂q and A_v =
 −M⁻¹ ∂f_inv/∂q̇ at (q₀, q̈₀), the a = q̈₀ term carrying ∂M/∂q·q̈₀: the Jacobian that
@@ -75,9 +77,10 @@ def _inverse_dynamics(model, data, out):
     return out - data.qfrc_passive
 
 
-def jacobians(model, data, eps=_FD_EPS):
+def jacobians(model, data, eps=_FD_EPS, held=()):
     """(∂q̈/∂q, ∂q̈/∂q̇) at data's state by central differences (step `eps`) of the inverse
-    dynamics."""
+    dynamics; with the degrees of freedom `held` at their speed (a prescribed motion: their
+    q̈ = 0, whatever torque that takes), over the others only."""
     if model.nq != model.nv:               # a ball or free joint: qpos is not qvel's tangent
         raise ValueError("jacobians: hinge and slide joints only")
     mujoco.mj_forward(model, data)             # q̈₀ in data.qacc, M factorised in data.qLD
@@ -92,9 +95,19 @@ def jacobians(model, data, eps=_FD_EPS):
             x[i] = x0 - eps
             df[i] = (fp - _inverse_dynamics(model, data, out)) / (2 * eps)
             x[i] = x0
-        mujoco.mj_solveM(model, data, df, df.copy())    # row i: M⁻¹ ∂f_inv/∂x_i
-        jac.append(-df.T)
-    return jac
+        jac.append(df)
+    if not held:
+        for df in jac:
+            mujoco.mj_solveM(model, data, df, df.copy())    # row i: M⁻¹ ∂f_inv/∂x_i
+        return [-df.T for df in jac]
+    # the held rows and columns out of M before it is inverted: the drive's armature alone
+    # would leave it a finite inertia, coupled to the rotor (I_rotor/armature: 1.4e-7 of a
+    # hovering root at 66 rad/s against Exudyn, which removes them so)
+    keep = [i for i in range(model.nv) if i not in held]
+    M = np.empty((model.nv, model.nv))
+    mujoco.mj_fullM(model, data, M)
+    M = M[np.ix_(keep, keep)]
+    return [-np.linalg.solve(M, df[np.ix_(keep, keep)].T) for df in jac]
 
 
 def linearised(params: dict, n: int, psi: float = 0.0, free: bool = False,
@@ -109,10 +122,10 @@ def linearised(params: dict, n: int, psi: float = 0.0, free: bool = False,
     data.qpos[spin.qposadr[0]] = psi
     data.qvel[spin.dofadr[0]] = params["speed"]
     t0 = time.perf_counter()
-    Aq, Av = jacobians(model, data, _FD_EPS * fd_scale)
+    d = int(spin.dofadr[0])
+    Aq, Av = jacobians(model, data, _FD_EPS * fd_scale, held=(d,))
     secs = time.perf_counter() - t0
-    keep = [i for i in range(model.nv) if i != spin.dofadr[0]]
-    return Aq[np.ix_(keep, keep)], Av[np.ix_(keep, keep)], [names[i] for i in keep], secs
+    return Aq, Av, [nm for i, nm in enumerate(names) if i != d], secs
 
 
 def modes(params: dict, settings: dict | None = None):

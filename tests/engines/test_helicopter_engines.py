@@ -396,7 +396,7 @@ def test_the_engine_pair_agrees_where_a_mixed_root_is_named_two_ways():
     fixed-frame root, 2.70625 Hz in both engines, whose fuselage and cyclic-flap shares are
     alike — Exudyn named it 'fuselage 2', MuJoCo 'flap cyclic 2' (shifted by Ω/2π to 6.267
     Hz), and by name the pair disagreed up to 2.9e5 ×. Root by root every root agrees with
-    their linearisation estimates (measured ≤ 0.17 of them)."""
+    their linearisation estimates (measured ≤ 0.12 of them)."""
     from compare.workflows.calibrate import sample
     sc = get_scene("helicopter-hover")
     p = sample(sc, 20, 11)[5][1]

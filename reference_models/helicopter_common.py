@@ -76,10 +76,18 @@ def _chain(bodies, parent, start, axis, L, n, m_line, inertia, joints, tag, sign
     """n-hinge chain from `start` (parent frame) along unit axis `axis` (− with sign −1);
     joints (name, axis, k): k the section stiffness (spring k/Δl) or a function of the layout
     giving the spring per hinge. Returns the index of the last body and the position of its
-    hinge relative to `start`."""
+    hinge relative to `start`. The piece before the first hinge (ΔL/2) moves with the parent
+    — a hub, a free fuselage — so it is a body welded to it: dropped, the hub lacked four
+    blade roots' mass, and the modes that move it converged as ΔL, not ΔL²
+    (helicopter-clamped's tenth calibration set at rest, lag collective 1 at N = 10…80: 2.9757,
+    3.0451, 3.0249, 3.0152 Hz toward mstmm's 3.0057, its h² Richardson bar 1.9 × short)."""
     lay = bc.layout(L, n)
     e = sign * np.eye(3)[axis]
     springs = [k(lay) if callable(k) else np.full(n, k / lay["dl"]) for _, _, k in joints]
+    if parent >= 0:                    # a chain from the ground has its root piece clamped
+        root = lay["hinges"][0]
+        bodies.append(Body(parent, np.asarray(start, float), m_line * root, 0.5 * root * e,
+                           inertia(root)))
     prev = None
     for i, x in enumerate(lay["hinges"]):
         ell = lay["lengths"][i]
@@ -260,10 +268,10 @@ def oscillating(linearised, params: dict, n: int, psi: float = 0.0, free: bool =
     differences are bound by rounding, not by their h² truncation as the beams' chains are
     (beam_chain_common.quadratic_modes): M is ill-conditioned by the 1e-9 kg frames, and at
     helicopter-clamped's defaults and its 71 rad/s calibration set Exudyn's roots move ~10 ×
-    more at step/10 than at step × 10, where they move by its difference from MuJoCo on 18
-    of 20 roots; the other two, 1.2e-7 of lag collective 1 and 1.3e-7 of a shaft mode, are
-    the eigen round-off (3.6e-7 Hz of each engine's bound against 7.4e-7 Hz apart). Rigid-body
-    roots (|s| < RIGID_BODY) are not modes."""
+    more at step/10 than at step × 10, where they move by its difference from MuJoCo on 19
+    of 20 roots (the 20th, lag collective 1, was 1.2e-7 apart by MuJoCo's drive armature
+    until MuJoCo held the drive as Exudyn does: now 3.3e-9). Rigid-body roots
+    (|s| < RIGID_BODY) are not modes."""
     lam, V, names, secs, moved = roots(linearised, params, n, psi, free, vary)
     sel = _is_mode(lam)
     order = np.argsort(lam.imag[sel])

@@ -374,8 +374,8 @@ def by_root(a: Modes, b: Modes, tolerances: dict | None) -> bool:
     give their roots and the scene lists the pair as one discrete model ("frequency_one_model"):
     one model has one set of roots, while a root whose shape mixes two families is named — and
     so shifted into the rotor frame, or left out of the first n — either way by two
-    linearisations of it (helicopter-hover, calibration set 5: the 2.70625 Hz root, 'fuselage
-    2' for Exudyn and 'flap cyclic 2' at 6.26700 Hz for MuJoCo; at set 4 one engine names two
+    linearisations of it (helicopter-hover, calibration set 5: the 2.70504 Hz root, 'fuselage
+    2' for Exudyn and a flap cyclic at 6.26579 Hz for MuJoCo; at set 4 one engine names two
     roots differently from one process to the next)."""
     one_model = set((tolerances or {}).get("frequency_one_model", ()))
     return (bool({f"{a.solver}|{b.solver}", f"{b.solver}|{a.solver}"} & one_model)

@@ -283,8 +283,7 @@ def oscillating(linearised, params: dict, n: int, psi: float = 0.0, free: bool =
     return lam[sel][order], V[:, sel][:, order], names, secs, lam, err, sections
 
 
-MODEL_DIFFERENCE = ("the sections' rotary inertia about their bending axes (blades, shaft, "
-                    "tail), which the Euler–Bernoulli beams have not")
+SECTIONS = "the sections' rotary inertia"   # about their bending axes: the paper's beams have none
 BLADE_SHARE = 0.3   # a mode whose blades hold this share of |p|² is named after the blades
 
 
@@ -418,8 +417,9 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
     differences add: the error the two engines of this model do not share); `roots_hz`,
     `roots_error_hz`, `roots_linearisation_error_hz`: every fixed-frame root up to the highest
     one reported, ascending and unnamed (compare.analysis.metrics.by_root);
-    `model_difference_hz` (at rest): how far the sections' rotary inertia moves each mode,
-    first order (the paper's Euler–Bernoulli beams have none: metrics.model_allowance)."""
+    `model_differences` (at rest): {SECTIONS: how far the sections' rotary inertia moves
+    each mode, first order} (the paper's Euler–Bernoulli beams have none:
+    metrics.model_allowance)."""
     s = merge_settings(settings, MODES_SETTINGS, ())
     t0 = time.perf_counter()
     f, change, kinds, secs, n_dof, every, lin, sections = _frequencies(linearised, params, s,
@@ -446,9 +446,8 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
                               "richardson_change_hz": change[order][:k],
                               "frequency_error_hz": np.abs(change[order][:k]),
                               "linearisation_error_hz": lin[order][:k],
-                              **({} if sections is None else {
-                                  "model_difference_hz": sections[order][:k],
-                                  "model_difference": MODEL_DIFFERENCE}),
+                              **({} if sections is None else {"model_differences": {
+                                  SECTIONS: sections[order][:k]}}),
                               "roots_hz": f[up], "roots_error_hz": np.abs(change[up]),
                               "roots_linearisation_error_hz": lin[up],
                               "linearise_s": secs, "modes_s": time.perf_counter() - t0,

@@ -421,15 +421,22 @@ def first_order_allowance(s):
 
 
 def model_allowance(m: Modes, other: Modes, i: int) -> float:
-    """The relative allowance of run `m`'s mode i against a solver whose model lacks what
-    `m` names in extra["model_difference"] (e.g. the sections' rotary inertia of a
-    rigid-segment chain against Euler–Bernoulli beams): `first_order_allowance` of the shift
-    `m` estimates for that mode itself (extra["model_difference_hz"]); 0 where the other
-    model has the same feature (it gives such an estimate too) or `m` gives none."""
-    md = m.extra.get("model_difference_hz")
-    if md is None or "model_difference_hz" in other.extra:
-        return 0.0
-    return first_order_allowance(abs(float(md[i])) / abs(m.frequencies_hz[i]))
+    """The relative allowance of run `m`'s mode i against a solver whose model lacks a
+    feature of m's: per feature m names in extra["model_differences"] ({feature: per-mode
+    shift in Hz that it makes, estimated by m itself — the sections' rotary inertia of a
+    rigid-segment chain, the axial flexibility of the paper's beams}) that `other` does not
+    name too, `first_order_allowance` of that mode's shift, summed; 0 where there is none."""
+    theirs = other.extra.get("model_differences") or {}
+    f = abs(m.frequencies_hz[i])
+    return sum(first_order_allowance(abs(float(v[i])) / f)
+               for name, v in (m.extra.get("model_differences") or {}).items()
+               if name not in theirs and i < len(v) and np.isfinite(v[i]))
+
+
+def models_allowance(a: Modes, b: Modes, ia: int, ib: int) -> float:
+    """What the two models' own named differences allow for the pair's modes ia and ib
+    (`model_allowance` of each against the other, added: independent features)."""
+    return model_allowance(a, b, ia) + model_allowance(b, a, ib)
 
 
 def frequency_comparisons(results: list[Modes], tolerances: dict) -> list[Comparison]:
@@ -457,7 +464,7 @@ def frequency_comparisons(results: list[Modes], tolerances: dict) -> list[Compar
                 # a model difference one of them estimates for this mode itself, if larger
                 same = a.labels[ia] if a.labels[ia] and a.labels[ia] == b.labels[ib] else None
                 tol = max(frequency_allowance(tolerances, a.solver, b.solver, same),
-                          model_allowance(a, b, ia), model_allowance(b, a, ib))
+                          models_allowance(a, b, ia, ib))
                 fa, fb = a.frequencies_hz[ia], b.frequencies_hz[ib]
                 d = abs(fa - fb)
                 scale = max(abs(fa), abs(fb), 1e-300)

@@ -30,7 +30,7 @@ SOURCE = ("seed 002: Yao Song, Rui Xiaoting, Wang Jinghong, 'Calculation of heli
 # both engines at 7 parameter sets). At the defaults: lag 1 −1.34e-3, flap 3 −1.4e-4, and at
 # 40 rad/s torsion 1 −6.4e-4 (the rigid section's propeller term). On the whole aircraft at
 # rest the engines estimate that shift per mode themselves (the blades', shaft's and tail's
-# sections: reference_models/helicopter_common.py, extra "model_difference_hz"), and the
+# sections: reference_models/helicopter_common.py, extra "model_differences"), and the
 # pair's allowance there is the larger of its first_order_allowance (metrics.model_allowance)
 # and the scene's. The hovering aircraft keeps a constant measured at its defaults (its 8
 # modes hold no lag mode at rest, one at speed, so the blade's closed form over ⌈8/4⌉ modes

@@ -22,8 +22,9 @@ that frame assumption only when all of these hold:
    by 8e-3); a pair with none of them compared cannot be confirmed;
 3. the pair agrees at rest (no frame question) mode by mode in frequency order (at rest the
    cyclic pairs are degenerate, names would be arbitrary), each mode within the pair's
-   allowance (or the sections' rotary inertia the engine estimates for that mode) plus both
-   runs' error bars there, as its verdict would judge it: the same aircraft.
+   allowance (or the named model differences each side estimates for that mode: the
+   engines' sections' rotary inertia, the paper's beams' axial flexibility) plus both runs'
+   error bars there, as its verdict would judge it: the same aircraft.
 
 The differential modes themselves are never explained by the frame. Everything else is
 `unexplained` and stays a disagreement.
@@ -32,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..analysis.metrics import frequency_allowance, model_allowance
+from ..analysis.metrics import frequency_allowance, models_allowance
 from ..analysis.verdict import Verdict
 
 ENGINES = ("exudyn", "mujoco")
@@ -91,7 +92,7 @@ def explain(params, comparisons, modes_at, tolerances):
         if not k:
             return np.inf, np.inf
         rel = np.abs(fa[:k] / fb[:k] - 1)
-        bound = np.array([max(tol, model_allowance(ra, rb, i), model_allowance(rb, ra, i))
+        bound = np.array([max(tol, models_allowance(ra, rb, i, i))
                           + error_bar(ra, i) + error_bar(rb, i) for i in range(k)])
         worst = int(np.argmax(rel / bound))
         return float(rel[worst]), float(bound[worst])

@@ -15,7 +15,7 @@ with n and 2n elements, the frequencies extrapolated (h⁴) and the change repor
 import numpy as np
 
 from compare.contract import LeafModes, merge_settings
-from compare.physics.mstmm import helicopter_layout
+from compare.physics.mstmm import AXIAL, AXIAL_RIGID, axial_shift, helicopter_layout
 from compare.physics.rotation import skew
 
 from .beam import bending
@@ -263,6 +263,7 @@ def modes_for(params, settings, clamped):
     refine = blade_refinement(L, spin, params["hub_radius"])
     mesh = (mesh[0] * refine, *mesh[1:])
     w, shapes, unstable = frequencies(L, spin, mesh, clamped, n_modes)
+    first = w
     notes, extra = [], {"unstable": unstable}
     if refine > 1:
         notes.append(f"blade mesh ×{refine} (elements within {TENSION_SPAN:g} tension lengths)")
@@ -278,6 +279,10 @@ def modes_for(params, settings, clamped):
     if unstable:
         notes.append(f"divergent (real) eigenvalues {np.round(unstable, 4).tolist()} 1/s")
     extra["unstable"] = unstable
+    if spin == 0:          # what the engines' axially rigid chains lack, where they are compared
+        rigid = frequencies(helicopter_layout(params, AXIAL_RIGID), spin, mesh, clamped,
+                            n_modes)[0]                     # like for like, on the first mesh
+        extra["model_differences"] = {AXIAL: axial_shift(first[:len(w)], rigid)}
     from custom_models.mstmm.labels import label_modes
     labels = label_modes(np.array(shapes), w, L, spin)
     return LeafModes(frequencies_hz=w / (2 * np.pi), labels=labels, shapes=np.array(shapes),

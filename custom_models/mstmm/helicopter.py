@@ -52,7 +52,7 @@ import numba as nb
 import numpy as np
 
 from compare.contract import LeafModes, merge_settings
-from compare.physics.mstmm import helicopter_layout
+from compare.physics.mstmm import AXIAL, AXIAL_RIGID, axial_shift, helicopter_layout
 from compare.physics.rotation import skew
 
 from . import elements as el
@@ -410,13 +410,17 @@ def modes_for(params: dict, settings: dict, clamped: bool) -> LeafModes:
             break
         omega_max *= 1.25
     roots = roots[:n]
+    extra = {"frequency_error_hz": root_error_hz(np.array(roots) / (2 * np.pi), s["rtol"])}
+    if spin == 0:          # what the engines' axially rigid chains lack, where they are compared
+        rigid, _ = frequencies(helicopter_layout(params, AXIAL_RIGID), spin, rh, clamped,
+                               omega_max, s["rtol"], s["step_hz"])      # like for like
+        extra["model_differences"] = {AXIAL: axial_shift(roots, rigid)}
     # a repeated root gets two orthogonal shapes only from the nullspace; take the same shape
     # twice (labels still count them) — MAC tracking sees a degenerate pair as such
     shapes = np.array([mode_shape(L, w, spin, rh, clamped) for w in roots])
     return LeafModes(frequencies_hz=np.array(roots) / (2 * np.pi),
                        labels=label_modes(shapes, roots, L, spin), shapes=shapes, settings=s,
-                       extra={"frequency_error_hz": root_error_hz(np.array(roots) / (2 * np.pi),
-                                                                  s["rtol"])},
+                       extra=extra,
                        notes=[f"exact reactionless roots at isolated-blade frequencies "
                               f"{np.round(np.array(exact) / (2 * np.pi), 4).tolist()} Hz"])
 

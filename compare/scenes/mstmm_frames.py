@@ -84,8 +84,8 @@ def explain(params, comparisons, modes_at, tolerances):
 
     def at_rest(a, b):
         """The pair's largest relative difference at rest, mode by mode in frequency order,
-        and its bound there (the pair's allowance — or the model difference the engine
-        estimates for that mode, if larger — plus both error bars)."""
+        and its bound there (the pair's allowance — or the named model differences both
+        sides estimate for that mode, if larger — plus both error bars)."""
         ra, rb = run(a, True), run(b, True)
         fa, fb = ra.frequencies_hz, rb.frequencies_hz
         k = min(len(fa), len(fb))

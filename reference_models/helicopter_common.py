@@ -207,14 +207,15 @@ def _state(K, D):
 
 
 def roots(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False,
-          vary: int = 0):
+          vary: int = 0, sections: bool = False):
     """Every root s of p̈ = K p + D ṗ with Im s ≥ 0 — oscillating, real (growing or decaying)
     and rigid-body alike — and its eigenvector in multi-blade coordinates, the coordinate
     names, the seconds the engine spent linearising and, for the lowest `vary` oscillating
     roots, (|δs| the engine's finite-difference step × FD_VARY makes — first order, a cluster
     by its Gershgorin discs: compare.physics.eigen.change —, the eigen solve's round-off
-    bound, |δs| the sections' rotary inertia makes, first order: the change on removing it),
-    NaN for the others; None where `vary` is 0. The sections' shift is taken at rest only:
+    bound, |δs| the sections' rotary inertia makes where `sections`, first order: the change on
+    removing it), NaN for the others; None where `vary` is 0. The sections' shift is taken at
+    rest only:
     there, removing them leaves the paper's beams exactly (Exudyn without them meets mstmm on
     the differential modes to 1e-7); spinning, a rigid segment keeps its torsion inertia's
     centrifugal moment on flap, which the paper's blade has not (helicopter-hover at its
@@ -237,7 +238,7 @@ def roots(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False
         moved = np.full((3, len(lam)), np.nan)
         moved[:2, idx] = (eigen.change(_state(K2, D2) - A, lam_v, V_v, W)[1],
                           eigen.round_off(A, lam_v, V_v, W))
-        if params["speed"] == 0:          # the sections' own shift: at rest only (`roots`)
+        if sections and params["speed"] == 0:      # their own shift: at rest only (above)
             K3, D3, _, secs3 = mbc_matrices(
                 lambda *a: linearised(*a, sections=0.0), params, n, psi, free)
             secs += secs3
@@ -258,7 +259,7 @@ def growing(lam: np.ndarray) -> np.ndarray:
 
 
 def oscillating(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False,
-                vary: int = 0):
+                vary: int = 0, sections: bool = False):
     """The oscillating roots (Im > 0, ascending) and their eigenvectors in multi-blade
     coordinates, the coordinate names, the seconds the engine spent linearising, every root
     (`roots`: real ones included, for the stability finding) and, for the lowest `vary`, each
@@ -272,15 +273,15 @@ def oscillating(linearised, params: dict, n: int, psi: float = 0.0, free: bool =
     of 20 roots (the 20th, lag collective 1, was 1.2e-7 apart by MuJoCo's drive armature
     until MuJoCo held the drive as Exudyn does: now 3.3e-9). Rigid-body roots
     (|s| < RIGID_BODY) are not modes."""
-    lam, V, names, secs, moved = roots(linearised, params, n, psi, free, vary)
+    lam, V, names, secs, moved = roots(linearised, params, n, psi, free, vary, sections)
     sel = _is_mode(lam)
     order = np.argsort(lam.imag[sel])
-    err = sections = None
+    err = shift = None
     if moved is not None:
         moved = moved[:, sel][:, order] / (2 * np.pi)
-        err, sections = moved[0] / (1 - 1 / FD_VARY) + moved[1], moved[2]
-        sections = None if np.isnan(sections).all() else sections
-    return lam[sel][order], V[:, sel][:, order], names, secs, lam, err, sections
+        err, shift = moved[0] / (1 - 1 / FD_VARY) + moved[1], moved[2]
+        shift = None if np.isnan(shift).all() else shift
+    return lam[sel][order], V[:, sel][:, order], names, secs, lam, err, shift
 
 
 SECTIONS = "the sections' rotary inertia"   # about their bending axes: the paper's beams have none
@@ -357,7 +358,7 @@ def _frequencies(linearised, params, s, free):
     # the linearisation error of the roots Richardson pairs, which hold every one reported
     m = 3 * params["n_modes"] + 12
     lam, V, names, secs, every, lin, sections = oscillating(linearised, params, n, s["psi"],
-                                                            free, m)
+                                                            free, m, sections=True)
     f = lam.imag / (2 * np.pi)
     kinds = classify(V, names)
     change = np.zeros_like(f)

@@ -147,9 +147,6 @@ def mode_bars(m, ref) -> dict:
         return {"status": "no tighter discretisation of its own and no declared truth"}
     if ref.status != "ok":
         return {"status": f"truth {ref.status}"}
-    est, known = frequency_errors(m), frequency_errors(ref)
-    if est is None:
-        return {"status": "no frequency error estimate"}
     if all(ROOTS in r.extra for r in (m, ref)):     # root by root, whatever each run named
         fr, fm = ref.extra[ROOTS], m.extra[ROOTS]
         k = min(len(fr), len(fm))
@@ -158,6 +155,9 @@ def mode_bars(m, ref) -> dict:
                 "estimate": {f"root {i + 1}": float(est[i] + known[i]) for i in range(k)},
                 "true": {f"root {i + 1}": float(abs(fm[i] - fr[i])) for i in range(k)},
                 "scale": {f"root {i + 1}": float(abs(fr[i])) for i in range(k)}}
+    est, known = frequency_errors(m), frequency_errors(ref)
+    if est is None:
+        return {"status": "no frequency error estimate"}
     known = np.zeros(len(ref.frequencies_hz)) if known is None else known
     fr, fm = list(ref.frequencies_hz), list(m.frequencies_hz)
     pairs = match_modes(fr, ref.labels, fm, m.labels)

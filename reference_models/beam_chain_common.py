@@ -280,6 +280,30 @@ LINEARISATION_SAFETY = 3.0    # the h² law of the varied step holds to ±10 %; 
 FD_VARY = 10.0       # the engines' finite-difference step × this: the linearisation's own error
 
 
+# the raw changes' ratio (f_N/4 − f_N/2)/(f_N/2 − f_N) of a chain in its 1/N² regime: 4 within
+# this (the aircraft's roots at 66 rad/s converge at 3.0–3.5 from N = 10 and their N/2–N
+# extrapolate is off by 1.6–2.5 × its diff/7; those in the band by ≤ 0.5 ×, bar rounding)
+ASYMPTOTIC_RATIO = (3.8, 4.2)
+
+
+def extrapolate_error(diff, change, ratio=None, safety=1.0):
+    """The error of a 1/N² extrapolate from N and N/2: `diff`, its difference from the
+    extrapolate of N/2 and N/4 (the coarser one's error), over 2^p − 1 where the extrapolation
+    leaves an order-p ≥ EXTRAPOLATED_ORDER term — claimed only where the extrapolation acts:
+    the two extrapolates nearer each other than the N chain to its own (`change`) and, where
+    given, the raw changes' `ratio` in ASYMPTOTIC_RATIO. Short of it (the blade's flap at 80
+    rad/s, N = 40: 5.1e-3 apart, the N chain 2.8e-3 from its extrapolate, whose true error is
+    2.0e-3, not the 7.2e-4 the 1/7 claimed) the difference as it is. Never above `change`
+    (the N chain's error, an upper bound of the extrapolate's), alone where the N/4 chain
+    lacks the mode (diff = inf). `safety` multiplies the claim where it is made."""
+    diff, change = np.asarray(diff, float), np.asarray(change, float)
+    acts = diff <= change
+    if ratio is not None:
+        lo, hi = ASYMPTOTIC_RATIO
+        acts &= (np.asarray(ratio) >= lo) & (np.asarray(ratio) <= hi)
+    return np.minimum(diff * np.where(acts, safety / (2 ** EXTRAPOLATED_ORDER - 1), 1), change)
+
+
 def damping_change(coarse: dict, fine: dict) -> np.ndarray:
     """|ζ_fine − ζ_coarse| per mode of `fine`, matched by label as `richardson` matches them
     (0 where the coarse model lacks the label): the discretisation's share of ζ's error."""
@@ -323,14 +347,7 @@ def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) 
         f = np.abs(signed)
         f_low = richardson(models[2], models[1], want + 6)
         low = dict(zip([models[1]["labels"][i] for i in range(len(f_low))], f_low))
-        # per mode: the two extrapolates' difference (N/4–N/2 against N/2–N), the error of
-        # the coarser one; the finer's is (2^p − 1)× smaller where the extrapolation leaves
-        # an order-p ≥ EXTRAPOLATED_ORDER term — claimed only where the extrapolation acts,
-        # the two extrapolates nearer each other than the N chain to its own: short of it
-        # (the blade's flap at 80 rad/s, N = 40: 5.1e-3 apart, the N chain 2.8e-3 from its
-        # extrapolate, whose true error is 2.0e-3, not the 7.2e-4 the 1/7 claimed) the
-        # difference as it is. Never above the extrapolation's own change (the N chain's
-        # error, an upper bound of the extrapolate's), alone where the N/4 chain lacks the mode
+        # per mode: the two extrapolates' difference (N/4–N/2 against N/2–N)
         change = np.abs(signed - signed_hz(fine)[idx])
         diff = np.array([abs(low[fine["labels"][i]] - f_all[i]) if fine["labels"][i] in low
                          else np.inf for i in idx])
@@ -338,8 +355,7 @@ def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) 
                      default=0.0)
         extra = {"unextrapolated_hz": fine["frequencies_hz"][idx],
                  "richardson_spread_rel": float(spread),
-                 "frequency_error_hz": np.minimum(
-                     diff / np.where(diff <= change, 2 ** EXTRAPOLATED_ORDER - 1, 1), change)}
+                 "frequency_error_hz": extrapolate_error(diff, change)}
         if spread > SPREAD_NOTE:
             notes.append(f"discretisation: extrapolations from N/4–N/2 and N/2–N differ by "
                          f"{spread:.1e} here; raise n_segments")

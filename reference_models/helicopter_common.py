@@ -48,6 +48,10 @@ MODES_SETTINGS = {"n_segments": 40, "extrapolate": True, "psi": 0.0}
 FD_VARY = bc.FD_VARY       # the finite-difference step × this: the linearisation's own error
 SPIN = ("drive", "spin", 0)                # the coordinate held at speed Ω
 TINY_MASS, TINY_INERTIA = 1e-9, 1e-12      # the massless frames (drive, blade roots)
+# the aircraft's extrapolates in their 1/N² regime were off by up to 1.9 × diff/7 against the
+# 2N–N one (helicopter-hover's ninth calibration set at 66 rad/s, a 4.46 Hz root; clamped's
+# second at 61 rad/s, 1.2 ×): its roots mix (veering clusters) more than the beams' chains
+EXTRAPOLATE_SAFETY = 2.0
 
 
 @dataclass
@@ -349,11 +353,12 @@ def richardson_pairs(f, kinds, f2, kinds2):
 
 def _frequencies(linearised, params, s, free):
     """Frequencies (Hz, Richardson-extrapolated from N/2 when asked: `richardson_pairs`), the
-    extrapolation's change, the (family, kind, sense) of each mode, the seconds spent
-    linearising, the number of coordinates, every root (the finer model's), each
-    frequency's linearisation error (what one engine's finite differences add, which the
-    other engine of this one model does not share) and the first-order shift of its
-    sections' rotary inertia, in ascending order."""
+    extrapolation's change, the extrapolate's error (against the N/2–N/4 extrapolate:
+    bc.extrapolate_error), the (family, kind, sense) of each mode, the seconds spent
+    linearising, the number of coordinates, every root (the finer model's), each frequency's
+    linearisation error (what one engine's finite differences add, which the other engine of
+    this one model does not share) and the first-order shift of its sections' rotary inertia,
+    in ascending order."""
     n = bc.checked_segments(s)
     # the linearisation error of the roots Richardson pairs, which hold every one reported
     m = 3 * params["n_modes"] + 12
@@ -362,16 +367,35 @@ def _frequencies(linearised, params, s, free):
     f = lam.imag / (2 * np.pi)
     kinds = classify(V, names)
     change = np.zeros_like(f)
+    error = np.zeros_like(f)
     if s["extrapolate"]:
         lam2, V2, names2, secs2, _, lin2, _ = oscillating(linearised, params, n // 2,
                                                           s["psi"], free, m)
         secs += secs2
         f2 = lam2.imag / (2 * np.pi)
+        kinds2 = classify(V2, names2)
         m = min(len(f), len(f2), m)
-        rows, cols = richardson_pairs(f[:m], kinds[:m], f2[:m], classify(V2[:, :m], names2))
+        rows, cols = richardson_pairs(f[:m], kinds[:m], f2[:m], kinds2[:m])
         ext = f.copy()
         ext[rows] = (4 * f[rows] - f2[cols]) / 3
         change[rows] = ext[rows] - f[rows]
+        # the extrapolate's own error: against the N/2–N/4 extrapolate, as the beams' chains
+        # (bc.extrapolate_error); the whole change where there is no N/4 model or root
+        diff, ratio = np.full_like(f, np.inf), np.full_like(f, np.nan)
+        if n % 4 == 0 and n // 4 >= 2:
+            lam4, V4, names4, secs4, *_ = oscillating(linearised, params, n // 4, s["psi"],
+                                                      free)
+            secs += secs4
+            f4 = lam4.imag / (2 * np.pi)
+            k = min(m, len(f4))
+            low, coarse = np.full_like(f2, np.nan), np.full_like(f2, np.nan)
+            r2, c4 = richardson_pairs(f2[:k], kinds2[:k], f4[:k], classify(V4[:, :k], names4))
+            low[r2] = (4 * f2[r2] - f4[c4]) / 3
+            coarse[r2] = f4[c4] - f2[r2]
+            diff[rows] = np.nan_to_num(np.abs(ext[rows] - low[cols]), nan=np.inf)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ratio[rows] = coarse[cols] / (f2[cols] - f[rows])
+        error = bc.extrapolate_error(diff, np.abs(change), ratio, EXTRAPOLATE_SAFETY)
         f = ext
         # 4/3 of the N model's and 1/3 of the N/2 one's, each its own: the coarse model's
         # rounding can be the larger (helicopter-hover's ninth calibration set at 66 rad/s, a
@@ -379,7 +403,7 @@ def _frequencies(linearised, params, s, free):
         lin_ext = np.full_like(lin, np.nan)
         lin_ext[rows] = (4 * lin[rows] + lin2[cols]) / 3
         lin = lin_ext
-    return (f, change, kinds, secs, len(names), every, bc.LINEARISATION_SAFETY * lin,
+    return (f, change, error, kinds, secs, len(names), every, bc.LINEARISATION_SAFETY * lin,
             sections)
 
 
@@ -411,7 +435,8 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
 
     extra: `fixed_frame_hz` (the frequency an observer on the fuselage sees), `whirl`
     (regressive / progressive for cyclic modes), `richardson_change_hz` (the extrapolation's
-    change: the discretisation error estimate), the stability finding: `finding` ('stable' or
+    change), `frequency_error_hz` (the extrapolate's error against the N/2–N/4 one,
+    bc.extrapolate_error, plus the linearisation's), the stability finding: `finding` ('stable' or
     'unstable'), `unstable` (Re s of every growing root, 1/s, also in the notes),
     `max_re_per_s` (the largest Re s of any root), `real_roots_per_s` (the non-oscillating
     roots beyond the rigid-body ones), `linearisation_error_hz` (what the engine's finite
@@ -423,8 +448,9 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
     metrics.model_allowance)."""
     s = merge_settings(settings, MODES_SETTINGS, ())
     t0 = time.perf_counter()
-    f, change, kinds, secs, n_dof, every, lin, sections = _frequencies(linearised, params, s,
-                                                                         free)
+    f, change, error, kinds, secs, n_dof, every, lin, sections = _frequencies(
+        linearised, params, s, free)
+    error = error + np.nan_to_num(lin)     # the discretisation's and the linearisation's
     grow = growing(every)
     real = np.sort(every.real[(np.abs(every.imag) <= 1e-9 * np.max(np.abs(every)))
                               & (np.abs(every) > RIGID_BODY)])
@@ -445,11 +471,11 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
                               "fixed_frame_hz": f[order][:k],
                               "whirl": [w for _, _, w in kinds][:k],
                               "richardson_change_hz": change[order][:k],
-                              "frequency_error_hz": np.abs(change[order][:k]),
+                              "frequency_error_hz": error[order][:k],
                               "linearisation_error_hz": lin[order][:k],
                               **({} if sections is None else {"model_differences": {
                                   SECTIONS: sections[order][:k]}}),
-                              "roots_hz": f[up], "roots_error_hz": np.abs(change[up]),
+                              "roots_hz": f[up], "roots_error_hz": error[up],
                               "roots_linearisation_error_hz": lin[up],
                               "linearise_s": secs, "modes_s": time.perf_counter() - t0,
                               "n_dof": n_dof + 1})

@@ -455,9 +455,9 @@ def test_the_extrapolates_error_bars_hold_at_66_rad_s(scene, k, least):
     root, the bar of the extrapolate — its distance to the N/2–N/4 one over 7, × 2, only where
     the raw changes shrink as 1/N² (ratio 3.8–4.2) — covers the error (clamped: every root;
     hover: all but 16.24 Hz, whose N chain is off by more than its whole change) and is
-    sharp: the median error is ≥ 0.1 of its bar (the whole N/2–N change: 0.006). Without the
-    ratio's test the clamped aircraft's roots converging at 3.0–3.5 fail 4 of 17; without the
-    × 2, hover's 4.46 Hz root is 1.9 × its bar."""
+    sharp: the median error is ≥ 0.1 of its bar (the whole N/2–N change: 0.006 over the
+    calibration). Without the ratio's test one clamped root (its changes shrinking 3.9, then
+    3.3 × per halving) is 2.6 × its bar; without the × 2, hover's 4.46 Hz root is 1.9 ×."""
     from compare.workflows.calibrate import mode_bars, sample
     sc = get_scene(scene)
     p = sample(sc, 20, 11)[k][1]

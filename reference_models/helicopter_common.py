@@ -436,8 +436,9 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
     extra: `fixed_frame_hz` (the frequency an observer on the fuselage sees), `whirl`
     (regressive / progressive for cyclic modes), `richardson_change_hz` (the extrapolation's
     change), `frequency_error_hz` (the extrapolate's error against the N/2–N/4 one,
-    bc.extrapolate_error, plus the linearisation's), the stability finding: `finding` ('stable' or
-    'unstable'), `unstable` (Re s of every growing root, 1/s, also in the notes),
+    bc.extrapolate_error; the linearisation's apart: at rest its first-order bound on the
+    free aircraft's degenerate blade roots reaches Hz), the stability finding: `finding`
+    ('stable' or 'unstable'), `unstable` (Re s of every growing root, 1/s, also in the notes),
     `max_re_per_s` (the largest Re s of any root), `real_roots_per_s` (the non-oscillating
     roots beyond the rigid-body ones), `linearisation_error_hz` (what the engine's finite
     differences add: the error the two engines of this model do not share); `roots_hz`,
@@ -450,7 +451,6 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
     t0 = time.perf_counter()
     f, change, error, kinds, secs, n_dof, every, lin, sections = _frequencies(
         linearised, params, s, free)
-    error = error + np.nan_to_num(lin)     # the discretisation's and the linearisation's
     grow = growing(every)
     real = np.sort(every.real[(np.abs(every.imag) <= 1e-9 * np.max(np.abs(every)))
                               & (np.abs(every) > RIGID_BODY)])

@@ -150,7 +150,7 @@ def mode_bars(m, ref) -> dict:
     if all(ROOTS in r.extra for r in (m, ref)):     # root by root, whatever each run named
         fr, fm = ref.extra[ROOTS], m.extra[ROOTS]
         k = min(len(fr), len(fm))
-        est, known = m.extra["roots_error_hz"][:k], ref.extra["roots_error_hz"][:k]
+        est, known = _root_errors(m, k), _root_errors(ref, k)
         return {"status": "ok",
                 "estimate": {f"root {i + 1}": float(est[i] + known[i]) for i in range(k)},
                 "true": {f"root {i + 1}": float(abs(fm[i] - fr[i])) for i in range(k)},
@@ -168,6 +168,14 @@ def mode_bars(m, ref) -> dict:
             "estimate": {name(j): float(est[j] + known[i]) for i, j in pairs},
             "true": {name(j): float(abs(fm[j] - fr[i])) for i, j in pairs},
             "scale": {name(j): float(abs(fr[i])) for i, j in pairs}}
+
+
+def _root_errors(run, k) -> np.ndarray:
+    """A run's error estimate of each of its first k roots: its discretisation's and, where it
+    gives it apart, its linearisation's (the run's finite differences are not its truth's)."""
+    err = np.asarray(run.extra["roots_error_hz"][:k], float)
+    lin = run.extra.get("roots_linearisation_error_hz")
+    return err if lin is None else err + np.nan_to_num(np.asarray(lin, float)[:k])
 
 
 def _run(scene, solver, params, first):

@@ -453,7 +453,8 @@ def test_the_extrapolates_error_bars_hold_at_66_rad_s(scene, k, least):
     """Calibration set 9 of both aircraft (`sample(scene, 20, 11)[9]`, Ω 66.4 rad/s), Exudyn
     at N = 40 against its own 2N–N extrapolate (the calibration's truth, `mode_bars`): root by
     root, the bar of the extrapolate — its distance to the N/2–N/4 one over 7, × 2, only where
-    the raw changes shrink as 1/N² (ratio 3.8–4.2) — covers the error (clamped: every root;
+    the raw changes shrink as 1/N² (ratio 3.8–4.2), and each run's linearisation error —
+    covers the error (clamped: every root;
     hover: all but 16.24 Hz, whose N chain is off by more than its whole change) and is
     sharp: the median error is ≥ 0.1 of its bar (the whole N/2–N change: 0.006 over the
     calibration). Without the ratio's test one clamped root (its changes shrinking 3.9, then

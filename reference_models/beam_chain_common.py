@@ -281,8 +281,8 @@ FD_VARY = 10.0       # the engines' finite-difference step × this: the linearis
 
 
 # the raw changes' ratio (f_N/4 − f_N/2)/(f_N/2 − f_N) of a chain in its 1/N² regime: 4 within
-# this (the aircraft's roots at 66 rad/s converge at 3.0–3.5 from N = 10 and their N/2–N
-# extrapolate is off by 1.6–2.5 × its diff/7; those in the band by ≤ 0.5 ×, bar rounding)
+# this (the aircraft's roots at 66 rad/s that converge at 3.0–3.5 from N = 10: their N/2–N
+# extrapolate was off by 1.6–2.5 × its diff/7)
 ASYMPTOTIC_RATIO = (3.8, 4.2)
 
 

@@ -118,7 +118,8 @@ def refine_gyroscopic(K, G, M, lam, x, steps: int = 4):
     the square of x's. ARPACK's shift-invert roots of fem's helicopter were off by up to
     1.1e-5 relative (residuals 2–26 against 1e-9–1e-6 refined; helicopter-hover's fourth
     calibration set, the lag cyclic pair): its tolerance bounds the inverted operator's
-    residual, not λ's. Returns (λ, x, a bound on |δλ|): to first order, the residual left and
+    residual, not λ's. K, G, M sparse or dense (converted here: pass them sparse to refine
+    many roots). Returns (λ, x, a bound on |δλ|): to first order, the residual left and
     the rounding of the matrices' products, eps·|x|ᵀ(|K| + |λ||G| + |λ|²|M|)|x|, over
     |xᴴ(2λM + G)x| — the cancellation of a low mode that strains a stiff member (the clamped
     aircraft's twelfth calibration set, lag collective 1: 9.1e-10 off mstmm, 4 × its mesh

@@ -188,10 +188,11 @@ def solve(L, spin, mesh, clamped, count):
     from scipy import sparse
     from scipy.sparse.linalg import eigs
     K, G, M, samplers, hub, fus, used, n = build(L, spin, *mesh, clamped)
+    K, G, M = (sparse.csc_matrix(X) for X in (K, G, M))      # once: the refinement uses them
     N = K.shape[0]
     I = sparse.identity(N, format="csc")
-    A = sparse.bmat([[None, I], [sparse.csc_matrix(-K), sparse.csc_matrix(-G)]], format="csc")
-    B = sparse.bmat([[I, None], [None, sparse.csc_matrix(M)]], format="csc")
+    A = sparse.bmat([[None, I], [-K, -G]], format="csc")
+    B = sparse.bmat([[I, None], [None, M]], format="csc")
     # shift off the axis: the hovering aircraft has (defective) rigid-body modes at λ = 0. A
     # fixed start vector: ARPACK's random one picked a different basis of a near-degenerate pair
     # on each run (the hovering fuselage pair's labels, and so its critical speeds, moved by

@@ -23,6 +23,7 @@ from types import ModuleType
 
 import numpy as np
 
+from .analysis.step_errors import band, shrinks
 from .analysis.trajectory import Modes, Trajectory
 from .contract import LeafModes, LeafResult, rounds_with
 from .errors import BadInput
@@ -271,12 +272,6 @@ def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
     return tr
 
 
-def _band(*runs) -> np.ndarray:
-    """2 × the running maximum of the runs' spread: the width of the band runs wander in where
-    their changes do not converge (any two members, the truth included, differ by up to it)."""
-    return 2 * np.maximum.accumulate(np.ptp(runs, axis=0))
-
-
 def _cost(tr, *runs):
     """Count the error estimate's runs and their seconds in the run's stats (`xval bench`: the
     cost of an error bar)."""
@@ -315,8 +310,8 @@ def _coarser_error(scene, solver, params, settings, tr, timeout_s) -> bool:
     for c in scene.channels:
         y = tr.channels[c]
         rich = RICHARDSON_SAFETY * np.abs(runs[-1].channels[c] - y) / (q ** p - 1)
-        band = _band(y, *(r.channels[c] for r in runs))
-        tr.errors[c] = np.maximum(rich, band) + unseen[c]
+        wander = band(y, *(r.channels[c] for r in runs))
+        tr.errors[c] = np.maximum(rich, wander) + unseen[c]
     tr.stats["error_estimate_by"] = "dt " + ", ".join(f"{s['dt']:g}" for s in members) + \
         " (coarser: Richardson and the members' band)"
     return True
@@ -350,7 +345,7 @@ def _knob_errors(scene, solver, params, settings, tr, timeout_s):
                  if double.status == "ok" else np.inf)
             r = max(r, 2.0 ** -abs(knob.order))
             err = (d1 * (1 / (1 - r) + r) if r < 1 else
-                   _band(y, half.channels[c],
+                   band(y, half.channels[c],
                          *([double.channels[c]] if double.status == "ok" else [])))
             tr.errors[c] = tr.errors.get(c, 0.0) + err
 
@@ -379,7 +374,10 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
       converged run (Exudyn's press crank_accel under its Newton tolerance: 0.157, 1.5e-3,
       2.7e-3 from 2·dt down): 2 |y − y_half| holds it (true 1.6e-3 against 3.1e-3).
     Costs a run at 2·dt (half the run), and the dt/4 run only where a channel is not
-    asymptotic."""
+    asymptotic. The run keeps its members' offsets y_member − y (`Trajectory.members`: 2·dt,
+    dt/2, and dt/4 where it ran), each channel's estimator and its `scheme` (leaf, integrator,
+    step): a run of the same scheme bounds their difference by them
+    (`analysis.step_errors.pair_error`)."""
     d1 = {c: np.abs(tr.channels[c] - half.channels[c]) for c in scene.channels}
     err = {c: 2 * d1[c] for c in scene.channels}
     coarse = _simulate(scene, solver, params, {**tight, "dt": 4 * tight["dt"]}, timeout_s,
@@ -389,7 +387,11 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
         return err
     seen = [c for c in scene.channels if np.max(d1[c]) > 10 * float(np.max(unseen[c]))]
     d0 = {c: np.abs(coarse.channels[c] - tr.channels[c]) for c in seen}
-    slow = [c for c in seen if np.any(d1[c] > 0.5 * np.maximum(d0[c], 0.1 * np.max(d0[c])))]
+    slow = [c for c in seen if not shrinks(d0[c], d1[c])]
+    tr.scheme = f"{solver.info(scene).name} {tight.get('integrator')} dt {2 * tight['dt']:.17g}"
+    tr.members = {c: np.stack([coarse.channels[c], half.channels[c]]) - tr.channels[c]
+                  for c in scene.channels}
+    tr.estimators = dict.fromkeys(scene.channels, "halving")
     if not slow:
         return err
     quarter = _simulate(scene, solver, params, {**tight, "dt": tight["dt"] / 2}, timeout_s,
@@ -402,9 +404,12 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
         d2 = float(np.max(np.abs(half.channels[c] - quarter.channels[c])))
         r = d2 / np.max(d1[c])
         if r >= 1 and d2 >= np.max(d0[c]) / 4:
-            err[c] = _band(tr.channels[c], half.channels[c], quarter.channels[c])
+            err[c] = band(tr.channels[c], half.channels[c], quarter.channels[c])
+            tr.estimators[c] = "band"
+            tr.members[c] = np.vstack([tr.members[c], quarter.channels[c] - tr.channels[c]])
         elif 0.5 < r < 1 and c in slow:
             err[c] = d1[c] / (1 - r)
+            tr.estimators[c] = "tail"
     return err
 
 

@@ -68,6 +68,7 @@ def channels(scene):
 
 
 def measure_time(scene, params, trajectories):
+    from compare.analysis.step_errors import pair_error
     rows = []
     ok = [tr for tr in trajectories if tr.status == "ok"]
     for i, a in enumerate(ok):
@@ -76,9 +77,8 @@ def measure_time(scene, params, trajectories):
                 x, y = a.channels[ch], b.channels[ch]
                 dev = float(np.max(np.abs(x - y)))
                 scale = float(max(np.max(np.abs(x)), np.max(np.abs(y)), 1e-300))
-                ea, eb = a.errors.get(ch), b.errors.get(ch)
-                err = (float(np.nanmax(ea + eb)) if ea is not None and eb is not None
-                       else None)
+                both = ch in a.errors and ch in b.errors     # the verdict's own estimate
+                err = float(np.nanmax(pair_error(a, b, ch))) if both else None
                 rows.append({"a": a.solver, "b": b.solver, "channel": ch, "max_abs": dev,
                              "scale": scale, "error_estimate": err,
                              "left": max(0.0, dev - (err or 0.0))})

@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..atomic import num
+from .step_errors import pair_error, shares_scheme
 from .trajectory import Modes, Trajectory
 from .verdict import Verdict
 
@@ -95,9 +96,11 @@ def deviation(a: Trajectory, b: Trajectory, channel: str,
     `allowance`: relative to the channel's scale, ("abs", bound) in SI units, or
     ("rel+abs", rel, floor): rel · scale + floor (a channel that stays near zero, like the
     tilt of an upright rotor, needs an absolute floor). The solvers' own errors come from
-    `Trajectory.errors` where estimated. `power_scale`: what an error bar is too wide against
-    (`too_wide`) where the channel's own values are not — a residual that stays at zero, as an
-    energy balance, is judged against the energy it balances; default the channel's scale."""
+    `Trajectory.errors` where estimated, summed — or, for two runs of one scheme, the error of
+    their difference (`step_errors.pair_error`). `power_scale`: what an error bar is too wide
+    against (`too_wide`) where the channel's own values are not — a residual that stays at
+    zero, as an energy balance, is judged against the energy it balances; default the
+    channel's scale."""
     if a.status != "ok" or b.status != "ok":
         why = ", ".join(f"{t.solver} {t.status}" for t in (a, b) if t.status != "ok")
         tol = allowance if not isinstance(allowance, tuple) else allowance[1]
@@ -113,7 +116,8 @@ def deviation(a: Trajectory, b: Trajectory, channel: str,
     allow = allowance_si(allowance, scale)
     ea, eb = a.errors.get(channel), b.errors.get(channel)
     both = ea is not None and eb is not None
-    err = float(np.nanmax(ea + eb)) if both else None
+    shared = both and shares_scheme(a, b, channel)
+    err = float(np.nanmax(pair_error(a, b, channel))) if both else None
     bound = allow + (err or 0.0)
     unit = getattr(channel, "unit", "")
     verdict, wide = judged(max_abs, bound, {a.solver: float(np.nanmax(ea)),
@@ -121,7 +125,8 @@ def deviation(a: Trajectory, b: Trajectory, channel: str,
                            allow, max(scale, power_scale or 0.0), f" {unit}" if unit else "")
     why = (f"max|Δ| = {max_abs:.2e} (at t = {a.t[np.argmax(d)]:.4g} s) "
            f"{'>' if verdict == Verdict.DISAGREE else '≤'} "
-           + (f"error estimates {err:.1e} + allowance {allow:.1e}" if err is not None
+           + (f"error estimates {err:.1e}{' (one scheme: of a − b)' if shared else ''} "
+              f"+ allowance {allow:.1e}" if err is not None
               else f"allowance {allow:.1e} (no error estimate)")
            + f" (Δ/bound {ratio_text(max_abs / bound if bound > 0 else np.inf)})")
     why = f"{wide}; {why}" if wide else why

@@ -22,6 +22,12 @@ class Trajectory:
     extra: dict = field(default_factory=dict)        # auxiliary arrays (e.g. orientation)
     # the solver's own numerical error per channel on t (from a tighter rerun), where estimated
     errors: dict = field(default_factory=dict)
+    # where a step halving estimated `errors`: per channel its estimator and the members'
+    # offsets y_member − y (rows dt/2, dt/4), and the scheme ("leaf integrator dt"): two runs of
+    # one scheme bound their difference by them (`analysis.step_errors.pair_error`)
+    members: dict = field(default_factory=dict)
+    estimators: dict = field(default_factory=dict)
+    scheme: str | None = None
 
     def final(self):
         return {k: float(v[-1]) for k, v in self.channels.items()}
@@ -29,14 +35,16 @@ class Trajectory:
     def meta(self):
         return {k: getattr(self, k) for k in ("scene", "solver", "status", "t_fail", "reason",
                                               "settings", "stats", "wall_s", "versions",
-                                              "invariants")}
+                                              "invariants", "scheme", "estimators")}
 
     def arrays(self) -> dict:
         """What its .npz holds (compare.output.run_folder writes it): `t`, one array per
-        channel, `extra.<name>` and `error.<channel>` arrays, `meta` (JSON)."""
+        channel, `extra.<name>`, `error.<channel>` and `member.<channel>` arrays, `meta`
+        (JSON)."""
         return {"t": self.t, **self.channels,
                 **{f"extra.{k}": v for k, v in self.extra.items()},
                 **{f"error.{k}": v for k, v in self.errors.items()},
+                **{f"member.{k}": v for k, v in self.members.items()},
                 "meta": np.array(json.dumps(self.meta(), default=_py))}
 
     @classmethod
@@ -44,10 +52,12 @@ class Trajectory:
         with np.load(path, allow_pickle=False) as z:
             meta = json.loads(str(z["meta"]))
             channels = {k: z[k] for k in z.files if k not in ("t", "meta")
-                        and not k.startswith(("extra.", "error."))}
+                        and not k.startswith(("extra.", "error.", "member."))}
             extra = {k[6:]: z[k] for k in z.files if k.startswith("extra.")}
             errors = {k[6:]: z[k] for k in z.files if k.startswith("error.")}
-            return cls(t=z["t"], channels=channels, extra=extra, errors=errors, **meta)
+            members = {k[7:]: z[k] for k in z.files if k.startswith("member.")}
+            return cls(t=z["t"], channels=channels, extra=extra, errors=errors,
+                       members=members, **meta)
 
 
 @dataclass

@@ -70,7 +70,9 @@ def calibration_tables(d: dict) -> list:
     rows = [[d["scene"], str(d["samples"]), str(d["comparisons"]), str(len(d["disagree"])),
              _g(d["coverage"]), _g(d["sharpness"]),
              _g(d["widest_window"]) + (f" ({' vs '.join(at['pair'])} {at['channel']}, "
-                                       f"set {at['set']})" if at else ""),
+                                       f"set {at['set']})" if at else "")
+             + (f"; {w['over_100']} of {w['opened']} > 100×, p95 {_g(w['p95'])}"
+                if (w := d.get("windows")) and w["opened"] else ""),
              str(len(d["skipped"]))]]
     per = [[s, str(o["pairs"]), str(o.get("unresolved", 0)), _g(o["coverage"]),
             _g(o["sharpness"]),

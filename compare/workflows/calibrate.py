@@ -284,7 +284,7 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
     rows, skipped, disagree, n_cmp, verdicts = [], [], [], 0, {}
     explained_rows = []
     left_out = {s.name: {} for s in chosen}
-    widest = None
+    widest, windows = None, []
     bar = progress.task(f"calibrate {scene.name}", samples, "parameter sets")
     for k, (over, params) in enumerate(sample(scene, samples, seed)):
         one = evaluate(scene, chosen, params, first=(k == 0))
@@ -314,6 +314,7 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
             bound = c.tolerance * c.scale
             if c.deviation > FLOOR * EPS * _rounds_with(scene, c, params) and bound > 0:
                 window = bound / c.deviation
+                windows.append(window)
                 if widest is None or window > widest["window"]:
                     widest = {**where, "window": float(window), "deviation": float(c.deviation),
                               "bound": float(bound)}
@@ -328,6 +329,7 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
     data = {"scene": scene.name, "samples": samples, "comparisons": n_cmp,
             "disagree": disagree, "explained": explained_rows, **_coverage(rows),
             "widest_window": widest["window"] if widest else None,
+            "windows": _windows(windows),
             "skipped": skipped, "seed": seed, "solvers": [s.name for s in chosen],
             "verdicts": verdicts, "widest_at": widest,
             "by_solver": {s.name: {**_coverage([r for r in rows if r[0] == s.name]),
@@ -339,6 +341,20 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
             "wall_s": time.perf_counter() - t0}
     bar.close()
     return CalibrationResult(data)
+
+
+# a window past this is a bound that would pass a bug this many times the pair's deviation
+WIDE_WINDOW = 100.0
+
+
+def _windows(windows: list) -> dict:
+    """How the windows the comparisons opened spread: how many, how many past WIDE_WINDOW, and
+    their median and 95th percentile — whether the widest is the rule or a few pairs (a
+    deviation that crosses zero at a set, two runs sharing an error their bound counts)."""
+    w = np.asarray(windows, float)
+    return {"opened": len(w), "over_100": int(np.sum(w > WIDE_WINDOW)),
+            "median": float(np.median(w)) if len(w) else None,
+            "p95": float(np.percentile(w, 95)) if len(w) else None}
 
 
 def _coverage(rows) -> dict:

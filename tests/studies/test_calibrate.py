@@ -120,6 +120,15 @@ def test_the_json_has_the_commands_keys_and_reads_back():
     assert isinstance(back, CalibrationResult) and "rotor-whirl" in str(back)
 
 
+def test_the_windows_spread_says_how_many_are_wide():
+    # counted by hand: two of four windows past 100; the 95th percentile interpolates between
+    # the third and fourth, 150 + 0.85 · 9850
+    w = cal._windows([2.0, 50.0, 150.0, 1e4])
+    assert (w["opened"], w["over_100"], w["median"]) == (4, 2, 100.0)
+    assert w["p95"] == pytest.approx(8522.5)
+    assert cal._windows([]) == {"opened": 0, "over_100": 0, "median": None, "p95": None}
+
+
 def test_a_true_error_at_round_off_tests_no_error_bar():
     # 30 eps of a 300 J channel against an estimate of 10 eps: both runs' rounding, not the
     # solver's error — unresolved, not a miss; 1e4 eps against the same estimate is a miss

@@ -123,18 +123,26 @@ class Knob:
     constant over the step): tighter moves it by 2 toward the limit, cutting its error by
     2^|p|; coarser the other way (`solvers._knob_errors`). `most`: the most halvings a
     reference run takes (a leaf's `KNOB_LIMITS`; None: no limit) — a finite difference's error
-    is h^p·f⁽ᵖ⁺¹⁾ plus its rounding δ/h^k, so past its round-off optimum a smaller h is worse."""
+    is h^p·f⁽ᵖ⁺¹⁾ plus its rounding δ/h^k, so past its round-off optimum a smaller h is worse.
+    A name joining settings with "+" is one knob that moves them together: steps whose errors
+    form one homogeneous term (lagrange-partial's two virtual steps of one loop, a·Δφ² + b·Δψ²
+    with a and b of opposite sign: each alone moved the press's slider by 17 × what both
+    together did, custom_models/press/partial.py)."""
     name: str
     order: float
     most: int | None = None
 
+    @property
+    def settings(self) -> tuple[str, ...]:
+        return tuple(self.name.split("+"))
+
     def value(self, settings: dict) -> float | None:
-        v = settings.get(self.name)
+        v = settings.get(self.settings[0])
         return float(v) if _number(v) and v > 0 else None
 
     def tighter(self, settings: dict, halvings: int = 1) -> dict:
-        return {**settings, self.name: self.value(settings)
-                * 2.0 ** (-np.sign(self.order) * halvings)}
+        f = 2.0 ** (-np.sign(self.order) * halvings)
+        return {**settings, **{n: float(settings[n]) * f for n in self.settings}}
 
 
 @dataclass(frozen=True)

@@ -49,6 +49,9 @@ def run_partial(model, phys, p: np.ndarray, y0: np.ndarray, warm: np.ndarray, t_
         first_class(model.acc, ACC), first_class(model.guard, GUARD), y0, 1, p, t_out, n_sub,
         theta, mode, float(s["newton_tol"]), int(s["max_iter"]))
     wall = time.perf_counter() - t0
+    flag = getattr(model, "FLAG", None)
+    if code != 0 and flag is not None and p[flag]:
+        code = int(p[flag])     # the loop that stopped closing, not the NaN it left behind
     p[model.WARM:model.WARM + len(warm)] = warm
     Q, QD = model.full_state(Y, p)
     ch = phys.channels(Q, QD, p[:model.NP])

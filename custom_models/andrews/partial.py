@@ -28,7 +28,9 @@ KNOBS = {"dbeta": 2}
 KNOB_LIMITS = {"dbeta": 1}
 REASONS = {**FAIL_REASONS, **LA_REASONS,
            model.FAIL_CLOSURE: "singular: the loop closure's Newton iteration found no "
-                               "assembly near the last one (dependent-angle Jacobian singular)"}
+                               "assembly near the last one (dependent-angle Jacobian "
+                               "singular, as at a dead point: β turns back while the loop "
+                               "moves on, and one coordinate cannot carry it)"}
 
 
 @check_once

@@ -20,13 +20,18 @@ from compare.physics import andrews as phys
 
 from .. import loop_common as lc
 
+# Newton's tolerances well under the step's error: the index-3 accelerations carry Newton's
+# residual over dt², and at 1e-10 (absolute 1e-12) that noise set the step's halving changes —
+# at `xval calibrate andrews-squeezer --seed 2026` set 5 the kinetic energy's change from dt to
+# dt/2 was 3.4e-10 J where the step's own (order 2, at 1e-13) is 9.6e-10, an estimate 2.2 ×
+# short of Exudyn's distance to MuJoCo (a false `disagree`); at 1e-13 the changes shrink by
+# 3.9 and 4.2 down to dt/4 and the run costs the same (0.1 s)
 DEFAULT_SETTINGS = {"integrator": "generalized_alpha", "dt": 2e-6, "spectral_radius": 1.0,
-                    "newton_tol": 1e-10, "newton_abs_tol": 1e-12}
+                    "newton_tol": 1e-13, "newton_abs_tol": 1e-15}
 INTEGRATORS = ("generalized_alpha", "trapezoidal")
 # Newton's relative tolerance is a knob of its own (error ∝ it): at a drawn squeezer (seed 11,
-# set 18, 3 ms) 1e-10 → 1e-12 moves β by 4.8e-8 rad at the step 1e-6 s, more than the step's
-# error (1.5e-8 against dt/16), and the estimate from the step alone fell 7 % short on the
-# kinetic energy there (two false `disagree`)
+# set 18, 3 ms) 1e-10 → 1e-12 moved β by 4.8e-8 rad at the step 1e-6 s, more than the step's
+# error (1.5e-8 against dt/16)
 KNOBS = {"newton_tol": 1}
 BODIES = ("K1", "K2", "K3", "K4", "K5", "K6", "K7")
 

@@ -289,7 +289,7 @@ BEARING_ROTOR = TimeScene(
     # is inside the two runs' error estimates (`python -m tests.allowances bearing-rotor`:
     # none left at the defaults nor at t_end 0.5 s, tests/allowances.json; `xval calibrate
     # bearing-rotor` at seeds 11 and 2026: 0 of 480 disagree) — but the journals' round-off
-    # floor, 3e-16 m (two ulps of positions ~l = 0.6 m from the centre), where a journal
+    # floor, 3e-16 m (eps·l at the longest drawn shaft, 1.2 m: 2.7e-16), where a journal
     # barely moves. The constants fitted here earlier (1e-10 of scale, 1e-12 m on the
     # journals) had nothing left to cover and opened windows of 183 (seed 2026: 5.5e-15 m
     # apart where the journal moves 6.7e-9 m).

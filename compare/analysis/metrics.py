@@ -6,6 +6,7 @@ and the recording alike.
 from dataclasses import asdict, dataclass
 
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
 from ..atomic import num
 from .step_errors import pair_error, shares_scheme
@@ -255,19 +256,35 @@ def observed_order(steps, errors) -> float:
 
 # --- frequencies ---------------------------------------------------------------------------
 
+def family(label: str) -> str:
+    """A mode's family and kind, its label without the number: "flap cyclic 2" → "flap
+    cyclic"; a label without one is its own family."""
+    head, _, tail = label.rpartition(" ")
+    return head if head and tail.isdigit() else label
+
+
 def match_modes(fa: list, la: list, fb: list, lb: list, why: dict | None = None
                 ) -> list[tuple[int, int]]:
-    """Pair the modes of two solvers: by label where both name a mode uniquely, else by nearest
-    value — accepted only when it is nearer than half the gap to any other candidate, so two
-    close modes are never both paired with one. Returns [(i, j)] index pairs. `why`, if given,
-    receives for each mode left unpaired ("a", i) / ("b", j) the reason, in words."""
+    """Pair the modes of two solvers: within each family both name (`family`), by the least
+    total |Δf| — a label's number counts the family's modes that made the solver's list, so
+    two lists that hold different ones number them differently (helicopter-hover, `xval
+    calibrate --seed 2026` set 6: a coupled fuselage–rotor root named "flap cyclic 2" by MuJoCo
+    and "fuselage 2" by Exudyn made Exudyn's 15.66 Hz mode its flap cyclic 2, against mstmm's
+    4.45 Hz) —, the rest by nearest value, accepted only when it is nearer than half the gap to
+    any other candidate, so two close modes are never both paired with one, and within a
+    factor 2 of each other (the last two left over are no pair for being alone: mstmm's 15.68
+    Hz flap differential 2 met MuJoCo's 0.36 Hz fuselage mode so). Returns [(i, j)]
+    index pairs. `why`, if given, receives for each mode left unpaired ("a", i) / ("b", j) the
+    reason, in words."""
     pairs, used_a, used_b = [], set(), set()
-    for i, name in enumerate(la):
-        if la.count(name) == 1 and lb.count(name) == 1 and name:
-            j = lb.index(name)
-            pairs.append((i, j))
-            used_a.add(i)
-            used_b.add(j)
+    for fam in {family(n) for n in la if n} & {family(n) for n in lb if n}:
+        ia = [i for i, n in enumerate(la) if n and family(n) == fam]
+        ib = [j for j, n in enumerate(lb) if n and family(n) == fam]
+        cost = np.abs(np.subtract.outer([fa[i] for i in ia], [fb[j] for j in ib]))
+        for r, c in zip(*linear_sum_assignment(cost)):
+            pairs.append((ia[r], ib[c]))
+            used_a.add(ia[r])
+            used_b.add(ib[c])
     cand = sorted((abs(fa[i] - fb[j]), i, j) for i in range(len(fa)) for j in range(len(fb))
                   if i not in used_a and j not in used_b)
     refused = {}                      # the first (nearest) candidate refused, per mode
@@ -278,7 +295,12 @@ def match_modes(fa: list, la: list, fb: list, lb: list, why: dict | None = None
                   if k != j and k not in used_b]
         others += [(abs(fa[k] - fb[j]), "a", k) for k in range(len(fa))
                    if k != i and k not in used_a]
-        if all(d < 0.5 * o for o, _, _ in others):
+        if d > 0.5 * max(abs(fa[i]), abs(fb[j])):    # not within a factor 2: no twin
+            refused.setdefault(("a", i), f"nearest by frequency: {_mode(lb, j)} of b at "
+                               f"{fb[j]:.10g} Hz, not within a factor 2 of it")
+            refused.setdefault(("b", j), f"nearest by frequency: {_mode(la, i)} of a at "
+                               f"{fa[i]:.10g} Hz, not within a factor 2 of it")
+        elif all(d < 0.5 * o for o, _, _ in others):
             pairs.append((i, j))
             used_a.add(i)
             used_b.add(j)
@@ -296,7 +318,8 @@ def match_modes(fa: list, la: list, fb: list, lb: list, why: dict | None = None
             for i in sorted(set(range(len(mine))) - used):
                 name = mine[i] if i < len(mine) else ""
                 label = ("" if not name else f"label {name!r} not among the other's; "
-                         if name not in theirs else f"label {name!r} not unique; ")
+                         if family(name) not in {family(n) for n in theirs if n} else
+                         f"the other lists fewer {family(name)!r} modes, each nearer its own; ")
                 why[(side, i)] = label + (refused.get((side, i)) or (
                     "no counterpart: every mode of the other solver is paired closer"
                     if len(f) else "the other solver returned no modes"))

@@ -133,16 +133,17 @@ class Knob:
     most: int | None = None
 
     @property
-    def settings(self) -> tuple[str, ...]:
+    def names(self) -> tuple[str, ...]:
+        """The settings the knob moves."""
         return tuple(self.name.split("+"))
 
     def value(self, settings: dict) -> float | None:
-        v = settings.get(self.settings[0])
+        v = settings.get(self.names[0])
         return float(v) if _number(v) and v > 0 else None
 
     def tighter(self, settings: dict, halvings: int = 1) -> dict:
         f = 2.0 ** (-np.sign(self.order) * halvings)
-        return {**settings, **{n: float(settings[n]) * f for n in self.settings}}
+        return {**settings, **{n: float(settings[n]) * f for n in self.names}}
 
 
 @dataclass(frozen=True)

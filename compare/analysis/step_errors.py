@@ -9,9 +9,9 @@ change of a − b times the same factor ≤ 2. `pair_error` uses it where a − 
 halving's own asymptotic test — its changes shrink from 2·dt → dt to dt → dt/2 — and the sum of
 the two runs' estimates elsewhere. Measured on sail-deploy's two thread-spool models (t_end
 0.5 s): tip angle 1.2e-6 rad apart, each run's halving estimate 4.1e-6 rad, their difference's
-1.7e-10 rad against its change to dt/16 of 1.1e-10; their deployed lengths, 1.2e-13 m apart in
-bands of 4.5e-10 m, change their difference by 1.9e-16, 6.9e-16, 2.6e-15 m from 2·dt → dt to
-dt/2 → dt/4 (the rounding of more steps, growing), so that pair keeps the sum. Only one leaf:
+1.7e-10 rad against its change to dt/16 of 1.1e-10. Where the difference does not converge
+but both runs wander in a band, the band of the difference holds its step's part, as a run's
+band holds its own (`difference_estimator`); the runs' rounding stays in each. Only one leaf:
 two codes running a scheme of one name need not share what the step means (MuJoCo ties its
 constraints' time constant to it)."""
 import numpy as np
@@ -42,26 +42,42 @@ def member_error(kind: str, offsets) -> np.ndarray:
     return band(np.zeros_like(offsets[1]), *offsets[1:])
 
 
-def shares_scheme(a: Trajectory, b: Trajectory, channel: str) -> bool:
-    """The two runs' step errors of `channel` come from members of one scheme, and their
-    difference's changes shrink as the step does (`shrinks`)."""
+def difference_estimator(a: Trajectory, b: Trajectory, channel: str) -> str | None:
+    """How the step's part of the error of a − b is read from its own members, where the two
+    runs' step errors of `channel` come from members of one scheme: "halving" where the
+    difference's changes shrink as the step does (`shrinks`), "band" where they do not but
+    both runs wandered in a band and so ran dt/4 too (the band a − b wanders in across its
+    members: sail-deploy's deployed lengths, each in a band of 4.5e-10 m, differ by
+    1.2e-13 m and that difference changes by 1.9e-16, 6.9e-16, 2.6e-15 m from 2·dt → dt to
+    dt/2 → dt/4), else None: the sum."""
     if a.scheme is None or a.scheme != b.scheme or channel not in a.members \
             or channel not in b.members:
-        return False
-    if not {a.estimators.get(channel), b.estimators.get(channel)} <= {"halving", "band"}:
-        return False
-    d = np.asarray(a.members[channel][:2]) - np.asarray(b.members[channel][:2])
-    return shrinks(d[0], d[1])
+        return None
+    kinds = {a.estimators.get(channel), b.estimators.get(channel)}
+    if not kinds <= {"halving", "band"}:
+        return None
+    ma, mb = np.asarray(a.members[channel]), np.asarray(b.members[channel])
+    d = ma[:2] - mb[:2]
+    if shrinks(d[0], d[1]):
+        return "halving"
+    return "band" if kinds == {"band"} and len(ma) == len(mb) == 3 else None
+
+
+def shares_scheme(a: Trajectory, b: Trajectory, channel: str) -> bool:
+    """The two runs' difference of `channel` has a step error of its own
+    (`difference_estimator`)."""
+    return difference_estimator(a, b, channel) is not None
 
 
 def pair_error(a: Trajectory, b: Trajectory, channel: str) -> np.ndarray:
-    """The error of a − b on t: the sum of the two runs' estimates, with the step's part
-    2 |Δ(a − b)| on halving where they share a scheme (`shares_scheme`) — never more than the
-    sum. Rounding and every other knob's error stay summed."""
+    """The error of a − b on t: the sum of the two runs' estimates, with the step's part read
+    from the difference's own members where they share a scheme (`difference_estimator`) —
+    never more than the sum. Rounding and every other knob's error stay summed."""
     ea, eb = a.errors[channel], b.errors[channel]
-    if not shares_scheme(a, b, channel):
+    kind = difference_estimator(a, b, channel)
+    if kind is None:
         return ea + eb
     ma, mb = a.members[channel], b.members[channel]
     own = (member_error(a.estimators[channel], ma)
            + member_error(b.estimators[channel], mb))
-    return ea + eb - own + np.minimum(2 * np.abs(ma[1] - mb[1]), own)
+    return ea + eb - own + np.minimum(member_error(kind, np.asarray(ma) - np.asarray(mb)), own)

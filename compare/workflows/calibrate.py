@@ -314,7 +314,7 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
             bound = c.tolerance * c.scale
             if c.deviation > FLOOR * EPS * _rounds_with(scene, c, params) and bound > 0:
                 window = bound / c.deviation
-                windows.append(window)
+                windows.append((window, f"{c.a}|{c.b}"))
                 if widest is None or window > widest["window"]:
                     widest = {**where, "window": float(window), "deviation": float(c.deviation),
                               "bound": float(bound)}
@@ -348,11 +348,17 @@ WIDE_WINDOW = 100.0
 
 
 def _windows(windows: list) -> dict:
-    """How the windows the comparisons opened spread: how many, how many past WIDE_WINDOW, and
-    their median and 95th percentile — whether the widest is the rule or a few pairs (a
-    deviation that crosses zero at a set, two runs sharing an error their bound counts)."""
-    w = np.asarray(windows, float)
+    """How the windows (window, "a|b") the comparisons opened spread: how many, how many past
+    WIDE_WINDOW and of which pairs, and their median and 95th percentile — whether the widest
+    is the rule or a few pairs (a deviation that crosses zero at a set, two runs sharing an
+    error their bound counts)."""
+    w = np.asarray([x for x, _ in windows], float)
+    by_pair: dict = {}
+    for x, pair in windows:
+        if x > WIDE_WINDOW:
+            by_pair[pair] = by_pair.get(pair, 0) + 1
     return {"opened": len(w), "over_100": int(np.sum(w > WIDE_WINDOW)),
+            "over_100_by_pair": dict(sorted(by_pair.items(), key=lambda kv: -kv[1])),
             "median": float(np.median(w)) if len(w) else None,
             "p95": float(np.percentile(w, 95)) if len(w) else None}
 

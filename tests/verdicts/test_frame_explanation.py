@@ -46,8 +46,9 @@ def _modes(solver, rows, extra=None, errors=None):
                         **({} if errors is None else {"frequency_error_hz": errors})})
 
 
-def _runs(paper_scale=1.0):
-    """The four solvers at speed and at rest, as measured; mstmm's frequencies × paper_scale."""
+def _runs(paper_scale=1.0, mujoco=None):
+    """The four solvers at speed and at rest, as measured; mstmm's frequencies × paper_scale;
+    MuJoCo's modes at speed `mujoco` where given."""
     torsion = {"mstmm": "torsion collective 1", "fem": "torsion differential 1"}
     at_speed = {p: _modes(p, [(n, f * (paper_scale if p == "mstmm" else 1.0))
                               for n, f in PAPER_AT_SPEED + [(torsion[p], TORSION)]],
@@ -55,6 +56,8 @@ def _runs(paper_scale=1.0):
                 for p in torsion}
     at_speed.update({e: _modes(e, ENGINE_AT_SPEED, errors=ERRORS[e])
                      for e in mstmm_frames.ENGINES})
+    if mujoco is not None:
+        at_speed["mujoco"] = _modes("mujoco", [r for r, _ in mujoco], errors=[e for _, e in mujoco])
     rest = {p: _modes(p, [(f"mode {i}", f) for i, f in enumerate(PAPER_AT_REST)])
             for p in torsion}
     rest.update({e: _modes(e, [(f"mode {i}", f) for i, f in enumerate(ENGINE_AT_REST)],
@@ -63,11 +66,11 @@ def _runs(paper_scale=1.0):
     return at_speed, rest
 
 
-def _explain(paper_scale=1.0):
+def _explain(paper_scale=1.0, mujoco=None):
     params = calibrate.sample(SCENE, 20, 2026)[17][1]
     assert params["speed"] == pytest.approx(57.72247797120145)
     tol = SCENE.tolerances_for(params)
-    at_speed, rest = _runs(paper_scale)
+    at_speed, rest = _runs(paper_scale, mujoco)
     comparisons = metrics.frequency_comparisons(list(at_speed.values()), tol)
     rows, _ = mstmm_frames.explain(
         params, comparisons, lambda n, p: (rest if p["speed"] == 0 else at_speed)[n], tol)
@@ -107,3 +110,19 @@ def test_a_differential_modes_allowance_is_its_blade_modes_shift():
             [_modes("mstmm", [("lag differential 1", f)]),
              _modes("exudyn", [("lag differential 1", 12.36114)])], tol)
         assert c.verdict == verdict, c.decided_by
+
+
+def test_an_engine_without_differential_modes_borrows_the_other_engines():
+    """Where one engine's list holds no differential mode (seed 2026 set 18: MuJoCo's first
+    eight roots reach none), the rotor is confirmed by the other engine's, since the two are
+    one discrete model agreeing root by root — and not when they disagree (one of MuJoCo's
+    fuselage modes 1 % off)."""
+    no_differential = [(r, e) for r, e in zip(ENGINE_AT_SPEED, ERRORS["mujoco"])
+                       if "differential" not in r[0]]
+    _, rows = _explain(mujoco=no_differential)
+    mujoco = [r for r in rows if "mujoco" in (r["a"], r["b"])]
+    assert mujoco and all(r["frame"] for r in mujoco), [r["why"] for r in mujoco]
+    off = [((n, f * 1.01 if n == "fuselage 2" else f), e) for (n, f), e in no_differential]
+    _, rows = _explain(mujoco=off)
+    mujoco = [r for r in rows if "mujoco" in (r["a"], r["b"])]
+    assert mujoco and not any(r["frame"] for r in mujoco)

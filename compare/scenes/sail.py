@@ -329,6 +329,34 @@ PAPER_ALLOWANCES = {"hub_rate": paper_hub_allowance, "tip_angle": paper_tip_allo
                     "angular_momentum": paper_momentum_allowance}
 
 
+# The deployed length. The paper's Q-damper takes Q's velocity to be the departure velocity
+# r ω e_x [8, 9]: on a segment lagging by θ it damps w + r ω (1 − cos θ) instead of the stretch
+# rate w, a steady extra force d r ω (1 − cos θ) that stretches the Q-spring by that over c;
+# and the paper's spin change ΔΩ/Ω (paper_release_deviation) moves the centrifugal stretch
+# m₀Ω²(L_c + ℓ)/c by twice that. At the tip's largest lag in its swing (tip_swing), their sum
+# is 1.00–1.21 × the deviation at the defaults (0.5 s and 2 s) and 11 calibration sets of
+# seeds 11 and 2026 (the damper alone 0.34–1.01: seed 2026 set 7's spin change is 2.6e-4);
+# both run one segment out (the second release is ≥ 1.3 s over the calibration region).
+# It was a constant 1e-12 m fitted at the defaults (1.2e-13), hidden by the two runs' summed
+# step bands until their difference got its own (step_errors.pair_error): seed 2026's tenth
+# set, damping 7.8e-4 on a 58 % longer lag, is 1.39e-12 apart — 1.39e-12 m by this model,
+# and 1.56e-12 still at dt = 2e-6, where the spring's ringing is resolved.
+def paper_length_deviation(params):
+    """|Δ deployed length| [m] of the paper's model against a conservative one (above)."""
+    tend = _swing_end(params)
+    lag = np.max(np.abs(tip_swing(params, np.linspace(0.0, tend, 2001))[0]))
+    c, rw = params["stiffness"], params["r"] * params["omega_spool"]
+    _, _, m, _ = phys.thread(params)
+    out = min(rw * params["t_end"], params["L"])
+    centrifugal = m[0] * params["Omega0"] ** 2 * (params["L_c"] + out) / c
+    return (params["damping"] * rw * (1 - np.cos(lag)) / c
+            + 2 * centrifugal * paper_release_deviation(params)[0])
+
+
+def paper_length_allowance(params):
+    return ("abs", PAPER_SAFETY * paper_length_deviation(params))
+
+
 # Formula 18 against every solver's hub rate (issue 47, item 7). The reference is the lumped
 # formula (`phys.formula18_discrete`: the models' own n nodes; the continuous formula differs by
 # the lumping, 1e-3 of Ω at 2 s, 10 × the effect judged). What it neglects of every model: the
@@ -406,9 +434,8 @@ SAIL = TimeScene(
     # length 1.0e-9 m, angular momentum 1.7e-11; conservative–MuJoCo 2.8e-8, 2.8e-6 rad,
     # 1.8e-10 m, 2.6e-14; Exudyn–MuJoCo 8.1e-8, 1.0e-9 m, 1.7e-11, tip its release offset's
     # (exudyn_tip_allowance; 3.4e-10 rad at the defaults); the paper's model: its release
-    # law's closed form (PAPER_ALLOWANCES), length as the other solver's
-    # (1.2e-13 m against conservative, inside the estimates); the length's deviation is a
-    # fixed offset in metres
+    # law's closed form (PAPER_ALLOWANCES), length against conservative its Q-damper's and
+    # spin change's (paper_length_allowance)
     allowance_cases=(AllowanceCase("t_end ≤ 2 s", lambda p: p["t_end"] <= 2.0, {
         "hub_rate": 3e-7, "tip_angle": ("abs", 1e-5), "deployed_length": ("abs", 3e-9),
         "angular_momentum": 5e-11,
@@ -418,8 +445,8 @@ SAIL = TimeScene(
                                                          "deployed_length": ("abs", 5e-10),
                                                          "angular_momentum": 1e-13},
                     "thread-spool|mujoco": {"deployed_length": ("abs", 5e-10)},
-                    "thread-spool|thread-spool-conservative": {"deployed_length": ("abs",
-                                                                                   1e-12)},
+                    "thread-spool|thread-spool-conservative": {
+                        "deployed_length": paper_length_allowance},
                     "exudyn|mujoco": {"tip_angle": exudyn_tip_allowance}}}),),
     key_channel="tip_angle",
     reference_solvers=("thread-spool-conservative", "exudyn"),

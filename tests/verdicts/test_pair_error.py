@@ -58,7 +58,8 @@ def test_a_difference_that_wanders_is_held_by_its_own_band(runs):
     the step's part of its error as a run's band bounds the run's (measured 6.1e-15 m,
     1.6e5 × under the summed bands). No finer run is its truth: the difference at dt/16 is
     4.3e-14 m off, inside the rounding of that run's 16 × more steps (steps·eps·scale
-    1.2e-13 m), and the verdict rests on the pair's allowance (1e-12 m) as it should."""
+    1.2e-13 m), and the verdict rests on the pair's allowance (the paper's Q-damper and spin
+    change: sail.paper_length_allowance) as it should."""
     true, pair, summed, shared = _true_and_bounds(runs, "deployed_length")
     (a, a16), (b, b16) = (runs[m] for m in MODELS)
     members = np.asarray(a.members["deployed_length"]) - np.asarray(b.members["deployed_length"])

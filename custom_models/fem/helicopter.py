@@ -27,6 +27,7 @@ MODES_SETTINGS = {"blade_elements": 12, "shaft_elements": 2, "tail_elements": 6,
 BLADE_STATIONS = 7
 RIGID_BODY_HZ = 0.01
 OSCILLATORY_RE = 1e-4
+UNREFINED_RE = 1e-2
 
 
 def blade_frame(k):
@@ -224,18 +225,33 @@ def frequencies(L, spin, mesh, clamped, n_modes):
     scale = np.abs(lam).max()
     # oscillatory: Re λ is the shift-invert's round-off, up to 3.2e-6 |λ| next to the free
     # aircraft's near-defective rigid-body cluster (helicopter-hover's second calibration set at
-    # rest, ×2 mesh); at 1e-6 that mode was dropped and Richardson paired the next one with it
-    osc = [i for i in range(len(lam)) if lam[i].imag > 1e-6 * scale ** 0.5
-           and abs(lam[i].real) < OSCILLATORY_RE * abs(lam[i])]
+    # rest, ×2 mesh); at 1e-6 that mode was dropped and Richardson paired the next one with it.
+    # ARPACK's Re λ can be far larger before refinement (helicopter-clamped, `xval calibrate
+    # --seed 777` set 4 at 57 rad/s, ×2 mesh: lag modes at 1e-4–4e-3 |λ|, dropped, so the
+    # meshes' modes were paired out of order, torsion 2 % off), so every candidate up to
+    # UNREFINED_RE is refined first (a conservative gyroscopic root refines onto the imaginary
+    # axis) and judged after, ascending, until n_modes are kept; below 0.01 Hz the free
+    # aircraft's rigid-body modes (mstmm's search starts at 0.05 Hz)
+    cand = sorted((i for i in range(len(lam)) if lam[i].imag > max(1e-6 * scale ** 0.5,
+                                                                  RIGID_BODY_HZ * 2 * np.pi)
+                   and abs(lam[i].real) < UNREFINED_RE * abs(lam[i])), key=lambda i: lam[i].imag)
+    osc, bound = [], []
+    for i in cand:
+        if len(osc) == n_modes:
+            break
+        raw = lam[i]
+        lam[i], V[:, i], b = refine_gyroscopic(*KGM, lam[i], V[:, i])
+        # a candidate that moved onto a root already kept is that root again (a degenerate
+        # pair's two start together: both stay)
+        if abs(lam[i].real) >= OSCILLATORY_RE * abs(lam[i]) or any(
+                abs(lam[i] - lam[j]) < 1e-9 * abs(lam[j]) and abs(raw - lam[j]) > 1e-6 * abs(lam[j])
+                for j in osc):
+            continue
+        osc.append(i)
+        bound.append(b)
     unstable = [float(lam[i].real) for i in range(len(lam))
                 if lam[i].real > 1e-6 * max(1.0, abs(lam[i])) and abs(lam[i]) > 1e-2]
     osc.sort(key=lambda i: lam[i].imag)
-    # below 0.01 Hz: the free aircraft's rigid-body modes (mstmm's search starts at 0.05 Hz)
-    osc = [i for i in osc if lam[i].imag > RIGID_BODY_HZ * 2 * np.pi][:n_modes]
-    bound = []
-    for i in osc:                            # ARPACK's roots to the matrices' own accuracy
-        lam[i], V[:, i], b = refine_gyroscopic(*KGM, lam[i], V[:, i])
-        bound.append(b)
     shapes = [shape_vector(V[:, i], samplers, hub, fus, used, n, L["blade"]["chord"])
               for i in osc]
     return np.array([lam[i].imag for i in osc]), shapes, unstable, np.array(bound)

@@ -377,7 +377,6 @@ def _frequencies(linearised, params, s, free):
     this one model does not share) and the first-order shift of its sections' rotary inertia,
     in ascending order."""
     n = bc.checked_segments(s)
-    n *= segment_refinement(params, n)
     # the linearisation error of the roots Richardson pairs, which hold every one reported
     m = 3 * params["n_modes"] + 12
     lam, V, names, secs, every, lin, sections = oscillating(linearised, params, n, s["psi"],
@@ -466,6 +465,9 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
     each mode, first order} (the paper's Euler–Bernoulli beams have none:
     metrics.model_allowance)."""
     s = merge_settings(settings, MODES_SETTINGS, ())
+    # the chains a run uses, refined where the blade is a string (its settings say so)
+    k = segment_refinement(params, bc.checked_segments(s))
+    s = {**s, "n_segments": k * s["n_segments"]}
     t0 = time.perf_counter()
     f, change, error, kinds, secs, n_dof, every, lin, sections = _frequencies(
         linearised, params, s, free)
@@ -474,7 +476,7 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
                               & (np.abs(every) > RIGID_BODY)])
     notes = [note] + ([f"unstable: {len(grow)} growing root(s), Re s = "
                        f"{np.round(grow, 4).tolist()} 1/s (> {GROWTH_TOL:g})"] if len(grow) else [])
-    if (k := segment_refinement(params, bc.checked_segments(s))) > 1:
+    if k > 1:
         notes.append(f"chains ×{k}: the N/2 chain's blade segments within "
                      f"{ENGINE_TENSION_SPAN:g} tension lengths at the root")
     blade_f = _on_blades(f, kinds, params["speed"] / (2 * np.pi))

@@ -91,13 +91,13 @@ def blade_rotary_inertia_shifts(params, prefix=""):
 # torsion sits 5e-9 off mstmm, inside their own error estimate, 1.1e-8).
 
 
-def blade_engine_allowances(params):
+def blade_engine_allowances(params, prefix=""):
     """The custom–engine allowance per mode, {label: relative allowance}: the mode's own
     rotary-inertia shift s (blade_rotary_inertia_shifts) with its neglected second order
     (metrics.first_order_allowance: ×2 for the first-order estimate's neglects — the mode
     shape's change with speed, −2 % on lag 1 at 40 rad/s)."""
     return {label: first_order_allowance(shift)
-            for label, _, shift in blade_rotary_inertia_shifts(params)}
+            for label, _, shift in blade_rotary_inertia_shifts(params, prefix)}
 
 
 def blade_engine_allowance(params):
@@ -158,9 +158,8 @@ def differential_allowances(params):
     first n_modes). helicopter-hover, `xval calibrate --seed 2026` set 7 (Ω 64 rad/s, chord
     0.41 m on a 4.48 m blade): lag differential 1 1.55e-3 apart, the closed form's shift
     1.62e-3, where the constant 1.5e-3 fitted at the defaults called it a disagreement."""
-    rows = blade_rotary_inertia_shifts(params, "blade_")
-    return {"{} differential {}".format(*label.rsplit(" ", 1)): first_order_allowance(shift)
-            for label, _, shift in rows}
+    return {"{} differential {}".format(*label.rsplit(" ", 1)): allowance
+            for label, allowance in blade_engine_allowances(params, "blade_").items()}
 
 
 ENGINE_ALLOWANCE = {"frequency_by_solver": {e: aircraft_engine_allowance for e in ("exudyn",

@@ -59,6 +59,7 @@ def explain(params, comparisons, modes_at, tolerances):
     if not bad or params["speed"] == 0:
         return [], []
     runs, rest = {}, {}
+    paired, named = {}, {}     # a paper solver's pairing with the other; a solver's families
 
     def run(name, at_rest=False):
         memo, p = (rest, {**params, "speed": 0.0}) if at_rest else (runs, params)
@@ -75,9 +76,11 @@ def explain(params, comparisons, modes_at, tolerances):
         a, b = run(paper), run(PAPER[paper])
         if a.status != "ok" or b.status != "ok" or mode not in a.labels:
             return None
+        if paper not in paired:
+            paired[paper] = dict(match_modes(list(a.frequencies_hz), a.labels,
+                                             list(b.frequencies_hz), b.labels))
         i = a.labels.index(mode)
-        j = dict(match_modes(list(a.frequencies_hz), a.labels, list(b.frequencies_hz),
-                             b.labels)).get(i)
+        j = paired[paper].get(i)
         if j is None:
             return None
         return (abs(a.frequencies_hz[i] / b.frequencies_hz[j] - 1),
@@ -90,8 +93,13 @@ def explain(params, comparisons, modes_at, tolerances):
         both name, so a channel whose family both name is such a pair; one paired by value
         across kinds (fem's torsion differential 1 with an engine's torsion cyclic 1, seed
         2026 set 17, the engines' torsion differential beyond their eighth mode) is not."""
-        return "differential" in c.channel and all(
-            family(c.channel) in {family(n) for n in run(s).labels if n} for s in (c.a, c.b))
+        return "differential" in c.channel and all(family(c.channel) in families(s)
+                                                   for s in (c.a, c.b))
+
+    def families(name):
+        if name not in named:
+            named[name] = {family(n) for n in run(name).labels if n}
+        return named[name]
 
     def one_aircraft():
         """The two engines agree root by root: one discrete model."""

@@ -1,6 +1,6 @@
 """A leaf as the rest of xval sees it — read once per leaf module, the only place that reads a
 leaf's attributes (`DEFAULT_SETTINGS`, `INTEGRATORS`, `ADAPTIVE`, `AUTO_DT`, `MODES_SETTINGS`,
-`ORDERS`, `KNOBS`, `KNOB_LIMITS`, `COARSER_DT`, `check_settings`, `regimes`,
+`ORDERS`, `KNOBS`, `KNOB_LIMITS`, `KNOB_HOLDS`, `COARSER_DT`, `check_settings`, `regimes`,
 `unbalance_response`) — and the accuracy knobs as types: `Fixed(dt)` or `Adaptive(rtol,
 atol)`, each with its tighter setting, its step count and its ladder (the shape of scipy's
 `OdeSolver`, which carries its own order, and diffrax's step-size controllers); a leaf's
@@ -127,10 +127,15 @@ class Knob:
     A name joining settings with "+" is one knob that moves them together: steps whose errors
     form one homogeneous term (lagrange-partial's two virtual steps of one loop, a·Δφ² + b·Δψ²
     with a and b of opposite sign: each alone moved the press's slider by 17 × what both
-    together did, custom_models/press/partial.py)."""
+    together did, custom_models/press/partial.py). `holds`: a setting moved the other way so
+    that its product with the knob stays (a leaf's `KNOB_HOLDS`): MuJoCo's press varies dt/tc
+    at a fixed time constant tc = solref_factor·dt — at a fixed dt a larger factor softens the
+    loop too, a change the dt halving already sees (17 × the sampling's at `xval calibrate
+    press --seed 777`'s set 9)."""
     name: str
     order: float
     most: int | None = None
+    holds: str | None = None
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -138,12 +143,13 @@ class Knob:
         return tuple(self.name.split("+"))
 
     def value(self, settings: dict) -> float | None:
-        v = settings.get(self.names[0])
-        return float(v) if _number(v) and v > 0 else None
+        v, h = settings.get(self.names[0]), settings.get(self.holds, 1.0)
+        return float(v) if _number(v) and v > 0 and _number(h) and h > 0 else None
 
     def tighter(self, settings: dict, halvings: int = 1) -> dict:
         f = 2.0 ** (-np.sign(self.order) * halvings)
-        return {**settings, **{n: float(settings[n]) * f for n in self.names}}
+        held = {self.holds: float(settings[self.holds]) / f} if self.holds else {}
+        return {**settings, **{n: float(settings[n]) * f for n in self.names}, **held}
 
 
 @dataclass(frozen=True)
@@ -332,6 +338,7 @@ def _build(leaf: ModuleType) -> LeafInfo:
                     cheap_rtol=dict(getattr(leaf, "CHEAP_RTOL", {})),
                     own_check=_has(leaf, "check_settings"),
                     batch_regimes=_has(leaf, "regimes"),
-                    knobs=tuple(Knob(n, p, getattr(leaf, "KNOB_LIMITS", {}).get(n))
+                    knobs=tuple(Knob(n, p, getattr(leaf, "KNOB_LIMITS", {}).get(n),
+                                     getattr(leaf, "KNOB_HOLDS", {}).get(n))
                                 for n, p in getattr(leaf, "KNOBS", {}).items()),
                     coarser_dt=dict(getattr(leaf, "COARSER_DT", {})))

@@ -333,7 +333,8 @@ def _knob_errors(scene, solver, params, settings, tr, timeout_s):
                 for s in (tight, knob.tighter(settings, -1))]
         _cost(tr, *runs)
         half, double = runs               # tighter, coarser
-        by = f"{knob.name} {knob.value(tight):g}"
+        by = f"{knob.name} {knob.value(tight):g}" + \
+            (f" ({knob.holds} {tight[knob.holds]:g})" if knob.holds else "")
         if half.status != "ok":
             tr.stats["error_estimate_by"] += f", {by}: {half.status} ({half.reason})"
             tr.errors = {}               # an estimate blind to a knob is no estimate

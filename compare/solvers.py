@@ -375,10 +375,9 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
       converged run (Exudyn's press crank_accel under its Newton tolerance: 0.157, 1.5e-3,
       2.7e-3 from 2·dt down): 2 |y − y_half| holds it (true 1.6e-3 against 3.1e-3).
     Costs a run at 2·dt (half the run), and the dt/4 run only where a channel is not
-    asymptotic. The run keeps its members' offsets y_member − y (`Trajectory.members`: 2·dt,
-    dt/2, and dt/4 where it ran), each channel's estimator and its `scheme` (leaf, integrator,
-    step): a run of the same scheme bounds their difference by them
-    (`analysis.step_errors.pair_error`)."""
+    asymptotic. The run keeps its members' offsets y_member − y (`Trajectory.members`: 2·dt
+    and dt/2), each channel's estimator and its `scheme` (leaf, integrator, step): a run of
+    the same scheme bounds their difference by them (`analysis.step_errors.pair_error`)."""
     d1 = {c: np.abs(tr.channels[c] - half.channels[c]) for c in scene.channels}
     err = {c: 2 * d1[c] for c in scene.channels}
     coarse = _simulate(scene, solver, params, {**tight, "dt": 4 * tight["dt"]}, timeout_s,
@@ -407,7 +406,6 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
         if r >= 1 and d2 >= np.max(d0[c]) / 4:
             err[c] = band(tr.channels[c], half.channels[c], quarter.channels[c])
             tr.estimators[c] = "band"
-            tr.members[c] = np.vstack([tr.members[c], quarter.channels[c] - tr.channels[c]])
         elif 0.5 < r < 1 and c in slow:
             err[c] = d1[c] / (1 - r)
             tr.estimators[c] = "tail"

@@ -23,7 +23,7 @@ class Trajectory:
     # the solver's own numerical error per channel on t (from a tighter rerun), where estimated
     errors: dict = field(default_factory=dict)
     # where a step halving estimated `errors`: per channel its estimator and the members'
-    # offsets y_member − y (rows 2·dt, dt/2, dt/4 where run), and the scheme ("leaf
+    # offsets y_member − y (rows 2·dt, dt/2), and the scheme ("leaf
     # integrator dt"): two runs of one scheme bound their difference by them
     # (`analysis.step_errors.pair_error`)
     members: dict = field(default_factory=dict)

@@ -330,31 +330,25 @@ PAPER_ALLOWANCES = {"hub_rate": paper_hub_allowance, "tip_angle": paper_tip_allo
 
 
 # The deployed length. The paper's Q-damper takes Q's velocity to be the departure velocity
-# r ω e_x [8, 9]: on a segment lagging by θ it damps w + r ω (1 − cos θ) instead of the stretch
-# rate w, a steady extra force d r ω (1 − cos θ) that stretches the Q-spring by that over c;
-# and the paper's spin change ΔΩ/Ω (paper_release_deviation) moves the centrifugal stretch
-# m₀Ω²(L_c + ℓ)/c by twice that. At the tip's largest lag in its swing (tip_swing), their sum
-# is 1.00–1.21 × the deviation at the defaults (0.5 s and 2 s) and 11 calibration sets of
-# seeds 11 and 2026 (the damper alone 0.34–1.01: seed 2026 set 7's spin change is 2.6e-4);
-# both run one segment out (the second release is ≥ 1.3 s over the calibration region).
-# It was a constant 1e-12 m fitted at the defaults (1.2e-13), hidden by the two runs' summed
-# step bands until their difference got its own (step_errors.pair_error): seed 2026's tenth
-# set, damping 7.8e-4 on a 58 % longer lag, is 1.39e-12 apart — 1.39e-12 m by this model,
-# and 1.56e-12 still at dt = 2e-6, where the spring's ringing is resolved.
-def paper_length_deviation(params):
-    """|Δ deployed length| [m] of the paper's model against a conservative one (above)."""
-    tend = _swing_end(params)
-    lag = np.max(np.abs(tip_swing(params, np.linspace(0.0, tend, 2001))[0]))
+# r ω e_x [8, 9], so its force differs from the conservative damper's by up to d r ω: on a
+# steadily lagging segment d r ω (1 − cos θ), and on the Q-spring's ringing (~1e5 rad/s)
+# more, where the step resolves it; the spring stretches by that over c. And the paper's
+# spin change ΔΩ/Ω (paper_release_deviation) moves the centrifugal stretch m₀Ω²(L_c + ℓ)/c by
+# twice that. At the scene's step (ringing unresolved) the steady term with the swing's
+# largest lag was 1.00–1.21 × the deviation at 13 sets; resolved (dt/512) the deviation is
+# 0.86–89 × that (seed 2026 set 7: 1.2e-11 m against 1.3e-13); the full d r ω / c is
+# 2.1–25 × it at five sets but 0.48 at seed 2026 set 7 (1.16e-11 m): the ringing's damping is
+# not modelled (docs/scenes/sail-deploy.md). The allowance is that bound; the verdicts rest on
+# the runs' summed bands, 7e-10 m and more even at dt = 2e-6. It was a constant 1e-12 m.
+def paper_length_allowance(params):
+    """|Δ deployed length| [m] of the paper's model against a conservative one, bounded
+    (above)."""
     c, rw = params["stiffness"], params["r"] * params["omega_spool"]
     _, _, m, _ = phys.thread(params)
     out = min(rw * params["t_end"], params["L"])
     centrifugal = m[0] * params["Omega0"] ** 2 * (params["L_c"] + out) / c
-    return (params["damping"] * rw * (1 - np.cos(lag)) / c
+    return ("abs", params["damping"] * rw / c
             + 2 * centrifugal * paper_release_deviation(params)[0])
-
-
-def paper_length_allowance(params):
-    return ("abs", PAPER_SAFETY * paper_length_deviation(params))
 
 
 # Formula 18 against every solver's hub rate (issue 47, item 7). The reference is the lumped

@@ -314,7 +314,7 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
             bound = c.tolerance * c.scale
             if c.deviation > FLOOR * EPS * _rounds_with(scene, c, params) and bound > 0:
                 window = bound / c.deviation
-                windows.append((window, f"{c.a}|{c.b}"))
+                windows.append((window, f"{c.a}|{c.b}", k, c.channel))
                 if widest is None or window > widest["window"]:
                     widest = {**where, "window": float(window), "deviation": float(c.deviation),
                               "bound": float(bound)}
@@ -348,17 +348,20 @@ WIDE_WINDOW = 100.0
 
 
 def _windows(windows: list) -> dict:
-    """How the windows (window, "a|b") the comparisons opened spread: how many, how many past
-    WIDE_WINDOW and of which pairs, and their median and 95th percentile — whether the widest
-    is the rule or a few pairs (a deviation that crosses zero at a set, two runs sharing an
-    error their bound counts)."""
-    w = np.asarray([x for x, _ in windows], float)
+    """How the windows (window, "a|b", set, channel) the comparisons opened spread: how many,
+    how many past WIDE_WINDOW, of which pairs and the ten widest of them, and their median and
+    95th percentile — whether the widest is the rule or a few pairs (a deviation that crosses
+    zero at a set, two runs sharing an error their bound counts)."""
+    w = np.asarray([x[0] for x in windows], float)
     by_pair: dict = {}
-    for x, pair in windows:
+    for x, pair, *_ in windows:
         if x > WIDE_WINDOW:
             by_pair[pair] = by_pair.get(pair, 0) + 1
+    wide = sorted((x for x in windows if x[0] > WIDE_WINDOW), key=lambda x: -x[0])[:10]
     return {"opened": len(w), "over_100": int(np.sum(w > WIDE_WINDOW)),
             "over_100_by_pair": dict(sorted(by_pair.items(), key=lambda kv: -kv[1])),
+            "over_100_at": [{"set": k, "pair": pair, "channel": c, "window": float(x)}
+                            for x, pair, k, c in wide],
             "median": float(np.median(w)) if len(w) else None,
             "p95": float(np.percentile(w, 95)) if len(w) else None}
 

@@ -123,12 +123,15 @@ def test_the_json_has_the_commands_keys_and_reads_back():
 def test_the_windows_spread_says_how_many_are_wide():
     # counted by hand: two of four windows past 100; the 95th percentile interpolates between
     # the third and fourth, 150 + 0.85 · 9850
-    w = cal._windows([(2.0, "a|b"), (50.0, "a|c"), (150.0, "a|c"), (1e4, "a|b")])
+    w = cal._windows([(2.0, "a|b", 0, "x"), (50.0, "a|c", 0, "x"), (150.0, "a|c", 1, "y"),
+                      (1e4, "a|b", 2, "x")])
     assert (w["opened"], w["over_100"], w["median"]) == (4, 2, 100.0)
     assert w["over_100_by_pair"] == {"a|b": 1, "a|c": 1}
+    assert w["over_100_at"] == [{"set": 2, "pair": "a|b", "channel": "x", "window": 1e4},
+                                {"set": 1, "pair": "a|c", "channel": "y", "window": 150.0}]
     assert w["p95"] == pytest.approx(8522.5)
     assert cal._windows([]) == {"opened": 0, "over_100": 0, "over_100_by_pair": {},
-                                "median": None, "p95": None}
+                                "over_100_at": [], "median": None, "p95": None}
 
 
 def test_a_true_error_at_round_off_tests_no_error_bar():

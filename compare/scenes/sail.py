@@ -441,7 +441,12 @@ SAIL = TimeScene(
                     "thread-spool|mujoco": {"deployed_length": ("abs", 5e-10)},
                     "thread-spool|thread-spool-conservative": {
                         "deployed_length": paper_length_allowance},
-                    "exudyn|mujoco": {"tip_angle": exudyn_tip_allowance}}}),),
+                    "exudyn|mujoco": {"tip_angle": exudyn_tip_allowance}},
+        "wider": {"thread-spool|thread-spool-conservative": {
+            "deployed_length": "a bound of the deviation with the Q-spring's ringing resolved "
+                               "(d r ω / c: 2.1–25 × it at five sets); the cases measure it at "
+                               "the scene's step, where the ringing is not resolved and the "
+                               "deviation up to 89 × smaller (docs/scenes/sail-deploy.md)"}}}),),
     key_channel="tip_angle",
     reference_solvers=("thread-spool-conservative", "exudyn"),
     invariant_channels=("angular_momentum",),

@@ -241,7 +241,7 @@ def roots(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False
         lam_v, V_v = lam[idx], V[:, idx]
         moved = np.full((3, len(lam)), np.nan)
         moved[:2, idx] = (eigen.change(_state(K2, D2) - A, lam_v, V_v, W)[1],
-                          eigen.round_off(A, lam_v, V_v, W))
+                          eigen.solve_spread(A, lam_v))
         if sections and params["speed"] == 0:      # their own shift: at rest only (above)
             K3, D3, _, secs3 = mbc_matrices(
                 lambda *a: linearised(*a, sections=0.0), params, n, psi, free)

@@ -54,6 +54,24 @@ def round_off(A: np.ndarray, lam: np.ndarray, V: np.ndarray, W: np.ndarray,
     return C_ROUND_OFF * EPS * np.linalg.norm(B, 1) * kappa
 
 
+# the reported roots' rounding against the most three other solves of the same A move them
+SPREAD_SAFETY = 3.0
+
+
+def solve_spread(A: np.ndarray, lam: np.ndarray) -> np.ndarray:
+    """The round-off the solve makes in the roots `lam` of A, measured rather than bounded:
+    SPREAD_SAFETY × the most they move when A is solved again as Aᵀ, reversed (P A Pᵀ) and
+    both — exact similarities that LAPACK rounds otherwise — each root against the nearest of
+    the others' (a repeated root's twins land on either one alike). The bound `round_off`
+    holds every root at once and sits 10–1000 × above this on the helicopters' low roots
+    (compare/scenes/mstmm.py)."""
+    lam = np.asarray(lam, complex)
+    R = A[::-1, ::-1]
+    moved = [np.min(np.abs(np.linalg.eigvals(B)[None, :] - lam[:, None]), axis=1)
+             for B in (A.T, R, R.T)]
+    return SPREAD_SAFETY * np.max(moved, axis=0)
+
+
 def change(dA: np.ndarray, lam: np.ndarray, V: np.ndarray, W: np.ndarray,
            idx=None) -> tuple[np.ndarray, np.ndarray]:
     """Bounds on |Re δλ| and |δλ| of the roots `idx` when A becomes A + dA, to first order

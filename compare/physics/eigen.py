@@ -64,7 +64,7 @@ def solve_spread(A: np.ndarray, lam: np.ndarray) -> np.ndarray:
     both — exact similarities that LAPACK rounds otherwise — each root against the nearest of
     the others' (a repeated root's twins land on either one alike). The bound `round_off`
     holds every root at once and sits 10–1000 × above this on the helicopters' low roots
-    (compare/scenes/mstmm.py)."""
+    (docs/scenes/mstmm.md, the engines)."""
     lam = np.asarray(lam, complex)
     R = A[::-1, ::-1]
     moved = [np.min(np.abs(np.linalg.eigvals(B)[None, :] - lam[:, None]), axis=1)

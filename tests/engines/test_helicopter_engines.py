@@ -377,9 +377,10 @@ def test_all_modes_named_at_once_as_one_by_one(free, speed):
 def test_the_engine_pair_sees_a_1e_5_blade_stiffness_error_root_by_root():
     """The engines build one aircraft, so they are compared root by root (metrics.by_root)
     within their own linearisation estimates (the finite differences' rounding, the eigen
-    round-off) over a 1e-11 floor. Blade E × (1 + 1e-5) in Exudyn alone moves the blade roots
-    by up to 5e-6 (f ∝ √E at rest, less spinning): most roots must disagree (measured 12 of
-    17; the constant 5e-7 fitted before missed all below E × (1 + 1e-6)). Honest, none does."""
+    solve's measured round-off) over a 1e-11 floor. Blade E × (1 + 1e-5) in Exudyn alone
+    moves the blade roots by up to 5e-6 (f ∝ √E at rest, less spinning): most roots must
+    disagree (measured 13 of 17, 12 with the round-off bound; the constant 5e-7 fitted before
+    missed all below E × (1 + 1e-6)). Honest, none does."""
     sc = get_scene("helicopter-clamped")
     ex, mj = solvers.get_solver("exudyn"), solvers.get_solver("mujoco")
     b = solvers.modes(sc, mj, P)

@@ -96,6 +96,24 @@ def test_round_off_bound_covers_a_conservative_spectrum_and_is_not_wide():
     assert np.median(widths) < 1e3 and max(widths) < 1e4
 
 
+def test_solve_spread_covers_a_conservative_spectrum_root_by_root():
+    """The measured round-off (three other solves of the same A) against the true error of
+    every root of 40 conservative spectra, |Re λ|: it holds each (measured at most 0.53 of
+    it) and is 18 × sharper than the bound (median 0.044 of it against 0.0025): a bar that
+    does not tell a helicopter's engines apart by 1e4 × their difference."""
+    ratio, ratio_bound = [], []
+    for seed in range(40):
+        rng = np.random.default_rng(seed)
+        A = _gyroscopic(int(rng.integers(3, 31)), rng, 10 ** rng.uniform(1, 6))
+        lam, V = np.linalg.eig(A)
+        spread = eigen.solve_spread(A, lam)
+        bound = eigen.round_off(A, lam, V, eigen.left_rows(V))
+        ratio += list(np.abs(lam.real) / spread)
+        ratio_bound += list(np.abs(lam.real) / bound)
+    assert max(ratio) <= 1
+    assert np.median(ratio) >= 10 * np.median(ratio_bound)
+
+
 def test_change_of_linearisation_is_first_order_exact():
     rng = np.random.default_rng(7)
     A = _gyroscopic(8, rng, 1e3)

@@ -41,7 +41,7 @@ from scipy.optimize import linear_sum_assignment
 
 from compare.contract import LeafModes, merge_settings
 from compare.physics import eigen
-from compare.physics.mstmm import blade_section_from, helicopter_layout
+from compare.physics.mstmm import blade_section_from, helicopter_layout, root_tension_wavenumber
 from reference_models import beam_chain_common as bc
 
 MODES_SETTINGS = {"n_segments": 40, "extrapolate": True, "psi": 0.0}
@@ -363,8 +363,8 @@ def segment_refinement(params: dict, n: int) -> int:
     """The factor on n_segments that keeps the N/2 chain's blade segments within
     ENGINE_TENSION_SPAN tension lengths at the root (1 at the defaults)."""
     sec, L = blade_section_from(params, "blade_"), params["blade_L"]
-    tension = sec["m"] * params["speed"] ** 2 * (params["hub_radius"] * L + L * L / 2)
-    span = (2 * L / n) * np.sqrt(tension / sec["EI_flap"])
+    span = (2 * L / n) * root_tension_wavenumber(sec["m"], sec["EI_flap"], L, params["speed"],
+                                                 params["hub_radius"])
     return max(1, int(np.ceil(span / ENGINE_TENSION_SPAN)))
 
 
@@ -466,8 +466,8 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
     metrics.model_allowance)."""
     s = merge_settings(settings, MODES_SETTINGS, ())
     # the chains a run uses, refined where the blade is a string (its settings say so)
-    k = segment_refinement(params, bc.checked_segments(s))
-    s = {**s, "n_segments": k * s["n_segments"]}
+    refine = segment_refinement(params, bc.checked_segments(s))
+    s = {**s, "n_segments": refine * s["n_segments"]}
     t0 = time.perf_counter()
     f, change, error, kinds, secs, n_dof, every, lin, sections = _frequencies(
         linearised, params, s, free)
@@ -476,8 +476,8 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
                               & (np.abs(every) > RIGID_BODY)])
     notes = [note] + ([f"unstable: {len(grow)} growing root(s), Re s = "
                        f"{np.round(grow, 4).tolist()} 1/s (> {GROWTH_TOL:g})"] if len(grow) else [])
-    if k > 1:
-        notes.append(f"chains ×{k}: the N/2 chain's blade segments within "
+    if refine > 1:
+        notes.append(f"chains ×{refine}: the N/2 chain's blade segments within "
                      f"{ENGINE_TENSION_SPAN:g} tension lengths at the root")
     blade_f = _on_blades(f, kinds, params["speed"] / (2 * np.pi))
     order = np.argsort(blade_f)

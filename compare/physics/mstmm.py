@@ -65,6 +65,14 @@ def blade_section_from(params: dict, prefix: str = "") -> dict:
     return blade_section(*(params[prefix + k] for k in ("chord", "thickness", "rho", "E", "G")))
 
 
+def root_tension_wavenumber(m_line: float, EI_flap: float, L: float, spin: float,
+                            hub_radius: float) -> float:
+    """√(T/EI_flap) [1/m] at the blade root, T = m̄Ω²(r_H L + L²/2) the centrifugal tension: the
+    inverse length of the boundary layer it sets there, which a discretisation resolves while
+    its root elements span a few of it (fem's TENSION_SPAN, the engines' ENGINE_TENSION_SPAN)."""
+    return float(np.sqrt(m_line * spin**2 * (hub_radius * L + L**2 / 2) / EI_flap))
+
+
 def nonrotating_blade_hz(params: dict, n: int = 3, prefix: str = "") -> dict:
     """Cantilever blade at rest: flap/lag λᵢ² √(EI/(m̄L⁴))/2π and torsion (2i−1)π/(2L)·√(GJ/I_α)
     /2π, in Hz."""

@@ -17,7 +17,13 @@ import numpy as np
 
 from compare.contract import LeafModes, merge_settings
 from compare.physics.eigen import refine_gyroscopic
-from compare.physics.mstmm import AXIAL, AXIAL_RIGID, axial_shift, helicopter_layout
+from compare.physics.mstmm import (
+    AXIAL,
+    AXIAL_RIGID,
+    axial_shift,
+    helicopter_layout,
+    root_tension_wavenumber,
+)
 from compare.physics.rotation import skew
 
 from .beam import bending
@@ -269,8 +275,7 @@ def blade_refinement(L, spin, hub_radius):
     """The factor on every blade mesh: ⌈√(T_root/EI_flap)·L / (TENSION_SPAN · default
     elements)⌉, T_root = m̄Ω²(r_H L + L²/2) (1 at the defaults: 18.7 / 24)."""
     b = L["blade"]
-    T = b["m"] * spin**2 * (hub_radius * b["L"] + b["L"] ** 2 / 2)
-    span = np.sqrt(T / b["EI_flap"]) * b["L"]
+    span = root_tension_wavenumber(b["m"], b["EI_flap"], b["L"], spin, hub_radius) * b["L"]
     return max(1, int(np.ceil(span / (TENSION_SPAN * MODES_SETTINGS["blade_elements"]))))
 
 

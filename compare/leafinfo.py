@@ -1,9 +1,9 @@
 """A leaf as the rest of xval sees it — read once per leaf module, the only place that reads a
 leaf's attributes (`DEFAULT_SETTINGS`, `INTEGRATORS`, `ADAPTIVE`, `AUTO_DT`, `MODES_SETTINGS`,
-`ORDERS`, `KNOBS`, `KNOB_LIMITS`, `KNOB_HOLDS`, `COARSER_DT`, `check_settings`, `regimes`,
-`unbalance_response`) — and the accuracy knobs as types: `Fixed(dt)` or `Adaptive(rtol,
-atol)`, each with its tighter setting, its step count and its ladder (the shape of scipy's
-`OdeSolver`, which carries its own order, and diffrax's step-size controllers); a leaf's
+`ORDERS`, `KNOBS`, `KNOB_LIMITS`, `KNOB_HOLDS`, `COARSER_DT`, `JITTER_PROBE`, `check_settings`,
+`regimes`, `unbalance_response`) — and the accuracy knobs as types: `Fixed(dt)` or
+`Adaptive(rtol, atol)`, each with its tighter setting, its step count and its ladder (the shape
+of scipy's `OdeSolver`, which carries its own order, and diffrax's step-size controllers); a leaf's
 other discretisation knobs (`KNOBS`: a finite-difference step) as `Knob`s, each varied by the
 error estimate on its own.
 """
@@ -180,6 +180,9 @@ class LeafInfo:
     # explicit step at its stability bound's safety margin, where halving costs 2× the run and
     # its changes do not converge; `coarser_members`, solvers._coarser_error)
     coarser_dt: dict = field(default_factory=dict)
+    # setting -> factor: a rerun that differs from the tight run only in where its Newton
+    # iteration stops (JITTER_PROBE: a fixed step's rounding jitter, solvers._unseen_error)
+    jitter_probe: dict = field(default_factory=dict)
 
     @property
     def unbalance_response(self):
@@ -341,4 +344,5 @@ def _build(leaf: ModuleType) -> LeafInfo:
                     knobs=tuple(Knob(n, p, getattr(leaf, "KNOB_LIMITS", {}).get(n),
                                      getattr(leaf, "KNOB_HOLDS", {}).get(n))
                                 for n, p in getattr(leaf, "KNOBS", {}).items()),
-                    coarser_dt=dict(getattr(leaf, "COARSER_DT", {})))
+                    coarser_dt=dict(getattr(leaf, "COARSER_DT", {})),
+                    jitter_probe=dict(getattr(leaf, "JITTER_PROBE", {})))

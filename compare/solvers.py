@@ -257,16 +257,18 @@ def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
         if tight is not None:
             ref = _simulate(scene, solver, params, tight, timeout_s, False, tr.t)
             _cost(tr, ref)
-            if ref.status == "ok":
+            unseen = None
+            if ref.status != "ok":
+                tr.stats["error_estimate_by"] = f"{how}: {ref.status} ({ref.reason})"
+            else:
                 unseen = _unseen_error(scene, solver, params, settings, tr, ref, tight,
                                        timeout_s)
+            if unseen is not None:
                 seen = (_halving_error(scene, solver, params, tr, ref, tight, unseen, timeout_s)
                         if "rtol" not in how else
                         {c: factor * np.abs(tr.channels[c] - ref.channels[c])
                          for c in scene.channels})
                 tr.errors = {c: seen[c] + unseen[c] for c in scene.channels}
-            else:
-                tr.stats["error_estimate_by"] = f"{how}: {ref.status} ({ref.reason})"
         if tr.errors or tight is None:   # the step's own estimate held, or there is none
             _knob_errors(scene, solver, params, settings, tr, timeout_s)
     return tr
@@ -307,6 +309,8 @@ def _coarser_error(scene, solver, params, settings, tr, timeout_s) -> bool:
     unseen = _unseen_error(scene, solver, params, settings, tr, runs[-1], members[-1],
                            timeout_s)
     tr.errors = {}
+    if unseen is None:
+        return True
     for c in scene.channels:
         y = tr.channels[c]
         rich = RICHARDSON_SAFETY * np.abs(runs[-1].channels[c] - y) / (q ** p - 1)
@@ -372,8 +376,9 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
       dt/2, dt/4). Sail-deploy's engines, 100 points: contained 0.998 (Exudyn; 0.93 at 20
       points with 2 |y − y_half|) and 1.000 (MuJoCo), median true/estimate 0.30 and 0.45.
       A change that fell by more than 4 before growing has met a noise floor under a
-      converged run (Exudyn's press crank_accel under its Newton tolerance: 0.157, 1.5e-3,
-      2.7e-3 from 2·dt down): 2 |y − y_half| holds it (true 1.6e-3 against 3.1e-3).
+      converged run (Exudyn's press crank_accel, its index-3 accelerations' rounding: 0.157,
+      1.5e-3, 2.7e-3 from 2·dt down): 2 |y − y_half| plus the measured jitter holds it
+      (`_unseen_error`).
     Costs a run at 2·dt (half the run), and the dt/4 run only where a channel is not
     asymptotic. The run keeps its members' offsets y_member − y (`Trajectory.members`: 2·dt
     and dt/2), each channel's estimator and its `scheme` (leaf, integrator, step): a run of
@@ -415,6 +420,9 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
 EPS = float(np.finfo(float).eps)
 # the tight run's error over its change on halving the tolerance (`_unseen_error`)
 TIGHT_TAIL = 1 / (1 - 2 ** -0.5)
+# a fixed step's error over its jitter probe's largest change, beyond 2·|y − y_half|: 4/3 of
+# the half step's jitter and 7/3 of the run's (`_unseen_error`), rounded up
+JITTER_SAFETY = 4.0
 
 
 def _steps(tr: Trajectory) -> float:
@@ -439,7 +447,7 @@ def rounding_model(channel, tr, params):
     return np.abs(model(tr.channels, params)) if callable(model) else 0.0
 
 
-def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) -> dict:
+def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) -> dict | None:
     """What the tighter rerun cannot see, per channel (a running maximum over t):
     - round-off: √(steps of both runs) × machine epsilon × the channel's scale (its largest
       |value|, or the length it is computed from: `rounding_scale`): each step rounds the
@@ -461,7 +469,18 @@ def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) ->
       runs 4 ulp of rtol apart scatter by 4.6e-9 J of work and one halving's change was up to
       6.1 × short of that run's own error; so a second run at a quarter of the tolerance, and the
       larger change counts. A fixed step's error is smooth in the step, and halving it sees
-      it: no further run."""
+      it: no further run;
+    - a fixed step's rounding jitter, where its leaf declares a probe (`JITTER_PROBE`: the
+      tight run again with its Newton iteration stopped elsewhere). An index-3 integrator's
+      accelerations carry the rounding of the converged positions over β·dt²: Exudyn's press
+      crank_accel, rerun at Newton tolerances 1e-10 … 1e-13, scattered by 1e-17–1.3e-16 s² ×
+      its scale / dt² at six sets and four steps (2e-5: up to 2.4e-4 rad/s²), so the halving's
+      half-step member is the noisier one and its change can cancel the run's own error
+      (`xval calibrate press-cycle --seed 90210` set 14: 2·|y − y_half| 2.6e-4 against a true
+      3.7e-4). With the run's jitter at most the half step's (it falls as dt²), its error is
+      within 2·|y − y_half| + (4/3 + 7/3)·jitter: JITTER_SAFETY × the largest change the probe
+      makes anywhere on the run (the jitter is not a running error: it is as large at the first
+      output time as at the last)."""
     floor = {c: np.maximum(np.sqrt(_steps(tr) + _steps(ref)) * EPS
                            * rounding_scale(c, tr, params), rounding_model(c, tr, params))
              for c in scene.channels}
@@ -476,6 +495,19 @@ def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) ->
             if ref2.status == "ok":
                 jitter = {c: np.maximum(jitter[c], TIGHT_TAIL * np.maximum.accumulate(
                     np.abs(ref.channels[c] - ref2.channels[c]))) for c in scene.channels}
+    probe = solver.info(scene).jitter_probe
+    if probe and all(isinstance(tight.get(k), float) for k in probe):
+        ref2 = _simulate(scene, solver, params, {**tight, **{k: tight[k] * f for k, f in
+                                                            probe.items()}},
+                         timeout_s, False, tr.t)
+        _cost(tr, ref2)
+        if ref2.status != "ok":         # a jitter not measured is no estimate
+            tr.stats["error_estimate_by"] = (tr.stats.get("error_estimate_by", "")
+                                             + f", jitter probe: {ref2.status} ({ref2.reason})")
+            return None
+        jitter = {c: jitter[c] + JITTER_SAFETY * np.max(np.abs(ref.channels[c]
+                                                               - ref2.channels[c]))
+                  for c in scene.channels}
     return {c: floor[c] + jitter[c] for c in scene.channels}
 
 

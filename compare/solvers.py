@@ -470,11 +470,12 @@ def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) ->
       6.1 × short of that run's own error; so a second run at a quarter of the tolerance, and the
       larger change counts. A fixed step's error is smooth in the step, and halving it sees
       it: no further run;
-    - a fixed step's rounding jitter, where its leaf declares a probe (`JITTER_PROBE`: the
-      tight run again with its Newton iteration stopped elsewhere). An index-3 integrator's
-      accelerations carry the rounding of the converged positions over β·dt²: Exudyn's press
-      crank_accel, rerun at Newton tolerances 1e-10 … 1e-13, scattered by 1e-17–1.3e-16 s² ×
-      its scale / dt² at six sets and four steps (2e-5: up to 2.4e-4 rad/s²), so the halving's
+    - a fixed step's Newton jitter, where its leaf declares a probe (`JITTER_PROBE`: the tight
+      run again with its Newton iteration stopped tighter by the factor, or looser where it
+      cannot converge that far). An index-3 integrator's accelerations carry the positions'
+      Newton error over β·dt²: Exudyn's press crank_accel, rerun at Newton tolerances 1e-10 …
+      1e-13, scattered by 1e-17–1.3e-16 s² × its scale / dt² at six sets and four steps (2e-5:
+      up to 2.4e-4 rad/s²; at a lock Newton may not reach 1e-11), so the halving's
       half-step member is the noisier one and its change can cancel the run's own error
       (`xval calibrate press-cycle --seed 90210` set 14: 2·|y − y_half| 2.6e-4 against a true
       3.7e-4). With the run's jitter at most the half step's (it falls as dt²), its error is
@@ -497,13 +498,18 @@ def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) ->
                     np.abs(ref.channels[c] - ref2.channels[c]))) for c in scene.channels}
     probe = solver.info(scene).jitter_probe
     if probe and all(isinstance(tight.get(k), float) for k in probe):
-        ref2 = _simulate(scene, solver, params, {**tight, **{k: tight[k] * f for k, f in
-                                                            probe.items()}},
-                         timeout_s, False, tr.t)
-        _cost(tr, ref2)
+        for way in (1, -1):             # Newton stopped tighter; where it cannot get there, looser
+            ref2 = _simulate(scene, solver, params, {**tight, **{k: tight[k] * f ** way
+                                                                for k, f in probe.items()}},
+                             timeout_s, False, tr.t)
+            _cost(tr, ref2)
+            if ref2.status == "ok":
+                break
+        by = ", ".join(f"{k} ×{f ** way:g}" for k, f in probe.items())
+        tr.stats["error_estimate_by"] = tr.stats.get("error_estimate_by", "") + (
+            f", Newton jitter ({by})" if ref2.status == "ok" else
+            f", Newton jitter: {ref2.status} ({ref2.reason})")
         if ref2.status != "ok":         # a jitter not measured is no estimate
-            tr.stats["error_estimate_by"] = (tr.stats.get("error_estimate_by", "")
-                                             + f", jitter probe: {ref2.status} ({ref2.reason})")
             return None
         jitter = {c: jitter[c] + JITTER_SAFETY * np.max(np.abs(ref.channels[c]
                                                                - ref2.channels[c]))

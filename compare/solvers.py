@@ -259,7 +259,8 @@ def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
             _cost(tr, ref)
             unseen = None
             if ref.status != "ok":
-                tr.stats["error_estimate_by"] = f"{how}: {ref.status} ({ref.reason})"
+                tr.stats["error_estimate_by"] = ""
+                _no_estimate(tr, f"{how}: {ref.status} ({ref.reason})")
             else:
                 unseen = _unseen_error(scene, solver, params, settings, tr, ref, tight,
                                        timeout_s)
@@ -272,6 +273,16 @@ def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
         if tr.errors or tight is None:   # the step's own estimate held, or there is none
             _knob_errors(scene, solver, params, settings, tr, timeout_s)
     return tr
+
+
+def _no_estimate(tr, why: str):
+    """The run's error estimate failed (a rerun it needs stopped): no error bar, and the run
+    says why (`stats["error_estimate_failed"]`): its verdicts beyond the allowance are then
+    `incomplete`, not `disagree` (`analysis.metrics.deviation`)."""
+    tr.errors = {}
+    tr.stats["error_estimate_failed"] = why
+    tr.stats["error_estimate_by"] = ", ".join(filter(None, (tr.stats.get("error_estimate_by"),
+                                                           why)))
 
 
 def _cost(tr, *runs):
@@ -339,9 +350,8 @@ def _knob_errors(scene, solver, params, settings, tr, timeout_s):
         half, double = runs               # tighter, coarser
         by = f"{knob.name} {knob.value(tight):g}" + \
             (f" ({knob.holds} {tight[knob.holds]:g})" if knob.holds else "")
-        if half.status != "ok":
-            tr.stats["error_estimate_by"] += f", {by}: {half.status} ({half.reason})"
-            tr.errors = {}               # an estimate blind to a knob is no estimate
+        if half.status != "ok":          # an estimate blind to a knob is no estimate
+            _no_estimate(tr, f"{by}: {half.status} ({half.reason})")
             return
         tr.stats["error_estimate_by"] += f", {by}"
         for c in scene.channels:
@@ -506,11 +516,11 @@ def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) ->
             if ref2.status == "ok":
                 break
         by = ", ".join(f"{k} ×{f ** way:g}" for k, f in probe.items())
-        tr.stats["error_estimate_by"] = tr.stats.get("error_estimate_by", "") + (
-            f", Newton jitter ({by})" if ref2.status == "ok" else
-            f", Newton jitter: {ref2.status} ({ref2.reason})")
         if ref2.status != "ok":         # a jitter not measured is no estimate
+            _no_estimate(tr, f"Newton jitter: {ref2.status} ({ref2.reason})")
             return None
+        tr.stats["error_estimate_by"] = tr.stats.get("error_estimate_by", "") + \
+            f", Newton jitter ({by})"
         jitter = {c: jitter[c] + JITTER_SAFETY * np.max(np.abs(ref.channels[c]
                                                                - ref2.channels[c]))
                   for c in scene.channels}

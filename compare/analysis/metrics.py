@@ -27,7 +27,7 @@ class Comparison:
     max_rel: float          # max |Δ| / scale
     scale: float            # the channel's scale: max |value| over both runs
     tolerance: float        # (error_estimate + allowance) / scale: the bound that decided
-    verdict: Verdict        # agree | inconclusive | disagree | skipped (a string is read as one)
+    verdict: Verdict        # agree | inconclusive | disagree | incomplete | skipped (from str)
     decided_by: str         # the number that decided, in words
     deviation: float = np.nan        # max |Δ| (SI), = max_abs
     error_estimate: float | None = None   # max (err_a + err_b) over the run (SI), if estimated
@@ -131,6 +131,12 @@ def deviation(a: Trajectory, b: Trajectory, channel: str,
               else f"allowance {allow:.1e} (no error estimate)")
            + f" (Δ/bound {ratio_text(max_abs / bound if bound > 0 else np.inf)})")
     why = f"{wide}; {why}" if wide else why
+    failed = [t for t in (a, b) if t.stats.get("error_estimate_failed")]
+    if verdict == Verdict.DISAGREE and failed:
+        # beyond the allowance alone, with one error bar missing: nothing is known
+        verdict = Verdict.INCOMPLETE
+        why = "; ".join(f"{t.solver}'s error estimate failed ({t.stats['error_estimate_failed']})"
+                        for t in failed) + f": not judged; {why}"
     return Comparison(a.solver, b.solver, channel, max_abs, float(np.sqrt(np.mean(d**2))), rel,
                       scale, bound / scale, verdict, why, max_abs, err, allow)
 

@@ -111,3 +111,20 @@ def test_a_default_run_stays_agree(tmp_path):
     assert rc == 0, err
     verdicts = [c["verdict"] for c in json.loads(out)["comparisons"]]
     assert verdicts and set(verdicts) == {"agree"}
+
+
+@pytest.mark.parametrize("failed, offset, verdict", [
+    (True, 1e-3, "incomplete"),     # beyond the allowance with one bar missing: not judged
+    (True, 1e-9, "agree"),          # within the allowance alone: no bar needed
+    (False, 1e-3, "disagree"),      # a run with no estimate to make is judged on the allowance
+])
+def test_a_failed_error_estimate_is_never_a_disagreement(failed, offset, verdict):
+    """A solver whose error estimate failed (a rerun it needs stopped: Exudyn's half step
+    through a singular passage of a drawn n-four-bar, 10 s) has no error bar; 16 comparisons
+    became `disagree` at Δ/bound up to 1e9 against the allowance alone."""
+    stats = {"error_estimate_failed": "dt 0.0005: diverged"} if failed else {}
+    a = Trajectory("synthetic", "a", T, {"x": np.full_like(T, 10.0)}, stats=stats)
+    c = deviation(a, _traj("b", 10.0 + offset, 1e-4), "x", 1e-9)
+    assert c.verdict == verdict, c.decided_by
+    assert ("a's error estimate failed (dt 0.0005: diverged)" in c.decided_by) == \
+        (verdict == "incomplete")

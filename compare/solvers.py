@@ -386,8 +386,8 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
       dt/2, dt/4). Sail-deploy's engines, 100 points: contained 0.998 (Exudyn; 0.93 at 20
       points with 2 |y − y_half|) and 1.000 (MuJoCo), median true/estimate 0.30 and 0.45.
       A change that fell by more than 4 before growing has met a noise floor under a
-      converged run (Exudyn's press crank_accel, its index-3 accelerations' rounding: 0.157,
-      1.5e-3, 2.7e-3 from 2·dt down): 2 |y − y_half| plus the measured jitter holds it
+      converged run (Exudyn's press crank_accel, its index-3 accelerations' Newton jitter:
+      0.157, 1.5e-3, 2.7e-3 from 2·dt down): 2 |y − y_half| plus the measured jitter holds it
       (`_unseen_error`).
     Costs a run at 2·dt (half the run), and the dt/4 run only where a channel is not
     asymptotic. The run keeps its members' offsets y_member − y (`Trajectory.members`: 2·dt
@@ -488,7 +488,7 @@ def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) ->
       up to 2.4e-4 rad/s²; at a lock Newton may not reach 1e-11), so the halving's
       half-step member is the noisier one and its change can cancel the run's own error
       (`xval calibrate press-cycle --seed 90210` set 14: 2·|y − y_half| 2.6e-4 against a true
-      3.7e-4). With the run's jitter at most the half step's (it falls as dt²), its error is
+      3.7e-4). With the run's jitter at most the half step's (it goes as 1/dt²), its error is
       within 2·|y − y_half| + (4/3 + 7/3)·jitter: JITTER_SAFETY × the largest change the probe
       makes anywhere on the run (the jitter is not a running error: it is as large at the first
       output time as at the last)."""

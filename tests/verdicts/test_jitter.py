@@ -1,6 +1,6 @@
-"""A fixed step's rounding jitter in its error bar (compare/solvers.py `_unseen_error`,
+"""A fixed step's Newton jitter in its error bar (compare/solvers.py `_unseen_error`,
 a leaf's `JITTER_PROBE`). Exudyn integrates the press with index-3 generalized-α, whose
-accelerations carry the converged positions' rounding over β·dt²: the noise grows as the step
+accelerations carry the positions' Newton error over β·dt²: the noise grows as the step
 shrinks, so the halving's half-step member is the noisier one and |y − y_half| can cancel the
 run's own error. The truth is lagrange-exact, an independent solver of the same rigid press, at
 1/16 of its step."""
@@ -28,7 +28,7 @@ def _crank_accel(dt, newton_tol):
 
 def test_the_half_step_member_is_the_noisier():
     """The premise: Newton stopped 100× tighter moves crank_accel by more at dt/2 than at dt
-    (measured at six sets: 2.0–10 × more)."""
+    (measured at six sets: 2.1–10 × more)."""
     dt = solvers.settings_for(EXUDYN, "press-cycle")["dt"]
     jitter = [np.max(np.abs(_crank_accel(h, 1e-10) - _crank_accel(h, 1e-12)))
               for h in (dt, dt / 2)]

@@ -180,8 +180,9 @@ class LeafInfo:
     # explicit step at its stability bound's safety margin, where halving costs 2× the run and
     # its changes do not converge; `coarser_members`, solvers._coarser_error)
     coarser_dt: dict = field(default_factory=dict)
-    # setting -> factor: a rerun that differs from the tight run only in where its Newton
-    # iteration stops (JITTER_PROBE: a fixed step's Newton jitter, solvers._unseen_error)
+    # setting -> factors, tried in order: a rerun that differs from the tight run only in where
+    # its Newton iteration stops (JITTER_PROBE: a fixed step's Newton jitter,
+    # solvers._unseen_error)
     jitter_probe: dict = field(default_factory=dict)
 
     @property

@@ -481,14 +481,17 @@ def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) ->
       larger change counts. A fixed step's error is smooth in the step, and halving it sees
       it: no further run;
     - a fixed step's Newton jitter, where its leaf declares a probe (`JITTER_PROBE`: the tight
-      run again with its Newton iteration stopped tighter by the factor, or looser where it
-      cannot converge that far). An index-3 integrator's accelerations carry the positions'
-      Newton error over β·dt²: Exudyn's press crank_accel, rerun at Newton tolerances 1e-10 …
-      1e-13, scattered by 1e-17–1.3e-16 s² × its scale / dt² at six sets and four steps (2e-5:
-      up to 2.4e-4 rad/s²; at a lock Newton may not reach 1e-11), so the halving's
-      half-step member is the noisier one and its change can cancel the run's own error
-      (`xval calibrate press-cycle --seed 90210` set 14: 2·|y − y_half| 2.6e-4 against a true
-      3.7e-4). With the run's jitter at most the half step's (it goes as 1/dt²), its error is
+      run again with its Newton tolerance scaled by the first factor at which it completes,
+      tightest first: the half step's Newton error against the same step converged as far as
+      Newton gets). An index-3 integrator's accelerations carry the positions' Newton error
+      over β·dt²: Exudyn's press crank_accel, rerun at Newton tolerances 1e-10 … 1e-13,
+      scattered by 1e-17–1.3e-16 s² × its scale / dt² at six sets and four steps (2e-5: up to
+      2.4e-4 rad/s²), so the halving's half-step member is the noisier one and its change can
+      cancel the run's own error (`xval calibrate press-cycle --seed 90210` set 14:
+      2·|y − y_half| 2.6e-4 against a true 3.7e-4). Newton's error moves in whole iterations:
+      10× tighter left the iterate as it was at `--seed 31337` set 9 (1e-12 moved it by
+      7e-4), and through a lock Newton may not converge below 1e-10. With the run's jitter at
+      most the half step's (it goes as 1/dt²), its error is
       within 2·|y − y_half| + (4/3 + 7/3)·jitter: JITTER_SAFETY × the largest change the probe
       makes anywhere on the run (the jitter is not a running error: it is as large at the first
       output time as at the last)."""
@@ -508,14 +511,14 @@ def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) ->
                     np.abs(ref.channels[c] - ref2.channels[c]))) for c in scene.channels}
     probe = solver.info(scene).jitter_probe
     if probe and all(isinstance(tight.get(k), float) for k in probe):
-        for way in (1, -1):             # Newton stopped tighter; where it cannot get there, looser
-            ref2 = _simulate(scene, solver, params, {**tight, **{k: tight[k] * f ** way
+        for i in range(len(next(iter(probe.values())))):    # the first of the factors that runs
+            ref2 = _simulate(scene, solver, params, {**tight, **{k: tight[k] * f[i]
                                                                 for k, f in probe.items()}},
                              timeout_s, False, tr.t)
             _cost(tr, ref2)
             if ref2.status == "ok":
                 break
-        by = ", ".join(f"{k} ×{f ** way:g}" for k, f in probe.items())
+        by = ", ".join(f"{k} ×{f[i]:g}" for k, f in probe.items())
         if ref2.status != "ok":         # a jitter not measured is no estimate
             _no_estimate(tr, f"Newton jitter: {ref2.status} ({ref2.reason})")
             return None

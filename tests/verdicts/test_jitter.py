@@ -5,6 +5,7 @@ shrinks, so the halving's half-step member is the noisier one and |y − y_half|
 run's own error. The truth is lagrange-exact, an independent solver of the same rigid press, at
 1/16 of its step."""
 import numpy as np
+import pytest
 
 import xval
 from compare import solvers
@@ -35,12 +36,16 @@ def test_the_half_step_member_is_the_noisier():
     assert jitter[1] > 1.5 * jitter[0] > 0, jitter
 
 
-def test_exudyn_error_bar_contains_its_distance_to_the_exact_model():
-    r = coverage.point(CYCLE, EXUDYN, PARAMS, ref=coverage.reference_run(CYCLE, EXACT, PARAMS))
+# and seed 31337's set 9, where Newton 10× tighter left the half step's iterate as it was
+# (2·|y − y_half| 7.2e-4 against a true 7.6e-4) and 100× tighter moved it by 7e-4
+@pytest.mark.parametrize("seed, k", [(90210, 14), (31337, 9)])
+def test_exudyn_error_bar_contains_its_distance_to_the_exact_model(seed, k):
+    p = sample(CYCLE, 20, seed)[k][1]
+    r = coverage.point(CYCLE, EXUDYN, p, ref=coverage.reference_run(CYCLE, EXACT, p))
     assert r["status"] == "ok"
     for c in CHANNELS:
         assert r["true"][c] <= r["estimate"][c], (c, r)
-    # the jitter's bar stays sharp: 1.1e-3 against 3.7e-4 rad/s²
+    # the jitter's bar stays sharp: within 10 × the distance
     assert r["estimate"]["crank_accel"] <= 10 * r["true"]["crank_accel"], r
 
 

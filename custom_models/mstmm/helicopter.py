@@ -251,8 +251,17 @@ def nullity(L, omega, spin, hub_radius, clamped, level=1e-9):
 LOW_HZ, STEP_REL = 0.01, 0.01
 
 
+# points per tier of a blade cluster's grid: narrow_pairs finds a pair with no sign change
+# between them only where a grid sample is σ_min's local minimum, and a V narrower than the
+# cell hides on a sloping σ_min (`xval calibrate helicopter-clamped --seed 90210` sets 1 and
+# 13: the cyclic pairs 6.6554/6.6555 and 7.452 Hz, 0.29 % and 0.005 % below their clusters'
+# isolated-blade roots, lost at 40 points — 34 disagreements with fem and both engines, which
+# agreed; found at 160, 1–3 s a run instead of 0.5–0.8)
+CLUSTER_POINTS = 160
+
+
 def frequencies(L, spin, hub_radius, clamped, omega_max, rtol=1e-10, step_hz=0.1,
-                cluster_width=0.02, cluster_points=40):
+                cluster_width=0.02, cluster_points=CLUSTER_POINTS):
     """All roots in (0, omega_max]: the exact reactionless roots at the isolated-blade
     frequencies (counted by the nullity of U_all there), then the deflated characteristic
     function on a grid that is refined ±cluster_width (relative) around every isolated-blade

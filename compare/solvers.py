@@ -511,14 +511,13 @@ def _unseen_error(scene, solver, params, settings, tr, ref, tight, timeout_s) ->
                     np.abs(ref.channels[c] - ref2.channels[c]))) for c in scene.channels}
     probe = solver.info(scene).jitter_probe
     if probe and all(isinstance(tight.get(k), float) for k in probe):
-        for i in range(len(next(iter(probe.values())))):    # the first of the factors that runs
-            ref2 = _simulate(scene, solver, params, {**tight, **{k: tight[k] * f[i]
-                                                                for k, f in probe.items()}},
-                             timeout_s, False, tr.t)
+        for factors in zip(*probe.values()):        # the first that completes, tightest first
+            scaled = {k: tight[k] * f for k, f in zip(probe, factors)}
+            ref2 = _simulate(scene, solver, params, {**tight, **scaled}, timeout_s, False, tr.t)
             _cost(tr, ref2)
             if ref2.status == "ok":
                 break
-        by = ", ".join(f"{k} ×{f[i]:g}" for k, f in probe.items())
+        by = ", ".join(f"{k} ×{f:g}" for k, f in zip(probe, factors))
         if ref2.status != "ok":         # a jitter not measured is no estimate
             _no_estimate(tr, f"Newton jitter: {ref2.status} ({ref2.reason})")
             return None

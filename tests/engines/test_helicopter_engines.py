@@ -434,6 +434,22 @@ def test_the_engine_pair_names_and_pairs_alike_at_22_rad_s():
         [c.decided_by for c in got if c.verdict != "agree"]
 
 
+def test_the_engine_pair_agrees_at_a_slow_regressive_lag_root():
+    """helicopter-hover's calibration set 17 (`sample(scene, 20, 4242)[17]`, an 8.3 m blade at
+    20.7 rad/s): a regressive lag root seen at 0.0714 Hz in the fixed frame. At Exudyn's
+    default step (1e-9) its velocity Jacobian's rounding put the root 4.8e-8 Hz off MuJoCo's,
+    and the ×10 probe moved it by 2e-9 only: 1.07 × the pair's bars. At the step of
+    exudyn/helicopter.py's FD_SCALE every root agrees."""
+    from compare.workflows.calibrate import sample
+    sc = get_scene("helicopter-hover")
+    p = sample(sc, 20, 4242)[17][1]
+    runs = [solvers.modes(sc, solvers.get_solver(n), p) for n in ("exudyn", "mujoco")]
+    got = sc.verdicts(p, runs)
+    assert abs(runs[1].extra["roots_hz"][0] - 0.071433) < 1e-6
+    assert len(got) >= 10 and [c.verdict for c in got] == ["agree"] * len(got), \
+        [c.decided_by for c in got if c.verdict != "agree"]
+
+
 def test_the_engine_pair_agrees_at_66_rad_s():
     """helicopter-hover's calibration set 9 (`sample(scene, 20, 11)[9]`, Ω 66.4 rad/s): two
     roots the engines put apart beyond their estimates, each for a reason of its own — 5.68 Hz,

@@ -280,11 +280,8 @@ def oscillating(linearised, params: dict, n: int, psi: float = 0.0, free: bool =
     makes over 1 − 1/FD_VARY, plus the eigen solve's round-off bound — and the first-order
     shift its sections' rotary inertia makes (Hz; `roots`). The aircraft's finite
     differences are bound by rounding, not by their h² truncation as the beams' chains are
-    (beam_chain_common.quadratic_modes): M is ill-conditioned by the 1e-9 kg frames, and at
-    helicopter-clamped's defaults and its 71 rad/s calibration set Exudyn's roots move ~10 ×
-    more at step/10 than at step × 10, where they move by its difference from MuJoCo on 19
-    of 20 roots (the 20th, lag collective 1, was 1.2e-7 apart by MuJoCo's drive armature
-    until MuJoCo held the drive as Exudyn does: now 3.3e-9). Rigid-body roots
+    (beam_chain_common.quadratic_modes): M is ill-conditioned by the 1e-9 kg frames (Exudyn's
+    step: exudyn/helicopter.py FD_SCALE, measured against MuJoCo). Rigid-body roots
     (|s| < RIGID_BODY) are not modes."""
     lam, V, names, secs, moved = roots(linearised, params, n, psi, free, vary, sections)
     sel = _is_mode(lam)

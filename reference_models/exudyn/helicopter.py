@@ -73,17 +73,11 @@ def links(params: dict, n: int, free: bool = False, sections: float = 1.0):
     return out, names
 
 
-# Exudyn's step is relativeEpsilon × max(minimumCoordinateSize, |x|): 1e-9 at its defaults, where
-# the aircraft's Jacobians are rounding (forward differences: ~ε|f|/step). Against MuJoCo's
-# central differences (its ×10 step moves the roots ≤ 3e-9 Hz) at the roots of five aircraft
-# (hover and clamped at their defaults, hover's seed-4242 set 17 and seed-11 set 9, clamped's
-# set 9; N = 20 and 40, 240 roots), Exudyn's roots are off by median 9.8e-9 Hz and 1.1e-6 at
-# the 90th percentile at step 1e-9; 2e-9 and 8.6e-8 at 1e-8; at 1e-6 truncation takes over
-# (3.8e-7 on hover's first root). By chance the 1e-9 and 1e-8 steps' errors can coincide, so
-# the ×10 probe reads none of it: hover set 17's 0.0731 Hz root, 4.8e-8 off MuJoCo, moved by
-# 2e-9 (Exudyn and MuJoCo 1.07 × their bars apart); at 1e-8 it is 4.6e-8 off and the probe
-# (1e-7: 3.2e-9 off) reads it. The ×10 probe's bar with its safety misses none of the 240
-# beyond the eigen solve's ~1e-9 Hz round-off.
+# Exudyn's step, relativeEpsilon × max(minimumCoordinateSize, |x|), is 1e-9 at its defaults,
+# where the aircraft's forward differences are rounding: over 240 roots of five aircraft
+# (N = 20, 40) its roots sat 9.8e-9 Hz off MuJoCo's at the median, 1.1e-6 at the 90th;
+# at 1e-8, 2e-9 and 8.6e-8 (truncation takes over by 1e-6). At 1e-9 the ×10 probe can miss it:
+# hover's seed-4242 set 17 root at 0.0714 Hz, 4.8e-8 off, moved 2e-9 (docs/commands/calibrate.md).
 FD_SCALE = 10.0
 
 

@@ -394,10 +394,11 @@ def test_the_engine_pair_sees_a_1e_5_blade_stiffness_error_root_by_root():
 
 def test_the_engine_pair_agrees_where_a_mixed_root_is_named_two_ways():
     """helicopter-hover's calibration set 5 (`sample(scene, 20, 11)[5]`, Ω 22.4 rad/s): one
-    fixed-frame root, 2.70504 Hz in both engines, whose fuselage and cyclic-flap shares are
-    alike — Exudyn names it 'fuselage 2', MuJoCo a flap cyclic (shifted by Ω/2π to 6.266 Hz),
-    and by name the pair disagreed up to 2.9e5 ×. Root by root every root agrees with their
-    linearisation estimates (measured ≤ 0.12 of them)."""
+    fixed-frame root, 2.70504 Hz in both engines, that Exudyn named 'fuselage 2' while its
+    shapes came from the state's position half (test_mode_shapes_solve_the_aircraft_equations)
+    and MuJoCo a flap cyclic (shifted by Ω/2π to 6.266 Hz): by name the pair disagreed up to
+    2.9e5 ×. Root by root, whatever the names, every root agrees with their linearisation
+    estimates (measured ≤ 0.12 of them)."""
     from compare.workflows.calibrate import sample
     sc = get_scene("helicopter-hover")
     p = sample(sc, 20, 11)[5][1]

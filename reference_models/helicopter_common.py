@@ -202,8 +202,12 @@ def mbc_matrices(linearised, params: dict, n: int, psi: float = 0.0, free: bool 
 # N = 20 and 40): at rest ≤ 9.1e-10 1/s on the oscillating roots, ≤ 1.4e-11 on the free
 # aircraft's rigid-body roots; spinning ≤ 4.1e-5 (oscillating) and ≤ 1.04e-4 (rigid-body): the
 # finite differences of the velocity Jacobian (2.5e-5 relative, see the engines' modules).
-# 10 × the largest noise; a growth time of 1000 s.
+# 10 × the largest noise; a growth time of 1000 s. The high roots' noise grows with |s|:
+# MuJoCo's at helicopter-hover, `xval calibrate --seed 4242` set 15 (Ω 69 rad/s, N = 40): up to
+# 1.9e-7 |s| (Re 1.03e-3 at 5567 rad/s, 52 roots above 1e-4 between 3e3 and 2.3e4 rad/s;
+# Exudyn's none), so a growth also exceeds GROWTH_REL |s|, 5 × that.
 GROWTH_TOL = 1e-3
+GROWTH_REL = 1e-6
 RIGID_BODY = 1e-3       # |s| [1/s] below: the free aircraft's rigid-body roots (noise ≤ 1.1e-4)
 
 
@@ -266,8 +270,9 @@ def _is_mode(lam):
 
 
 def growing(lam: np.ndarray) -> np.ndarray:
-    """Re s of the roots that grow (Re s > GROWTH_TOL), oscillating or real, largest first."""
-    g = lam.real[(lam.real > GROWTH_TOL) & (np.abs(lam) > RIGID_BODY)]
+    """Re s of the roots that grow (Re s > GROWTH_TOL + GROWTH_REL |s|), oscillating or real,
+    largest first."""
+    g = lam.real[(lam.real > GROWTH_TOL + GROWTH_REL * np.abs(lam)) & (np.abs(lam) > RIGID_BODY)]
     return np.sort(g)[::-1]
 
 
@@ -391,6 +396,7 @@ def _frequencies(linearised, params, s, free):
     kinds = classify(V, names)
     change = np.zeros_like(f)
     error = np.zeros_like(f)
+    undecided = np.zeros(0)
     if s["extrapolate"]:
         lam2, V2, names2, secs2, _, lin2, _ = oscillating(linearised, params, n // 2,
                                                           s["psi"], free, m)
@@ -423,11 +429,59 @@ def _frequencies(linearised, params, s, free):
         # 4/3 of the N model's and 1/3 of the N/2 one's, each its own: the coarse model's
         # rounding can be the larger (helicopter-hover's ninth calibration set at 66 rad/s, a
         # 16.24 Hz root: Exudyn–MuJoCo 1.7e-8 apart at N = 40, 1.7e-6 at N = 20)
+        bar, undecided = coalescence_error(lam, lam2, rows, cols, len(f))
+        error = np.maximum(error, bar)
         lin_ext = np.full_like(lin, np.nan)
         lin_ext[rows] = (4 * lin[rows] + lin2[cols]) / 3
         lin = lin_ext
     return (f, change, error, kinds, secs, len(names), every, bc.LINEARISATION_SAFETY * lin,
-            sections)
+            sections, undecided)
+
+
+# Two roots coalesce where a regressive lag root meets a body mode (ground resonance, the
+# undamped aircraft's own instability): one Im, Re ±a. Near that edge the chain's length moves
+# the pair through the bifurcation, not along a 1/N² curve — helicopter-hover, `xval calibrate
+# --seed 4242` set 8 (an 11.7 m blade at 44 rad/s): coalesced at N = 20 and 40 (Re 1.23 and
+# 0.36 /s), split at N = 80 (2.541/2.790 Hz), the N = 40 extrapolate 0.18 Hz off the 2N–N one
+# against a Richardson bar of 0.023. What changes smoothly is the pair's discriminant δ — a²
+# coalesced, −(gap/2)² split (s = c ± √δ) —: 1.517, 0.127, −0.613 (1/s)² at N = 20, 40, 80,
+# each change about half the last: δ's remaining change is about its last one, which moves
+# the pair's roots by up to √|δ_N − δ_N/2| (× COALESCENCE_SAFETY).
+COALESCED = 1e-8            # relative Im spread within which two roots are one coalesced pair
+COALESCENCE_SAFETY = 2.0
+
+
+def discriminants(lam):
+    """Per oscillating root (Im ascending): δ of the pair it belongs to — a² where a root of
+    the same Im (within COALESCED of |s|) mirrors it, Re ±a; else −(gap/2)², the gap to its
+    nearest root in Im (rad/s) — and whether it is coalesced."""
+    lam = np.asarray(lam, complex)
+    d, co = np.zeros(len(lam)), np.zeros(len(lam), bool)
+    for i, s in enumerate(lam):
+        gaps = np.abs(lam.imag - s.imag)
+        gaps[i] = np.inf
+        j = int(np.argmin(gaps)) if len(lam) > 1 else i
+        grows = abs(s.real) > GROWTH_TOL + GROWTH_REL * abs(s)
+        if j != i and gaps[j] <= COALESCED * abs(s) and grows and s.real * lam[j].real < 0:
+            d[i], co[i] = s.real ** 2, True
+        elif j != i:
+            d[i] = -(gaps[j] / 2) ** 2
+    return d, co
+
+
+def coalescence_error(lam, lam2, rows, cols, n):
+    """(the frequency error (Hz) of each root Richardson paired — rows at N, cols at N/2 —
+    that is coalesced in either model: COALESCENCE_SAFETY · √|δ_N − δ_N/2| / 2π, 0 elsewhere;
+    Re s of the N model's growing coalesced roots whose growth that change can undo: δ_N within
+    COALESCENCE_SAFETY · |δ_N − δ_N/2| of zero)."""
+    d, co = discriminants(lam)
+    d2, co2 = discriminants(lam2)
+    out = np.zeros(n)
+    moves = COALESCENCE_SAFETY * np.abs(d[rows] - d2[cols])
+    near = co[rows] | co2[cols]
+    out[rows[near]] = np.sqrt(COALESCENCE_SAFETY * moves[near]) / (2 * np.pi)
+    undone = rows[co[rows] & (d[rows] <= moves) & (lam.real[rows] > 0)]
+    return out, lam.real[undone]
 
 
 def _on_blades(f, kinds, speed_hz):
@@ -461,7 +515,9 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
     change), `frequency_error_hz` (the extrapolate's error against the N/2–N/4 one,
     bc.extrapolate_error; the linearisation's apart: at rest its first-order bound on the
     free aircraft's degenerate blade roots reaches Hz), the stability finding: `finding`
-    ('stable' or 'unstable'), `unstable` (Re s of every growing root, 1/s, also in the notes),
+    ('stable', 'unstable', or 'undecided' where the only growing roots are a coalesced pair
+    the chains' refinement can split: `coalescence_error`), `unstable` (Re s of every growing
+    root but those, 1/s, also in the notes), `coalescing` (theirs),
     `max_re_per_s` (the largest Re s of any root), `real_roots_per_s` (the non-oscillating
     roots beyond the rigid-body ones), `linearisation_error_hz` (what the engine's finite
     differences add: the error the two engines of this model do not share); `roots_hz`,
@@ -475,13 +531,21 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
     refine = segment_refinement(params, bc.checked_segments(s))
     s = {**s, "n_segments": refine * s["n_segments"]}
     t0 = time.perf_counter()
-    f, change, error, kinds, secs, n_dof, every, lin, sections = _frequencies(
+    f, change, error, kinds, secs, n_dof, every, lin, sections, undecided = _frequencies(
         linearised, params, s, free)
     grow = growing(every)
+    edge = np.isin(grow, undecided)
+    grow, edge = grow[~edge], grow[edge]
     real = np.sort(every.real[(np.abs(every.imag) <= 1e-9 * np.max(np.abs(every)))
                               & (np.abs(every) > RIGID_BODY)])
     notes = [note] + ([f"unstable: {len(grow)} growing root(s), Re s = "
-                       f"{np.round(grow, 4).tolist()} 1/s (> {GROWTH_TOL:g})"] if len(grow) else [])
+                       f"{np.round(grow, 4).tolist()} 1/s (> {GROWTH_TOL:g} + "
+                       f"{GROWTH_REL:g} |s|)"] if len(grow) else [])
+    if len(edge):
+        notes.append(f"undecided: {len(edge)} coalesced root(s) at the edge of ground "
+                     f"resonance, Re s = {np.round(edge, 4).tolist()} 1/s, which the chains' "
+                     f"refinement can undo (the pair's discriminant moves by as much from N/2 "
+                     f"to N)")
     if refine > 1:
         notes.append(f"chains ×{refine}: the N/2 chain's blade segments within "
                      f"{ENGINE_TENSION_SPAN:g} tension lengths at the root")
@@ -493,8 +557,9 @@ def aircraft_modes(linearised, params: dict, settings: dict | None, free: bool,
     up = up[f[up] <= np.max(f[order][:k])]
     return LeafModes(frequencies_hz=blade_f[order][:k], labels=_labels(kinds)[:k],
                        settings=s, notes=notes,
-                       extra={"finding": "unstable" if len(grow) else "stable",
-                              "unstable": grow.tolist(),
+                       extra={"finding": "unstable" if len(grow) else
+                              "undecided" if len(edge) else "stable",
+                              "unstable": grow.tolist(), "coalescing": edge.tolist(),
                               "max_re_per_s": float(every.real.max()),
                               "real_roots_per_s": real.tolist(),
                               "fixed_frame_hz": f[order][:k],

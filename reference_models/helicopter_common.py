@@ -477,10 +477,10 @@ def coalescence_error(lam, lam2, rows, cols, n):
     d, co = discriminants(lam)
     d2, co2 = discriminants(lam2)
     out = np.zeros(n)
-    moves = COALESCENCE_SAFETY * np.abs(d[rows] - d2[cols])
+    moves = np.abs(d[rows] - d2[cols])
     near = co[rows] | co2[cols]
-    out[rows[near]] = np.sqrt(COALESCENCE_SAFETY * moves[near]) / (2 * np.pi)
-    undone = rows[co[rows] & (d[rows] <= moves) & (lam.real[rows] > 0)]
+    out[rows[near]] = COALESCENCE_SAFETY * np.sqrt(moves[near]) / (2 * np.pi)
+    undone = rows[co[rows] & (d[rows] <= COALESCENCE_SAFETY * moves) & (lam.real[rows] > 0)]
     return out, lam.real[undone]
 
 

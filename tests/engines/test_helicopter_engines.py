@@ -555,7 +555,7 @@ def test_chains_refined_where_the_blade_is_a_string():
     assert any("chains ×2" in n for n in e.notes)
 
 
-@pytest.mark.parametrize("rate", [1.0, 0.5], ids=["first-order", "second-order"])
+@pytest.mark.parametrize("rate", [1.0, 1 / 3], ids=["first-order", "second-order"])
 def test_a_coalesced_pairs_bar_covers_its_split(rate):
     """Closed form: two roots s = iω₀ ± √δ (coalesced, Re ±√δ, while δ > 0; split, Im ω₀ ±
     √−δ, below) whose discriminant converges as δ(h) = δ∞ + k hᵖ with the segment length h

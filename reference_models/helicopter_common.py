@@ -429,7 +429,7 @@ def _frequencies(linearised, params, s, free):
         # 4/3 of the N model's and 1/3 of the N/2 one's, each its own: the coarse model's
         # rounding can be the larger (helicopter-hover's ninth calibration set at 66 rad/s, a
         # 16.24 Hz root: Exudyn–MuJoCo 1.7e-8 apart at N = 40, 1.7e-6 at N = 20)
-        bar, undecided = coalescence_error(lam, lam2, rows, cols, len(f))
+        bar, undecided = coalescence_error(lam, lam2, rows, cols)
         error = np.maximum(error, bar)
         lin_ext = np.full_like(lin, np.nan)
         lin_ext[rows] = (4 * lin[rows] + lin2[cols]) / 3
@@ -469,14 +469,14 @@ def discriminants(lam):
     return d, co
 
 
-def coalescence_error(lam, lam2, rows, cols, n):
+def coalescence_error(lam, lam2, rows, cols):
     """(the frequency error (Hz) of each root Richardson paired — rows at N, cols at N/2 —
     that is coalesced in either model: COALESCENCE_SAFETY · √|δ_N − δ_N/2| / 2π, 0 elsewhere;
     Re s of the N model's growing coalesced roots whose growth that change can undo: δ_N within
     COALESCENCE_SAFETY · |δ_N − δ_N/2| of zero)."""
     d, co = discriminants(lam)
     d2, co2 = discriminants(lam2)
-    out = np.zeros(n)
+    out = np.zeros(len(lam))
     moves = np.abs(d[rows] - d2[cols])
     near = co[rows] | co2[cols]
     out[rows[near]] = COALESCENCE_SAFETY * np.sqrt(moves[near]) / (2 * np.pi)

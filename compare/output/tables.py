@@ -72,7 +72,10 @@ def calibration_tables(d: dict) -> list:
              _g(d["widest_window"]) + (f" ({' vs '.join(at['pair'])} {at['channel']}, "
                                        f"set {at['set']})" if at else "")
              + (f"; {w['over_100']} of {w['opened']} > 100×, p95 {_g(w['p95'])}"
-                if (w := d.get("windows")) and w["opened"] else ""),
+                if (w := d.get("windows")) and w["opened"] else "")
+             + (f"; typical {_g(t['widest']['median'])} ({t['widest']['pair'].replace('|', ' vs ')}"
+                f" {t['widest']['channel']})"
+                if (t := (d.get("windows") or {}).get("typical")) and t["widest"] else ""),
              str(len(d["skipped"]))]]
     per = [[s, str(o["pairs"]), str(o.get("unresolved", 0)), _g(o["coverage"]),
             _g(o["sharpness"]),

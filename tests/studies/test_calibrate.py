@@ -131,7 +131,31 @@ def test_the_windows_spread_says_how_many_are_wide():
                                 {"set": 1, "pair": "a|c", "channel": "y", "window": 150.0}]
     assert w["p95"] == pytest.approx(8522.5)
     assert cal._windows([]) == {"opened": 0, "over_100": 0, "over_100_by_pair": {},
-                                "over_100_at": [], "median": None, "p95": None}
+                                "over_100_at": [], "median": None, "p95": None,
+                                "typical": {"widest": None, "over_100": 0, "of": 0}}
+
+
+def test_the_typical_window_tells_chance_from_a_bound_wide_by_design():
+    # 50 channels × 20 sets of independent errors of spread σ under a bound 3σ: a window
+    # passes 100 with probability P(|z| < 0.03) = 0.0239 (the normal law), 24 of 1000
+    # expected; each channel's median window is 3 / |z| at |z|'s median 0.6745, 4.45. One
+    # pair whose runs share their error (deviation 1e-6 σ at every set) is wide as a rule.
+    rng = np.random.default_rng(5)
+    chance = [(3 / abs(z), "a|b", k, f"c{j}") for j in range(50)
+              for k, z in enumerate(rng.standard_normal(20))]
+    w = cal._windows(chance)
+    assert 24 - 3 * 24**0.5 <= w["over_100"] <= 24 + 3 * 24**0.5, w["over_100"]
+    assert max(x[0] for x in chance) > 100
+    t = w["typical"]
+    assert (t["over_100"], t["of"]) == (0, 50)
+    medians = [np.median([x[0] for x in chance if x[3] == f"c{j}"]) for j in range(50)]
+    assert np.median(medians) == pytest.approx(3 / 0.6745, rel=0.1)
+    assert t["widest"]["median"] == pytest.approx(max(medians))
+    shared = [(3e6 * (1 + 0.1 * k), "a|c", k, "x") for k in range(20)]
+    t = cal._windows(chance + shared + [(1e9, "a|d", 0, "y")])["typical"]
+    assert (t["over_100"], t["of"]) == (1, 51)
+    assert t["widest"] == {"pair": "a|c", "channel": "x", "median": pytest.approx(3e6 * 1.95),
+                           "sets": 20}
 
 
 def test_a_true_error_at_round_off_tests_no_error_bar():

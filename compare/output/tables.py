@@ -64,19 +64,24 @@ CALIBRATION_HEADER = ["scene", "samples", "comparisons", "disagree", "coverage",
                       "widest window", "skipped"]
 
 
+def _widest_cell(d: dict) -> str:
+    """The widest window, where it is, how the windows spread and the widest typical one."""
+    at, w = d.get("widest_at") or {}, d.get("windows") or {}
+    cell = _g(d["widest_window"])
+    if at:
+        cell += f" ({' vs '.join(at['pair'])} {at['channel']}, set {at['set']})"
+    if w.get("opened"):
+        cell += f"; {w['over_100']} of {w['opened']} > 100×, p95 {_g(w['p95'])}"
+    if top := (w.get("typical") or {}).get("widest"):
+        pair = top["pair"].replace("|", " vs ")
+        cell += f"; typical {_g(top['median'])} ({pair} {top['channel']})"
+    return cell
+
+
 def calibration_tables(d: dict) -> list:
     """`xval calibrate`'s JSON as its two tables: the scene's row, and one row per solver."""
-    at = d.get("widest_at") or {}
     rows = [[d["scene"], str(d["samples"]), str(d["comparisons"]), str(len(d["disagree"])),
-             _g(d["coverage"]), _g(d["sharpness"]),
-             _g(d["widest_window"]) + (f" ({' vs '.join(at['pair'])} {at['channel']}, "
-                                       f"set {at['set']})" if at else "")
-             + (f"; {w['over_100']} of {w['opened']} > 100×, p95 {_g(w['p95'])}"
-                if (w := d.get("windows")) and w["opened"] else "")
-             + (f"; typical {_g(t['widest']['median'])} ({t['widest']['pair'].replace('|', ' vs ')}"
-                f" {t['widest']['channel']})"
-                if (t := (d.get("windows") or {}).get("typical")) and t["widest"] else ""),
-             str(len(d["skipped"]))]]
+             _g(d["coverage"]), _g(d["sharpness"]), _widest_cell(d), str(len(d["skipped"]))]]
     per = [[s, str(o["pairs"]), str(o.get("unresolved", 0)), _g(o["coverage"]),
             _g(o["sharpness"]),
             "; ".join(f"{n}× {why}" for why, n in o["left_out"].items()) or "—"]

@@ -222,15 +222,14 @@ def roots(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False
     and rigid-body alike — and its eigenvector in multi-blade coordinates, the coordinate
     names, the seconds the engine spent linearising and, for the lowest `vary` oscillating
     roots, (|δs| the engine's finite-difference step × FD_VARY makes — first order, a cluster
-    by its Gershgorin discs: compare.physics.eigen.change —, the eigen solve's round-off
-    bound, |δs| the sections' rotary inertia makes where `sections`, first order: the change on
-    removing it), NaN for the others; None where `vary` is 0. The sections' shift is taken at
-    rest only:
-    there, removing them leaves the paper's beams exactly (Exudyn without them meets mstmm on
-    the differential modes to 1e-7); spinning, a rigid segment keeps its torsion inertia's
-    centrifugal moment on flap, which the paper's blade has not (helicopter-hover at its
-    defaults: flap differential 1 moves 9.0e-4 without them, while mstmm sits 3.8e-5 from
-    the engine with them)."""
+    by its Gershgorin discs: compare.physics.eigen.change —, the eigen solve's spread
+    (eigen.solve_spread), |δs| the sections' rotary inertia makes where `sections`, first
+    order: the change on removing it), NaN for the others; None where `vary` is 0. The
+    sections' shift is taken at rest only: there, removing them leaves the paper's beams
+    exactly (Exudyn without them meets mstmm on the differential modes to 1e-7); spinning, a
+    rigid segment keeps its torsion inertia's centrifugal moment on flap, which the paper's
+    blade has not (helicopter-hover at its defaults: flap differential 1 moves 9.0e-4 without
+    them, while mstmm sits 3.8e-5 from the engine with them)."""
     K, D, names, secs = mbc_matrices(linearised, params, n, psi, free)
     m = len(names)
     A = _state(K, D)
@@ -282,7 +281,8 @@ def oscillating(linearised, params: dict, n: int, psi: float = 0.0, free: bool =
     coordinates, the coordinate names, the seconds the engine spent linearising, every root
     (`roots`: real ones included, for the stability finding) and, for the lowest `vary`, each
     oscillating root's linearisation error (Hz; NaN beyond): the change the step × FD_VARY
-    makes over 1 − 1/FD_VARY, plus the eigen solve's round-off bound — and the first-order
+    makes over 1 − 1/FD_VARY, × LINEARISATION_SAFETY, plus the eigen solve's spread (with its
+    own safety: compare.physics.eigen.solve_spread) — and the first-order
     shift its sections' rotary inertia makes (Hz; `roots`). The aircraft's finite
     differences are bound by rounding, not by their h² truncation as the beams' chains are
     (beam_chain_common.quadratic_modes): M is ill-conditioned by the 1e-9 kg frames (Exudyn's
@@ -294,7 +294,9 @@ def oscillating(linearised, params: dict, n: int, psi: float = 0.0, free: bool =
     err = shift = None
     if moved is not None:
         moved = moved[:, sel][:, order] / (2 * np.pi)
-        err, shift = moved[0] / (1 - 1 / FD_VARY) + moved[1], moved[2]
+        # the safety on the step's change only: the spread carries its own (SPREAD_SAFETY)
+        err = bc.LINEARISATION_SAFETY * moved[0] / (1 - 1 / FD_VARY) + moved[1]
+        shift = moved[2]
         shift = None if np.isnan(shift).all() else shift
     return lam[sel][order], V[:, sel][:, order], names, secs, lam, err, shift
 
@@ -434,8 +436,7 @@ def _frequencies(linearised, params, s, free):
         lin_ext = np.full_like(lin, np.nan)
         lin_ext[rows] = (4 * lin[rows] + lin2[cols]) / 3
         lin = lin_ext
-    return (f, change, error, kinds, secs, len(names), every, bc.LINEARISATION_SAFETY * lin,
-            sections, undecided)
+    return f, change, error, kinds, secs, len(names), every, lin, sections, undecided
 
 
 # Two roots coalesce where a regressive lag root meets a body mode (ground resonance, the

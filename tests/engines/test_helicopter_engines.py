@@ -374,22 +374,22 @@ def test_all_modes_named_at_once_as_one_by_one(free, speed):
     assert {k for _, k, _ in names_all} >= {"collective", "cyclic", "differential"}
 
 
-def test_the_engine_pair_sees_a_1e_5_blade_stiffness_error_root_by_root():
+def test_the_engine_pair_sees_a_1e_7_blade_stiffness_error_root_by_root():
     """The engines build one aircraft, so they are compared root by root (metrics.by_root)
     within their own linearisation estimates (the finite differences' rounding, the eigen
-    solve's measured round-off) over a 1e-11 floor. Blade E × (1 + 1e-5) in Exudyn alone
-    moves the blade roots by up to 5e-6 (f ∝ √E at rest, less spinning): most roots must
-    disagree (measured 13 of 17, 12 with the round-off bound; the constant 5e-7 fitted before
-    missed all below E × (1 + 1e-6)). Honest, none does."""
+    solve's measured spread) over a 1e-11 floor. Blade E × (1 + 1e-7) in Exudyn alone moves
+    the blade roots by up to 5e-8 (f ∝ √E at rest, less spinning): at least 8 of the 17
+    roots must disagree (measured 9; 7 while the step's safety × 3 multiplied the spread's
+    own × 3 too; 13 and 14 of 17 at 1e-6 and 1e-5). Honest, none does."""
     sc = get_scene("helicopter-clamped")
     ex, mj = solvers.get_solver("exudyn"), solvers.get_solver("mujoco")
     b = solvers.modes(sc, mj, P)
     nominal = sc.verdicts(P, [solvers.modes(sc, ex, P), b])
     assert len(nominal) >= 13 and all(c.channel.startswith("root") for c in nominal)
     assert [c.verdict for c in nominal] == ["agree"] * len(nominal)
-    a = solvers.modes(sc, ex, {**P, "blade_E": P["blade_E"] * (1 + 1e-5)})
+    a = solvers.modes(sc, ex, {**P, "blade_E": P["blade_E"] * (1 + 1e-7)})
     seeded = [c.verdict for c in sc.verdicts(P, [a, b])]
-    assert seeded.count("disagree") >= 10, seeded
+    assert seeded.count("disagree") >= 8, seeded
 
 
 def test_the_engine_pair_agrees_where_a_mixed_root_is_named_two_ways():

@@ -296,8 +296,7 @@ def oscillating(linearised, params: dict, n: int, psi: float = 0.0, free: bool =
         moved = moved[:, sel][:, order] / (2 * np.pi)
         # the safety on the step's change only: the spread carries its own (SPREAD_SAFETY)
         err = bc.LINEARISATION_SAFETY * moved[0] / (1 - 1 / FD_VARY) + moved[1]
-        shift = moved[2]
-        shift = None if np.isnan(shift).all() else shift
+        shift = None if np.isnan(moved[2]).all() else moved[2]
     return lam[sel][order], V[:, sel][:, order], names, secs, lam, err, shift
 
 

@@ -166,7 +166,7 @@ def build(L, spin, n_blade, n_shaft, n_tail, clamped):
 # the aircraft's, and the dense products cost O(n²) per member (46 s of a 54 s solve of a
 # refined blade mesh). Each entry's terms are summed in the order the dense products add
 # them (ascending inner index, zeros skipped), so K, G and M are those of the dense assembly
-# bit for bit (checked at ten parameter sets, refined meshes included).
+# bit for bit (checked at eight parameter sets, refined meshes included).
 _FIELD_ROWS = ((0, 0, 1.0), (2, 1, 1.0), (3, 5, 1.0), (4, 2, 1.0), (5, 4, -1.0), (6, 3, 1.0))
 
 

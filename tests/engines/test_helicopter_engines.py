@@ -9,6 +9,8 @@ recursion in Exudyn, MuJoCo's composite rigid bodies and finite differences) on 
 the blade's own modes on a clamped root at r_H: the rotating-beam MuJoCo leaf, a separate
 model; (4) mstmm (the paper's transfer matrices): at rest for every mode (no frame question),
 spinning for the differential modes, within the engines' stated blade allowance."""
+import functools
+
 import mujoco
 import numpy as np
 import pytest
@@ -473,6 +475,20 @@ def test_the_engine_pair_agrees_at_a_slow_regressive_lag_root():
         [c.decided_by for c in got if c.verdict != "agree"]
 
 
+def _set_9_of_seed_11(sc):
+    from compare.workflows.calibrate import sample
+    return sample(sc, 20, 11)[9][1]
+
+
+@functools.cache
+def _exudyn_at_66(scene: str, n: int):
+    """Exudyn with n segments at calibration set 9 of seed 11 (Ω 66.4 rad/s), once per worker:
+    two tests read the hovering aircraft's N = 40 run."""
+    sc = get_scene(scene)
+    return solvers.modes(sc, solvers.get_solver("exudyn"), _set_9_of_seed_11(sc),
+                         settings={"n_segments": n})
+
+
 def test_the_engine_pair_agrees_at_66_rad_s():
     """helicopter-hover's calibration set 9 (`sample(scene, 20, 11)[9]`, Ω 66.4 rad/s): two
     roots the engines put apart beyond their estimates, each for a reason of its own — 5.68 Hz,
@@ -480,10 +496,9 @@ def test_the_engine_pair_agrees_at_66_rad_s():
     armature coupled it to the rotor, I_rotor/armature: now held as Exudyn holds it, 1.6e-8),
     and 16.24 Hz, 5.7e-7 apart after extrapolating from N/2 = 20 segments, whose rounding is
     100 × N = 40's (the N/2 model's linearisation error now counted). Every root agrees."""
-    from compare.workflows.calibrate import sample
     sc = get_scene("helicopter-hover")
-    p = sample(sc, 20, 11)[9][1]
-    runs = [solvers.modes(sc, solvers.get_solver(n), p) for n in ("exudyn", "mujoco")]
+    p = _set_9_of_seed_11(sc)
+    runs = [_exudyn_at_66(sc.name, 40), solvers.modes(sc, solvers.get_solver("mujoco"), p)]
     got = sc.verdicts(p, runs)
     assert len(got) >= 10 and [c.verdict for c in got] == ["agree"] * len(got), \
         [c.decided_by for c in got if c.verdict != "agree"]
@@ -514,9 +529,9 @@ def test_the_aircraft_converges_as_the_segment_length_squared():
     assert abs(ext - want[i]) <= abs(ext - got[2]), (ext, want[i])
 
 
-@pytest.mark.parametrize("scene, k, least", [("helicopter-clamped", 9, 1.0),
-                                             ("helicopter-hover", 9, 0.9)])
-def test_the_extrapolates_error_bars_hold_at_66_rad_s(scene, k, least):
+@pytest.mark.parametrize("scene, least", [("helicopter-clamped", 1.0),
+                                          ("helicopter-hover", 0.9)])
+def test_the_extrapolates_error_bars_hold_at_66_rad_s(scene, least):
     """Calibration set 9 of both aircraft (`sample(scene, 20, 11)[9]`, Ω 66.4 rad/s), Exudyn
     at N = 40 against its own 2N–N extrapolate (the calibration's truth, `mode_bars`): root by
     root, the bar of the extrapolate — its distance to the N/2–N/4 one over 7, × 2, only where
@@ -526,12 +541,8 @@ def test_the_extrapolates_error_bars_hold_at_66_rad_s(scene, k, least):
     sharp: the median error is ≥ 0.1 of its bar (the whole N/2–N change: 0.006 over the
     calibration). Without the ratio's test one clamped root (its changes shrinking 3.9, then
     3.3 × per halving) is 2.6 × its bar; without the × 2, hover's 4.46 Hz root is 1.9 ×."""
-    from compare.workflows.calibrate import mode_bars, sample
-    sc = get_scene(scene)
-    p = sample(sc, 20, 11)[k][1]
-    run, truth = (solvers.modes(sc, solvers.get_solver("exudyn"), p, settings={"n_segments": n})
-                  for n in (40, 80))
-    bars = mode_bars(run, truth)
+    from compare.workflows.calibrate import mode_bars
+    bars = mode_bars(_exudyn_at_66(scene, 40), _exudyn_at_66(scene, 80))
     ratio = np.array([bars["true"][c] / bars["estimate"][c] for c in bars["true"]])
     assert len(ratio) >= 14 and np.mean(ratio <= 1) >= least, np.round(ratio, 2)
     assert np.median(ratio) >= 0.1, np.round(ratio, 2)

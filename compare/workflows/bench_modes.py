@@ -224,10 +224,15 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
             knobs = [k for k in rungs[0] if any(r[k] != rungs[0][k] for r in rungs)]
             kind = "mesh" if any(k.endswith(MESH_SUFFIXES) for k in knobs) else "tolerance"
 
+            def rung(i, s=s, rungs=rungs, label=label, knobs=knobs, kind=kind, seen=seen):
+                try:
+                    s.info(sc).check(rungs[i])
+                except ValueError:
+                    return None      # a setting the leaf refuses ends the ladder, as in bench
+                return _rung(call, s, rungs[i], label, kind, knobs, ref, seen, repeats, log)
+
             # one rung that does not halve the error ends a ladder: a finer mesh costs 2–8×
-            rows += walk(rungs, start, lambda i, s=s, rungs=rungs, label=label, knobs=knobs,
-                          kind=kind, seen=seen: _rung(call, s, rungs[i], label, kind, knobs, ref,
-                                                      seen, repeats, log), patience=1)
+            rows += walk(rungs, start, rung, patience=1)
 
     # the reference's confirmation: the second reference solver's best rung (its defaults
     # when it was not benched)

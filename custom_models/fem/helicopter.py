@@ -294,15 +294,23 @@ def blade_refinement(L, spin, hub_radius):
     return max(1, int(np.ceil(span / (TENSION_SPAN * MODES_SETTINGS["blade_elements"]))))
 
 
-def modes_for(params, settings, clamped):
+def check_settings(settings: dict | None, t_out=None) -> dict:
+    """The settings over MODES_SETTINGS; ValueError (one line) for a mesh the mode-shape
+    stations cannot sit on (a bench's mesh ladder stops there)."""
     s = merge_settings(settings, MODES_SETTINGS, ())
-    L = helicopter_layout(params)
-    spin, n_modes = params["speed"], params["n_modes"]
     mesh = (s["blade_elements"], s["shaft_elements"], s["tail_elements"])
     if not all(isinstance(m, int) and m >= 1 for m in mesh) or mesh[0] % (BLADE_STATIONS - 1):
         raise ValueError(f"blade_elements must be a positive multiple of {BLADE_STATIONS - 1} "
                          f"(the mode-shape stations sit on nodes), shaft_elements and "
                          f"tail_elements positive integers; got {mesh}")
+    return s
+
+
+def modes_for(params, settings, clamped):
+    s = check_settings(settings)
+    L = helicopter_layout(params)
+    spin, n_modes = params["speed"], params["n_modes"]
+    mesh = (s["blade_elements"], s["shaft_elements"], s["tail_elements"])
     refine = blade_refinement(L, spin, params["hub_radius"])
     mesh = (mesh[0] * refine, *mesh[1:])
     w, shapes, unstable, rounding = frequencies(L, spin, mesh, clamped, n_modes)

@@ -52,3 +52,17 @@ def test_frequency_bench_unknown_solver_is_one_line_exit_2(tmp_path):
     rc, so, se = xval("bench", "rotating-beam", "--solver", "nope", "--out", str(tmp_path))
     assert rc == 2 and len(se.strip().splitlines()) == 1 and so == ""
     assert "nope" in se and not any(tmp_path.iterdir())
+
+
+def test_a_mesh_the_leaf_refuses_ends_the_ladder(tmp_path, monkeypatch):
+    """helicopter-clamped's fem puts its mode-shape stations on every (elements/6)-th node, so
+    it refuses 3 blade elements (a quarter of its 12): the mesh ladder 3, 6, 12 stops at 6
+    with no row for the refused mesh, as the time bench ends a ladder at a setting its leaf
+    refuses; the two meshes it ran converge (6 elements coarser than 12)."""
+    monkeypatch.setattr(bench_modes, "MESH_FACTORS", (0.25, 0.5, 1.0))
+    obj = bench("helicopter-clamped", ["fem"], repeats=1, out=tmp_path)
+    mesh = [r for r in obj["rows"] if r["solver"] == "fem" and r["method"] == "mesh"]
+    assert all(r["status"] == "ok" for r in obj["rows"]), [r.get("reason") for r in obj["rows"]]
+    assert sorted(r["knob"]["blade_elements"] for r in mesh) == [6, 12]
+    six, twelve = sorted(mesh, key=lambda r: r["knob"]["blade_elements"])
+    assert six["rel_error"] > twelve["rel_error"]

@@ -219,14 +219,15 @@ def run_bench_modes(sc: Scene, solver_names, overrides: dict, out, repeats: int 
 
     rows = []
     for s in chosen:
-        seen = {}
-        for label, rungs, start in ladders(s.info(sc), s.preset):
+        seen, info = {}, s.info(sc)
+        for label, rungs, start in ladders(info, s.preset):
             knobs = [k for k in rungs[0] if any(r[k] != rungs[0][k] for r in rungs)]
             kind = "mesh" if any(k.endswith(MESH_SUFFIXES) for k in knobs) else "tolerance"
 
-            def rung(i, s=s, rungs=rungs, label=label, knobs=knobs, kind=kind, seen=seen):
+            def rung(i, s=s, info=info, rungs=rungs, label=label, knobs=knobs, kind=kind,
+                     seen=seen):
                 try:
-                    s.info(sc).check(rungs[i])
+                    info.check(rungs[i])
                 except ValueError:
                     return None      # a setting the leaf refuses ends the ladder, as in bench
                 return _rung(call, s, rungs[i], label, kind, knobs, ref, seen, repeats, log)

@@ -140,8 +140,8 @@ def build(L, spin, n_blade, n_shaft, n_tail, clamped):
     diag = np.zeros(n)
     diag[hub] = np.concatenate([[h["m"]] * 3, h["I"]])
     diag[fus] = np.concatenate([[fu["m"]] * 3, fu["I"]])
-    K, G, M = (sparse.csr_matrix((n, n)) for _ in range(3))
-    M = M + sparse.diags(diag, format="csr")
+    K = G = sparse.csr_matrix((n, n))
+    M = sparse.diags(diag, format="csr")
     samplers = []
     for R, nodes, fields, shared, own, extra in members:
         E = field_map(R, shared, own, n)

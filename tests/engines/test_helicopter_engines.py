@@ -529,8 +529,11 @@ def test_the_aircraft_converges_as_the_segment_length_squared():
     assert abs(ext - want[i]) <= abs(ext - got[2]), (ext, want[i])
 
 
-@pytest.mark.parametrize("scene, least", [("helicopter-clamped", 1.0),
-                                          ("helicopter-hover", 0.9)])
+# clamped's twin computes two aircraft of its own (a minute, N = 80): slow; hover's shares its
+# N = 40 run with test_the_engine_pair_agrees_at_66_rad_s
+@pytest.mark.parametrize("scene, least", [
+    pytest.param("helicopter-clamped", 1.0, marks=pytest.mark.slow),
+    ("helicopter-hover", 0.9)])
 def test_the_extrapolates_error_bars_hold_at_66_rad_s(scene, least):
     """Calibration set 9 of both aircraft (`sample(scene, 20, 11)[9]`, Ω 66.4 rad/s), Exudyn
     at N = 40 against its own 2N–N extrapolate (the calibration's truth, `mode_bars`): root by
@@ -548,17 +551,40 @@ def test_the_extrapolates_error_bars_hold_at_66_rad_s(scene, least):
     assert np.median(ratio) >= 0.1, np.round(ratio, 2)
 
 
-def test_chains_refined_where_the_blade_is_a_string():
-    """helicopter-clamped, `sample(scene, 20, 777)[17]` (a 10 m blade at 66 rad/s): at N = 40
-    the N/2 chain's segments span 12.2 root tension lengths √(EI/T) and Exudyn's flap
-    differential 1 sat 0.079 Hz off the independent transfer matrices (mstmm) against its own
-    bar of 0.0071 Hz. The chains are refined ×2 there (×1 at the defaults), and the mode meets
-    mstmm within its bar."""
+def _string_blade():
+    """helicopter-clamped, `sample(scene, 20, 777)[17]`: a 10 m blade at 66 rad/s."""
     from compare.workflows.calibrate import sample
     sc = get_scene("helicopter-clamped")
-    p = sample(sc, 20, 777)[17][1]
+    return sc, sample(sc, 20, 777)[17][1]
+
+
+class _Linearised(Exception):
+    pass
+
+
+def test_the_refined_chains_are_the_ones_linearised():
+    """Where the blade is a string (`_string_blade`: at N = 40 the N/2 chain's segments span
+    12.2 root tension lengths √(EI/T)) the chains are refined ×2, ×1 at the defaults, and the
+    refined chain is what the engine linearises first (the physics: the slow test below)."""
+    sc, p = _string_blade()
     assert hc.segment_refinement(P, 40) == hc.segment_refinement(HP, 40) == 1
     assert hc.segment_refinement(p, 40) == 2
+    asked = []
+
+    def linearised(params, n, *args, **kwargs):
+        asked.append(n)
+        raise _Linearised
+    with pytest.raises(_Linearised):
+        hc.aircraft_modes(linearised, sc.resolve(p), {"n_segments": 40}, False, "")
+    assert asked == [80]
+
+
+@pytest.mark.slow
+def test_chains_refined_where_the_blade_is_a_string():
+    """`_string_blade` at N = 40, chains unrefined: Exudyn's flap differential 1 sat 0.079 Hz
+    off the independent transfer matrices (mstmm) against its own bar of 0.0071 Hz. Refined
+    ×2, the mode meets mstmm within its bar (an N = 80 chain: a minute)."""
+    sc, p = _string_blade()
     e = solvers.modes(sc, solvers.get_solver("exudyn"), p)
     m = solvers.modes(sc, solvers.get_solver("mstmm"), p)
     i, j = e.labels.index("flap differential 1"), m.labels.index("flap differential 1")

@@ -2,9 +2,10 @@
 
     python tools/trace_run.py run rotor-spinup --set torque=3.2 --set t_end=1 --out DIR
 
-Prints, for the command given: project files entered, calls of `get_scene`, `Solver.leaf`
-(and `LeafInfo` look-ups and builds), output-grid builds, settings checks (`merge_settings`, leaves'
-`check_settings`) and warm-up calls (a leaf's `simulate` on a two-point grid).
+Prints, for the command given: project files and functions entered, calls of `get_scene`,
+`Solver.leaf` (and `LeafInfo` look-ups and builds), output-grid builds, settings checks
+(`merge_settings`, leaves' `check_settings`) and warm-up calls (a leaf's `simulate` on a
+two-point grid).
 """
 import collections
 import sys
@@ -19,7 +20,7 @@ COUNTED = {"get_scene": "get_scene", "leaf": "Solver.leaf", "leaf_info": "leaf_i
 
 
 def main(argv):
-    calls, files, warm = collections.Counter(), set(), [0]
+    calls, files, warm = collections.Counter(), collections.defaultdict(set), [0]
 
     def prof(frame, event, arg):
         if event != "call":
@@ -27,7 +28,7 @@ def main(argv):
         code = frame.f_code
         if not code.co_filename.startswith(PROJECT):
             return
-        files.add(code.co_filename)
+        files[code.co_filename].add(code.co_name)
         if code.co_name in COUNTED:
             calls[COUNTED[code.co_name]] += 1
         if code.co_name == "simulate" and code.co_filename.startswith(PROJECT[1:3]):
@@ -43,7 +44,10 @@ def main(argv):
         rc = e.code
     finally:
         sys.setprofile(None)
-    print(f"exit {rc}; project files entered: {len(files)}", file=sys.stderr)
+    imported_only = sum(names == {"<module>"} for names in files.values())
+    print(f"exit {rc}; project files entered: {len(files)} ({imported_only} only imported: "
+          f"package markers, constants, numba kernels whose calls the profiler cannot see); "
+          f"functions entered: {sum(map(len, files.values()))}", file=sys.stderr)
     for name in COUNTED.values():
         print(f"  {name}: {calls[name]}", file=sys.stderr)
     print(f"  warm-up calls (simulate on a 2-point grid): {warm[0]}", file=sys.stderr)

@@ -339,7 +339,7 @@ PAPER_ALLOWANCES = {"hub_rate": paper_hub_allowance, "tip_angle": paper_tip_allo
 # 0.86–89 × that (seed 2026 set 7: 1.2e-11 m against 1.3e-13); the full d r ω / c is
 # 2.1–25 × it at five sets but 0.48 at seed 2026 set 7 (1.16e-11 m): the ringing's damping is
 # not modelled (docs/scenes/sail-deploy.md). The allowance is that bound; the verdicts rest on
-# the runs' summed bands, 7e-10 m and more even at dt = 2e-6. It was a constant 1e-12 m.
+# the runs' summed bands, 7e-10 m and more even at dt = 2e-6.
 def paper_length_allowance(params):
     """|Δ deployed length| [m] of the paper's model against a conservative one, bounded
     (above)."""

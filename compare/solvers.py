@@ -375,6 +375,8 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
       0.72–0.75, then 0.5; its true error was 2.3 × |y − y_half| against a factor 2): the ratio
       r measured at the run's own step, one more run at dt/4, and the geometric tail
       1/(1 − r) of the changes still to come (the ratio falls toward the asymptotic one);
+    - where the scene's forces kink (`Scene.kinks`), the larger of 2 |y − y_half| and the band
+      below, always: the error's size and sign jump between halvings (bearing-rotor's bump);
     - not shrinking (r ≥ 1, seen on any channel once the dt/4 run exists) while the change
       from 2·dt to dt/4 fell by less than 4 (an order-p ≥ 1 method's falls by 4^p): the runs
       are not converging but wander in a band — a mode the step does not resolve (sail-deploy's
@@ -402,7 +404,7 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
         return err
     seen = [c for c in scene.channels if np.max(d1[c]) > 10 * float(np.max(unseen[c]))]
     d0 = {c: np.abs(coarse.channels[c] - tr.channels[c]) for c in seen}
-    slow = [c for c in seen if not shrinks(d0[c], d1[c])]
+    slow = [c for c in seen if scene.kinks or not shrinks(d0[c], d1[c])]
     tr.scheme = f"{solver.info(scene).name} {tight.get('integrator')} dt {2 * tight['dt']:.17g}"
     tr.members = {c: np.stack([coarse.channels[c], half.channels[c]]) - tr.channels[c]
                   for c in scene.channels}
@@ -412,13 +414,19 @@ def _halving_error(scene, solver, params, tr, half, tight, unseen, timeout_s):
     quarter = _simulate(scene, solver, params, {**tight, "dt": tight["dt"] / 2}, timeout_s,
                         False, tr.t)
     _cost(tr, quarter)
-    tr.stats["error_estimate_by"] += f", dt {tight['dt'] / 2:g} (not asymptotic: {slow[0]})"
+    tr.stats["error_estimate_by"] += (f", dt {tight['dt'] / 2:g} "
+                                      + (f"(the forces' kinks: {scene.kinks})" if scene.kinks
+                                         else f"(not asymptotic: {slow[0]})"))
     if quarter.status != "ok":
         return err
     for c in seen:
         d2 = float(np.max(np.abs(half.channels[c] - quarter.channels[c])))
         r = d2 / np.max(d1[c])
-        if r >= 1 and d2 >= np.max(d0[c]) / 4:
+        if scene.kinks:
+            err[c] = np.maximum(err[c], band(tr.channels[c], half.channels[c],
+                                             quarter.channels[c]))
+            tr.estimators[c] = "band"
+        elif r >= 1 and d2 >= np.max(d0[c]) / 4:
             err[c] = band(tr.channels[c], half.channels[c], quarter.channels[c])
             tr.estimators[c] = "band"
         elif 0.5 < r < 1 and c in slow:

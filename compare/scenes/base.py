@@ -439,6 +439,12 @@ class Scene:
     # verdicts weigh each solver's own error from a tighter rerun (off where a rerun costs
     # more than the scene can pay; the allowances then carry the verdict alone)
     error_estimate: bool = True
+    # why the scene's forces have a derivative that jumps in time (a bump's edges), if they
+    # do: a fixed step straddles the jump at a fraction of itself that changes with the step,
+    # so its error's size and sign jump between halvings and one halving's change can fall
+    # short of it; a fixed step's estimate then takes a run at dt/4 and the band of the run and
+    # its two refinements (`solvers._halving_error`)
+    kinks: str = ""
     # the bench's reference: the first runs tightest, the second confirms it (names only)
     reference_solvers: tuple[str, ...] = ()
     # the solvers `xval bench` walks unless told (default: all): a solver of another model has

@@ -297,6 +297,13 @@ BEARING_ROTOR = TimeScene(
                 **{c: ("abs", 3e-16) for c in ("journal_a_x", "journal_a_y", "journal_b_x",
                                                 "journal_b_y")}},
     key_channel="spin_rate",
+    # h(x) = H(1 − (x/w)²)² is C¹: its curvature jumps by 8H/w² at the edges, and the damper's
+    # c·ḣ kinks there. MuJoCo's RK4 (the one fixed step here) converges at order 4 without the
+    # bump (its error 16–18 × smaller per halving) and erratically with it: `xval calibrate
+    # bearing-rotor --seed 5150` set 4, spin_angle at t_end 0.3 s 1.3e-7, 2.0e-8, 1.3e-8, −8.7e-9
+    # rad off the quaternion model at dt 1e-4 … 1.25e-5, so 2|y − y_half| said 1.4e-8
+    kinks="the bearing defect's lift h(x) = H(1 − (x/w)²)² has a curvature that jumps at the "
+          "bump's edges",
     energy_scale_channels=("kinetic", "motor_work"),
     reference_solvers=("quaternion",),
     check=check,

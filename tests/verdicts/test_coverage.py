@@ -91,3 +91,34 @@ def test_an_engine_whose_runs_do_not_converge_still_bounds_its_error():
     1.1·dt, 1.2·dt the leaf declares (`COARSER_DT`; seeded: |y₁.₂ − y| alone contained 0.45)."""
     _check(coverage.study("sail-deploy", 4, seed=0, solver_names=["exudyn"],
                           fixed={"t_end": 0.05, "output_dt": 0.01}))
+
+
+# `xval calibrate bearing-rotor --seed 5150` set 4 (t_end 0.3 s)
+KINKED = {"m": 3.7031748041940293, "l": 0.5047995880788702, "J_t": 0.35673998200060647,
+          "J_p": 0.001367164736863001, "k_b": 1325241.862191129, "c_b": 179.35155346791026,
+          "k_axial": 701648.0009857398, "defect_height": 2.4210646309722894e-05,
+          "defect_width": 0.06878751100684298, "motor_stall_torque": 0.9610731653716844,
+          "motor_no_load_speed": 117.21966192685547, "bearing_drag": 0.0006092710616137729,
+          "mu": 0.03941763430742045, "r_j": 0.011886386145548078, "t_end": 0.3}
+
+
+def test_an_engine_on_a_kinked_force_still_bounds_its_error():
+    """MuJoCo's RK4 on bearing-rotor: the bump's lift h(x) = H(1 − (x/w)²)² has a curvature
+    that jumps at its edges, so the step's error jumps in size and sign between halvings
+    (spin_angle 2.0e-8, 1.3e-8, −8.7e-9 rad off at dt, dt/2, dt/4): 2|y − y_half| said 1.4e-8
+    rad against a true 2.0e-8, and the pair with the quaternion model disagreed. The scene
+    declares its kinks (`Scene.kinks`) and the bar takes the band of dt, dt/2 and dt/4. The
+    truth is the quaternion model at rtol 1e-13 (its own bar 4e-10 rad)."""
+    from compare import solvers
+    from compare.scenes import get_scene
+    sc = get_scene("bearing-rotor")
+    p = sc.resolve(KINKED)
+    t = sc.output_grid(p)
+    q, m = solvers.get_solver("quaternion"), solvers.get_solver("mujoco")
+    truth = solvers.simulate(sc, q, p, {**solvers.settings_for(q, sc.name, t_out=t),
+                                        "rtol": 1e-13, "atol": 1e-15})
+    run = solvers.simulate(sc, m, p, solvers.settings_for(m, sc.name, t_out=t),
+                           estimate_error=True)
+    for c in ("spin_angle", "journal_b_y", "spin_rate"):
+        true = abs(run.channels[c] - truth.channels[c])
+        assert (true <= run.errors[c]).all(), (c, float(max(true - run.errors[c])))

@@ -91,8 +91,8 @@ def explain(params, comparisons, modes_at, tolerances):
     def both_differential(c):
         """A differential mode both solvers of `c` name so: match_modes pairs within a family
         both name, so a channel whose family both name is such a pair; one paired by value
-        across kinds (fem's torsion differential 1 with an engine's torsion cyclic 1, seed
-        2026 set 17, the engines' torsion differential beyond their eighth mode) is not."""
+        across kinds is not (a differential mode above the other's last mode, whose twin is
+        past that list, pairs with none: fem's torsion differential 1 at seed 2026 set 17)."""
         return "differential" in c.channel and all(family(c.channel) in families(s)
                                                    for s in (c.a, c.b))
 

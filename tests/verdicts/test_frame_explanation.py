@@ -81,12 +81,19 @@ def test_every_engine_paper_difference_at_set_17_is_the_frame():
     comparisons, rows = _explain()
     bad = [c for c in comparisons if c.verdict == Verdict.DISAGREE]
     assert all((c.a in mstmm_frames.ENGINES) != (c.b in mstmm_frames.ENGINES) for c in bad)
-    assert len(rows) == len(bad) >= 10
+    assert len(rows) == len(bad) >= 8
     assert all(r["frame"] for r in rows), [r["why"] for r in rows if not r["frame"]]
-    # fem's torsion differential 1 met the engines' torsion cyclic 1 by value, across kinds:
-    # a frame question, not a differential mode both name
-    cross = [r for r in rows if r["mode"] == "torsion differential 1"]
-    assert cross and all(r["why"].startswith("the frame assumption") for r in cross)
+    # the paper's torsion root (15.20888 Hz, fem's differential) lies above the engines' last
+    # mode, their torsion cyclic 1 (15.15316 Hz), and they list no torsion collective or
+    # differential: its twin is past their list, so it pairs with none (it met the torsion
+    # cyclic across kinds, and that pair's difference was put down to the frame)
+    at_speed, _ = _runs()
+    unpaired = metrics.unpaired_modes(list(at_speed.values()), SCENE.tolerances_for(
+        calibrate.sample(SCENE, 20, 2026)[17][1]))
+    torsion = [u for u in unpaired if u["mode"].startswith("torsion")
+               and u["solver"] in mstmm_frames.PAPER
+               and set(mstmm_frames.ENGINES) & {u["a"], u["b"]}]
+    assert len(torsion) == 4 and all("past the other's list" in u["reason"] for u in torsion)
 
 
 def test_a_seeded_one_percent_paper_error_stays_unexplained():

@@ -332,7 +332,7 @@ def match_modes(fa: list, la: list, fb: list, lb: list, why: dict | None = None
         for side, mine, theirs, f in (("a", la, lb, fb), ("b", lb, la, fa)):
             used = used_a if side == "a" else used_b
             for i in sorted(set(range(len(mine))) - used):
-                name = mine[i] if i < len(mine) else ""
+                name = _label(mine, i)
                 label = ("" if not name else f"label {name!r} not among the other's; "
                          if family(name) not in {family(n) for n in theirs if n} else
                          f"the other lists fewer {family(name)!r} modes, each nearer its own; ")
@@ -359,7 +359,8 @@ def _past_list(f: float, label: str, labels: list, other: list, other_labels: li
             f"fewer of: its twin is past the other's list")
 
 
-def _label(labels, i):
+def _label(labels, i) -> str:
+    """Mode i's label, "" where the solver gives none."""
     return labels[i] if i < len(labels) else ""
 
 
@@ -382,7 +383,7 @@ def unpaired_modes(results: list[Modes], tolerances: dict | None = None) -> list
                         why)
             for (side, i), reason in sorted(why.items()):
                 m = a if side == "a" else b
-                lab = m.labels[i] if i < len(m.labels) else ""
+                lab = _label(m.labels, i)
                 out.append({"a": a.solver, "b": b.solver, "solver": m.solver,
                             "mode": lab or f"mode {i + 1}",
                             "frequency_hz": float(m.frequencies_hz[i]), "reason": reason})

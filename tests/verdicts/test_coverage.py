@@ -7,6 +7,8 @@ true/estimate ≥ 0.1). Points near each scene's defaults, short horizons to sta
 Reproduce the table: `python -m pytest tests/verdicts/test_coverage.py -m slow -s -q`."""
 import pytest
 
+from compare import solvers
+from compare.scenes import get_scene
 from compare.workflows import coverage
 
 # scene -> (fixed parameters: a short horizon, the reference solver or None for each
@@ -109,8 +111,6 @@ def test_an_engine_on_a_kinked_force_still_bounds_its_error():
     rad against a true 2.0e-8, and the pair with the quaternion model disagreed. The scene
     declares its kinks (`Scene.kinks`) and the bar takes the band of dt, dt/2 and dt/4. The
     truth is the quaternion model at rtol 1e-13 (its own bar 4e-10 rad)."""
-    from compare import solvers
-    from compare.scenes import get_scene
     sc = get_scene("bearing-rotor")
     p = sc.resolve(KINKED)
     t = sc.output_grid(p)

@@ -1,7 +1,7 @@
 """A leaf as the rest of xval sees it — read once per leaf module, the only place that reads a
 leaf's attributes (`DEFAULT_SETTINGS`, `INTEGRATORS`, `ADAPTIVE`, `AUTO_DT`, `MODES_SETTINGS`,
-`ORDERS`, `KNOBS`, `KNOB_LIMITS`, `KNOB_HOLDS`, `COARSER_DT`, `JITTER_PROBE`, `check_settings`,
-`regimes`, `unbalance_response`) — and the accuracy knobs as types: `Fixed(dt)` or
+`ORDERS`, `KNOBS`, `KNOB_LIMITS`, `KNOB_HOLDS`, `KNOB_INTEGRATORS`, `COARSER_DT`, `JITTER_PROBE`,
+`check_settings`, `regimes`, `unbalance_response`) — and the accuracy knobs as types: `Fixed(dt)` or
 `Adaptive(rtol, atol)`, each with its tighter setting, its step count and its ladder (the shape
 of scipy's `OdeSolver`, which carries its own order, and diffrax's step-size controllers); a leaf's
 other discretisation knobs (`KNOBS`: a finite-difference step) as `Knob`s, each varied by the
@@ -131,11 +131,13 @@ class Knob:
     that its product with the knob stays (a leaf's `KNOB_HOLDS`): MuJoCo's press varies dt/tc
     at a fixed time constant tc = solref_factor·dt — at a fixed dt a larger factor softens the
     loop too, a change the dt halving already sees (17 × the sampling's at `xval calibrate
-    press --seed 777`'s set 9)."""
+    press --seed 777`'s set 9). `integrators`: the integrators the knob acts with (a leaf's
+    `KNOB_INTEGRATORS`; None: all): with any other it has no value and is not varied."""
     name: str
     order: float
     most: int | None = None
     holds: str | None = None
+    integrators: tuple | None = None
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -143,6 +145,8 @@ class Knob:
         return tuple(self.name.split("+"))
 
     def value(self, settings: dict) -> float | None:
+        if self.integrators is not None and settings.get("integrator") not in self.integrators:
+            return None
         v, h = settings.get(self.names[0]), settings.get(self.holds, 1.0)
         return float(v) if _number(v) and v > 0 and _number(h) and h > 0 else None
 
@@ -343,7 +347,8 @@ def _build(leaf: ModuleType) -> LeafInfo:
                     own_check=_has(leaf, "check_settings"),
                     batch_regimes=_has(leaf, "regimes"),
                     knobs=tuple(Knob(n, p, getattr(leaf, "KNOB_LIMITS", {}).get(n),
-                                     getattr(leaf, "KNOB_HOLDS", {}).get(n))
+                                     getattr(leaf, "KNOB_HOLDS", {}).get(n),
+                                     getattr(leaf, "KNOB_INTEGRATORS", {}).get(n))
                                 for n, p in getattr(leaf, "KNOBS", {}).items()),
                     coarser_dt=dict(getattr(leaf, "COARSER_DT", {})),
                     jitter_probe=dict(getattr(leaf, "JITTER_PROBE", {})))

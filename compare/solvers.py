@@ -250,7 +250,7 @@ def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
     if estimate_error and tr.status == "ok":
         if settings.get("dt") == "auto" and isinstance(tr.settings.get("dt"), (int, float)):
             settings = {**settings, "dt": tr.settings["dt"]}   # the step "auto" chose
-        tight = None
+        tight, at_tight = None, None
         if not _coarser_error(scene, solver, params, settings, tr, timeout_s):
             tight, factor, how = tighter_settings(solver.info(scene), settings)
             tr.stats["error_estimate_by"] = how
@@ -264,6 +264,7 @@ def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
             else:
                 unseen = _unseen_error(scene, solver, params, settings, tr, ref, tight,
                                        timeout_s)
+                at_tight = (ref, tight) if "rtol" in how else None
             if unseen is not None:
                 seen = (_halving_error(scene, solver, params, tr, ref, tight, unseen, timeout_s)
                         if "rtol" not in how else
@@ -271,7 +272,7 @@ def simulate(scene: Scene, solver: Solver, params: dict, settings: dict,
                          for c in scene.channels})
                 tr.errors = {c: seen[c] + unseen[c] for c in scene.channels}
         if tr.errors or tight is None:   # the step's own estimate held, or there is none
-            _knob_errors(scene, solver, params, settings, tr, timeout_s)
+            _knob_errors(scene, solver, params, settings, tr, timeout_s, at_tight)
     return tr
 
 
@@ -332,7 +333,7 @@ def _coarser_error(scene, solver, params, settings, tr, timeout_s) -> bool:
     return True
 
 
-def _knob_errors(scene, solver, params, settings, tr, timeout_s):
+def _knob_errors(scene, solver, params, settings, tr, timeout_s, at_tight=None):
     """Add each discretisation knob's error to the run's estimate — a knob the estimate does not
     vary would hide its error (lagrange-partial's 0.1° central differences: 14–1500 × the
     step's error on the press). Each knob alone one step tighter and one coarser (a factor 2
@@ -342,20 +343,29 @@ def _knob_errors(scene, solver, params, settings, tr, timeout_s):
     the tail's own uncertainty (p = 2: 1.58 · d1; the tail alone, 4/3 · d1, met the press's
     partial to 0.2–2 % against lagrange-exact, leaving its verdicts at Δ/bound 0.996–0.998);
     changes that do not shrink (r ≥ 1, or the coarse run failed): 2 × the running maximum of
-    the three runs' spread."""
-    for knob, tight in solver.info(scene).knob_reruns(settings):
+    the three runs' spread.
+    An error-controlled run's knobs are varied about its tight rerun (`at_tight`: that run and
+    its settings): a knob moves the steps, and at the run's own tolerance the tolerance's
+    error, which the tight rerun already bounds, moved with them as scatter (Exudyn's cap on
+    the step on bearing-rotor, `xval calibrate --seed 2026` set 0: its halving and doubling
+    each moved spin_rate by ~2.3e-7 rad/s, the run's own tolerance error at one output time,
+    r = 0.997, and the tail said 7.7e-5); about the tight rerun that scatter is 100× smaller,
+    the knob's own error (an interpolant's, not the tolerance's) as large."""
+    centre, base = at_tight or (tr, settings)
+    for knob, finer in solver.info(scene).knob_reruns(base):
         runs = [_simulate(scene, solver, params, s, timeout_s, False, tr.t)
-                for s in (tight, knob.tighter(settings, -1))]
+                for s in (finer, knob.tighter(base, -1))]
         _cost(tr, *runs)
         half, double = runs               # tighter, coarser
-        by = f"{knob.name} {knob.value(tight):g}" + \
-            (f" ({knob.holds} {tight[knob.holds]:g})" if knob.holds else "")
+        by = f"{knob.name} {knob.value(finer):g}" + \
+            (f" ({knob.holds} {finer[knob.holds]:g})" if knob.holds else "")
         if half.status != "ok":          # an estimate blind to a knob is no estimate
             _no_estimate(tr, f"{by}: {half.status} ({half.reason})")
             return
         tr.stats["error_estimate_by"] += f", {by}"
         for c in scene.channels:
-            y, d1 = tr.channels[c], np.abs(tr.channels[c] - half.channels[c])
+            y = centre.channels[c]
+            d1 = np.abs(y - half.channels[c])
             r = (np.max(d1) / max(np.max(np.abs(double.channels[c] - y)), 1e-300)
                  if double.status == "ok" else np.inf)
             r = max(r, 2.0 ** -abs(knob.order))

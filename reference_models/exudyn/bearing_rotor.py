@@ -59,7 +59,7 @@ INTEGRATORS = ("rk4", "rk67", "dopri5", "rk23", "generalized_alpha")   # rk23: E
 ADAPTIVE = ("dopri5", "rk23")
 # The adaptive output's cubic Hermite between step ends errs by h⁴·|y⁗|/384, which the tolerance
 # does not control: the step, once grown to its cap (the output step × max_step_ratio), resolves
-# the journals' bounce on the bearings (√(2 k_b/m): 320 rad/s at `xval calibrate bearing-rotor
+# the journals' bounce on the bearings (√(2 k_b/m): 450 rad/s at `xval calibrate bearing-rotor
 # --seed 6060` set 13) well enough for DOPRI5 but not for the interpolant: motor_work 3.85e-11 J
 # off between step ends (1e-13 at them), at rtol 1e-10 and 1e-12 alike, so the rtol/100 rerun
 # saw none of it; a cap of 1/2, 1/4, 1/8 left 5.8e-12, 3.5e-12, 9e-13. The cap is therefore a

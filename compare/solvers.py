@@ -341,7 +341,13 @@ def _knob_errors(scene, solver, params, settings, tr, timeout_s, at_tight=None):
     max |y_coarse − y| per channel give the geometric tail d1/(1 − r) of the changes still to
     come, r taken no smaller than the declared order's 2^-|p|, plus one more change r·d1 for
     the tail's own uncertainty (p = 2: 1.58 · d1; the tail alone, 4/3 · d1, met the press's
-    partial to 0.2–2 % against lagrange-exact, leaving its verdicts at Δ/bound 0.996–0.998);
+    partial to 0.2–2 % against lagrange-exact, leaving its verdicts at Δ/bound 0.996–0.998),
+    and no less than Richardson's coarse change |y_coarse − y|/(2^|p| − 1): a change that fell
+    by more than the order allows met a floor under the tighter run, not the limit
+    (lagrange-partial's Δβ on andrews-squeezer, `xval calibrate --seed 5150` set 6: β moved
+    1.43e-8 rad from 2Δβ to Δβ, then 5e-10 to Δβ/2, whose central differences round as δ/Δβ²;
+    the run was 5.7e-9 off the engines' far tighter runs and its bar said 3.9e-9); in the
+    asymptotic range it is the tail's first term, no more;
     changes that do not shrink (r ≥ 1, or the coarse run failed): 2 × the running maximum of
     the three runs' spread.
     An error-controlled run's knobs are varied about its tight rerun (`at_tight`: that run and
@@ -372,6 +378,9 @@ def _knob_errors(scene, solver, params, settings, tr, timeout_s, at_tight=None):
             err = (d1 * (1 / (1 - r) + r) if r < 1 else
                    band(y, half.channels[c],
                          *([double.channels[c]] if double.status == "ok" else [])))
+            if r < 1:                    # the coarse change at the declared order
+                err = np.maximum(err, np.abs(double.channels[c] - y)
+                                 / (2.0 ** abs(knob.order) - 1))
             tr.errors[c] = tr.errors.get(c, 0.0) + err
 
 

@@ -104,6 +104,19 @@ KINKED = {"m": 3.7031748041940293, "l": 0.5047995880788702, "J_t": 0.35673998200
           "mu": 0.03941763430742045, "r_j": 0.011886386145548078, "t_end": 0.3}
 
 
+def _bearing_run_and_truth(params, solver, rtol, atol):
+    """bearing-rotor at `params`: the solver's run with its error bar, and the quaternion
+    model's run at rtol, atol (the truth)."""
+    sc = get_scene("bearing-rotor")
+    p = sc.resolve(params)
+    t = sc.output_grid(p)
+    q, s = solvers.get_solver("quaternion"), solvers.get_solver(solver)
+    truth = solvers.simulate(sc, q, p, {**solvers.settings_for(q, sc.name, t_out=t),
+                                        "rtol": rtol, "atol": atol})
+    return solvers.simulate(sc, s, p, solvers.settings_for(s, sc.name, t_out=t),
+                            estimate_error=True), truth
+
+
 def test_an_engine_on_a_kinked_force_still_bounds_its_error():
     """MuJoCo's RK4 on bearing-rotor: the bump's lift h(x) = H(1 − (x/w)²)² has a curvature
     that jumps at its edges, so the step's error jumps in size and sign between halvings
@@ -111,14 +124,7 @@ def test_an_engine_on_a_kinked_force_still_bounds_its_error():
     rad against a true 2.0e-8, and the pair with the quaternion model disagreed. The scene
     declares its kinks (`Scene.kinks`) and the bar takes the band of dt, dt/2 and dt/4. The
     truth is the quaternion model at rtol 1e-13 (its own bar 4e-10 rad)."""
-    sc = get_scene("bearing-rotor")
-    p = sc.resolve(KINKED)
-    t = sc.output_grid(p)
-    q, m = solvers.get_solver("quaternion"), solvers.get_solver("mujoco")
-    truth = solvers.simulate(sc, q, p, {**solvers.settings_for(q, sc.name, t_out=t),
-                                        "rtol": 1e-13, "atol": 1e-15})
-    run = solvers.simulate(sc, m, p, solvers.settings_for(m, sc.name, t_out=t),
-                           estimate_error=True)
+    run, truth = _bearing_run_and_truth(KINKED, "mujoco", 1e-13, 1e-15)
     for c in ("spin_angle", "journal_b_y", "spin_rate"):
         true = abs(run.channels[c] - truth.channels[c])
         assert (true <= run.errors[c]).all(), (c, float(max(true - run.errors[c])))
@@ -151,15 +157,8 @@ def test_an_interpolated_output_bounds_its_error_and_no_more(params):
     time, halving and doubling the cap alike, and the bar said 7.7e-5). The truth is the
     quaternion model at rtol 1e-14: the bar holds it everywhere, and within 10 × its largest
     error."""
-    sc = get_scene("bearing-rotor")
-    p = sc.resolve(params)
-    t = sc.output_grid(p)
-    q, e = solvers.get_solver("quaternion"), solvers.get_solver("exudyn")
-    truth = solvers.simulate(sc, q, p, {**solvers.settings_for(q, sc.name, t_out=t),
-                                        "rtol": 1e-14, "atol": 1e-14})
-    run = solvers.simulate(sc, e, p, solvers.settings_for(e, sc.name, t_out=t),
-                           estimate_error=True)
-    for c in sc.channels:
+    run, truth = _bearing_run_and_truth(params, "exudyn", 1e-14, 1e-14)
+    for c in run.channels:
         true = abs(run.channels[c] - truth.channels[c])
         assert (true <= run.errors[c]).all(), (c, float(max(true - run.errors[c])))
         assert max(run.errors[c]) <= 10 * max(true), (c, max(run.errors[c]) / max(true))

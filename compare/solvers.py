@@ -369,18 +369,17 @@ def _knob_errors(scene, solver, params, settings, tr, timeout_s, at_tight=None):
             _no_estimate(tr, f"{by}: {half.status} ({half.reason})")
             return
         tr.stats["error_estimate_by"] += f", {by}"
+        coarse_ok = double.status == "ok"
         for c in scene.channels:
             y = centre.channels[c]
             d1 = np.abs(y - half.channels[c])
-            r = (np.max(d1) / max(np.max(np.abs(double.channels[c] - y)), 1e-300)
-                 if double.status == "ok" else np.inf)
-            r = max(r, 2.0 ** -abs(knob.order))
-            err = (d1 * (1 / (1 - r) + r) if r < 1 else
-                   band(y, half.channels[c],
-                         *([double.channels[c]] if double.status == "ok" else [])))
-            if r < 1:                    # the coarse change at the declared order
-                err = np.maximum(err, np.abs(double.channels[c] - y)
-                                 / (2.0 ** abs(knob.order) - 1))
+            d0 = np.abs(double.channels[c] - y) if coarse_ok else None
+            r = max(np.max(d1) / max(np.max(d0), 1e-300) if coarse_ok else np.inf,
+                    2.0 ** -abs(knob.order))
+            if r < 1:             # the tail, no less than the coarse change at the order
+                err = np.maximum(d1 * (1 / (1 - r) + r), d0 / (2.0 ** abs(knob.order) - 1))
+            else:
+                err = band(y, half.channels[c], *([double.channels[c]] if coarse_ok else []))
             tr.errors[c] = tr.errors.get(c, 0.0) + err
 
 

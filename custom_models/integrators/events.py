@@ -16,7 +16,7 @@ from numba import types as nt
 
 from .dense import RHS_INTO, _combine, _finite, _stage_state
 from .explicit import _MAT, _VEC, FAIL_NONFINITE, GUARD
-from .linear_acceleration import ACC, wilson_step
+from .linear_acceleration import ACC, la_step
 
 # g(t, y, p) -> float: the event is a sign change of g over a step
 EVENT_FN = nt.FunctionType(nt.float64(nt.float64, _VEC, _VEC))
@@ -60,7 +60,7 @@ def _one_step(f, acc, t, y, qdd, zd, p, h, tab, cfg, K, ys, y1):
         rk_step(f, t, y, p, h, tab[0], tab[1], tab[2], K, ys, y1)
         return qdd, zd, tab[1].shape[0], 0
     n = int(cfg[C_NQ])
-    q1, qd1, qdd1, z1, zd1, ev, code = wilson_step(
+    q1, qd1, qdd1, z1, zd1, ev, _, code = la_step(
         acc, t, y[:n], y[n:2 * n], qdd, y[2 * n:], zd, p, h, cfg[C_THETA], int(cfg[C_LA_MODE]),
         cfg[C_TOL], int(cfg[C_MAX_ITER]))
     y1[:n] = q1

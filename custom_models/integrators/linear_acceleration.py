@@ -30,6 +30,15 @@ q'' (first n entries), optionally followed by the rates of nz auxiliary integral
 rule, which is what the linear-acceleration assumption gives for a rate sampled at the step
 ends (second order, like the method). `accel_from_mass_force` builds `acc` from M and Q callables.
 
+A step whose Newton iteration does not converge is retried as 2, 4, … 2^MAX_CUTS equal steps
+from the same start (`la_step`; the time-step cutback of implicit finite-element codes). Its
+cause is rarely the step's size: the tolerance sits below the model's own rounding (the
+partial systems' second differences amplify the closures' rounding by 1/Δθ², 5e-7 of θ'' on 40
+chained loops), so the iteration alternates between two accelerations for ever, and the
+shorter step's convergence test on the state (τ²/6 of the correction) is met. The fixed-point
+and predictor–corrector variants keep their one step (their limits are the variants' own).
+`steps` counts the steps taken, cut ones included.
+
 Output layout matches the explicit drivers: rows [q, q', z] on the output grid, NaN after a
 failure, plus (steps, rhs_evals, t_fail, code).
 """
@@ -46,6 +55,7 @@ from .explicit import _MAT, _VEC, FAIL_NONFINITE, FAIL_OK, GUARD
 ACC = nt.FunctionType(_VEC(nt.float64, nt.float64[:], nt.float64[:], _VEC))
 
 FAIL_NO_CONVERGENCE = 4
+MAX_CUTS = 4                # a step that does not converge is retried down to h/16
 MODE_NEWTON, MODE_FIXED_POINT, MODE_PC = 0, 1, 2
 # the variants a leaf offers by name: (θ, or None = the leaf's `theta` setting; iteration mode)
 LA_INTEGRATORS = {"linacc": (1.0, MODE_NEWTON), "wilson": (None, MODE_NEWTON),
@@ -224,6 +234,30 @@ def wilson_step(acc, t, q, qd, qdd, z, zd, p, h, theta, mode, tol, max_iter):
     return q1, qd1, qdd1, z1, zd1, evals, FAIL_OK
 
 
+@nb.njit(cache=True)
+def la_step(acc, t, q, qd, qdd, z, zd, p, h, theta, mode, tol, max_iter):
+    """`wilson_step` over h; where Newton's iteration does not converge, the same interval as
+    2, 4, … 2^MAX_CUTS equal steps from the same start. Returns (q1, qd1, qdd1, z1, zd1, evals,
+    steps, code)."""
+    evals = 0
+    cuts = MAX_CUTS if mode == MODE_NEWTON else 0
+    for cut in range(cuts + 1):
+        m = 2 ** cut
+        hs = h / m
+        q1, qd1, qdd1, z1, zd1 = q, qd, qdd, z, zd
+        code = FAIL_OK
+        for k in range(m):
+            q1, qd1, qdd1, z1, zd1, ev, code = wilson_step(acc, t + k * hs, q1, qd1, qdd1, z1,
+                                                           zd1, p, hs, theta, mode, tol,
+                                                           max_iter)
+            evals += ev
+            if code != FAIL_OK:
+                break
+        if code != FAIL_NO_CONVERGENCE:
+            return q1, qd1, qdd1, z1, zd1, evals, m, code
+    return q, qd, qdd, z, zd, evals, 2 ** cuts, FAIL_NO_CONVERGENCE
+
+
 @nb.njit(nt.Tuple((_MAT, nt.int64, nt.int64, nt.float64, nt.int64))(
     ACC, GUARD, _VEC, nt.int64, _VEC, _VEC, nt.int64, nt.float64, nt.int64, nt.float64,
     nt.int64), cache=True)
@@ -249,10 +283,10 @@ def integrate_wilson(acc, guard, y0, n, p, t_out, substeps, theta, mode, tol, ma
         h = (t_out[i + 1] - t_out[i]) / substeps
         for k in range(substeps):
             t = t_out[i] + k * h
-            q, qd, qdd, z, zd, ev, code = wilson_step(acc, t, q, qd, qdd, z, zd, p, h, theta,
-                                                      mode, tol, max_iter)
+            q, qd, qdd, z, zd, ev, taken, code = la_step(acc, t, q, qd, qdd, z, zd, p, h,
+                                                         theta, mode, tol, max_iter)
             evals += ev
-            steps += 1
+            steps += taken
             if code != FAIL_OK:
                 return Y, steps, evals, t + h, code
             y[:n] = q

@@ -255,6 +255,33 @@ def test_wilson_theta_137_is_unconditionally_stable(ratio):
     assert _amplitude(ratio, 1.4) <= 1.0 + 1e-9
 
 
+@nb.njit
+def _jittered(t, q, qd, p):
+    """q'' = −ω² q plus a jitter of height J that flips every w in q: a model whose rounding
+    (n-four-bar's second differences over 40 chained closures) is coarser than Newton's
+    tolerance, so an iterate whose root falls on a flip alternates for ever."""
+    out = np.empty(1)
+    out[0] = -p[0] * q[0] + p[1] * (math.floor(q[0] / p[2]) % 2.0)
+    return out
+
+
+def test_a_step_newton_cannot_finish_below_the_models_rounding_is_cut_and_stays_accurate():
+    """ω = 2π, h = 1e-3, J = 1e-5 (2.5e-7 of ω²: above the iteration's floor 1e-7 of the
+    accelerations, so the full step never converges where it alternates); flips every 2e-12
+    in q, the iterates' spacing τ²J/6 = 1.7e-12 at h. The run completes through the cut steps
+    (at h/4 a correction of J moves q by 1e-13, the state's convergence test) and stays within
+    the clean run's error of cos ωt plus the response to a force of size J, J·t/ω."""
+    w2, jit, t = 4 * math.pi ** 2, 1e-5, np.linspace(0.0, 2.0, 201)
+    runs = [integrate_wilson(_jittered, no_guard, np.array([1.0, 0.0]), 1,
+                             np.array([w2, j, 2e-12]), t, 10, 1.0, 0, 1e-10, 30) for j in (0, jit)]
+    (clean, steps0, _, _, code0), (noisy, steps, _, _, code) = runs
+    assert code0 == 0 and steps0 == 2000                 # nothing to cut without the jitter
+    assert code == 0 and steps > 2000, (code, steps)     # it would stop without the cut
+    exact = np.cos(2 * math.pi * t)
+    assert np.max(np.abs(noisy[:, 0] - exact)) <= (np.max(np.abs(clean[:, 0] - exact))
+                                                   + jit * t[-1] / math.sqrt(w2))
+
+
 # ---- slow: whole-press checks ------------------------------------------------------------
 # small vibration about the start (motor disconnected: u = 0): the linearisation holds
 QUIET = PRESS.resolve({"slider_stiffness": 1e9, "gravity": 0.0, "gear_ratio": 0.0,

@@ -33,6 +33,14 @@ INTEGRATORS = ("generalized_alpha", "trapezoidal")
 # set 18, 3 ms) 1e-10 → 1e-12 moved β by 4.8e-8 rad at the step 1e-6 s, more than the step's
 # error (1.5e-8 against dt/16)
 KNOBS = {"newton_tol": 1}
+# the error estimate's Newton jitter (compare/solvers.py `_unseen_error`): the index-3 velocities
+# carry the positions' Newton error over the step, a scatter the halving's runs sample but need
+# not span — `xval calibrate andrews-squeezer --seed 8080` set 8: the energy balance 3.8e-12 J
+# off MuJoCo's far run at dt, 2.9e-12 at dt/2 and 3.1e-12 at dt/4 (no order), a bar of 1.8e-12.
+# Newton's last iterate moves in whole iterations: there 100× tighter stops the run, 10× moves
+# dt/2's by 4.5e-12 J and 10× looser not at all; at seed 2026 set 19 (3.1e-11 J against a bar
+# of 2.9e-11) only 100× tighter moves it (1.1e-11 J)
+JITTER_PROBE = {"newton_tol": (0.01, 0.1, 10.0)}
 BODIES = ("K1", "K2", "K3", "K4", "K5", "K6", "K7")
 
 

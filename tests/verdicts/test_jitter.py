@@ -88,3 +88,22 @@ def test_four_bar_error_bar_contains_the_half_steps_newton_error():
     for c in r["true"]:
         assert r["true"][c] <= r["estimate"][c], (c, r)
     assert r["estimate"]["energy_balance"] <= 10 * r["true"]["energy_balance"], r
+
+
+# Andrews' squeezer: Exudyn's index-3 velocities carry the positions' Newton error over the
+# step, so its energy balance scatters from run to run with no order in the step (`xval
+# calibrate andrews-squeezer --seed 8080` set 8: 3.8e-12, 2.9e-12, 3.1e-12 J off MuJoCo at dt,
+# dt/2, dt/4) and the halving's change fell 2.1 × short: Exudyn and MuJoCo `disagree` (1.12).
+# The truth is MuJoCo's far tighter run (the scene's declared truth for Exudyn), 4.2e-13 J from
+# lagrange-partial's there.
+SQUEEZER = get_scene("andrews-squeezer")
+
+
+def test_squeezer_error_bar_contains_the_velocities_newton_error():
+    p = sample(SQUEEZER, 20, 8080)[8][1]
+    ref = coverage.reference_run(SQUEEZER, solvers.get_solver("mujoco"), p)
+    r = coverage.point(SQUEEZER, EXUDYN, p, ref=ref)
+    assert r["status"] == "ok"
+    for c in r["true"]:
+        assert r["true"][c] <= r["estimate"][c], (c, r)
+    assert r["estimate"]["energy_balance"] <= 10 * r["true"]["energy_balance"], r

@@ -95,18 +95,34 @@ def bars(scene: Scene, tr, ref) -> dict:
     # the truth is known to the reference's own round-off (solvers.py's floor for one run):
     # where the run is itself at round-off (lagrange-exact's press at rk4 1e-5: 3e-14 of the
     # scale), 32000 reference steps carry as much
-    known = {c: np.sqrt(solvers._steps(ref)) * solvers.EPS * np.max(np.abs(ref.channels[c]))
-             for c in scene.channels}
+    scale = truth_scales(scene, ref)
+    known = {c: np.sqrt(solvers._steps(ref)) * solvers.EPS * scale[c] for c in scene.channels}
     return {"status": "ok",
             "estimate": {c: float(np.nanmax(tr.errors[c]) + known[c]) for c in scene.channels},
             "true": {c: float(np.nanmax(np.abs(tr.channels[c] - ref.channels[c])))
                      for c in scene.channels},
-            "scale": {c: float(np.nanmax(np.abs(ref.channels[c]))) for c in scene.channels},
-            # what the truth is not known better than: its rounding added up step by step,
-            # linearly at worst (Exudyn's rotor-spinup energies at dt/16 and dt/32 differ by
-            # 7e-12 J of 7 J, 30× the √steps figure, within the linear 5e-11 J)
-            "floor": {c: float(solvers._steps(ref) * solvers.EPS
-                               * np.max(np.abs(ref.channels[c]))) for c in scene.channels}}
+            "scale": scale, "floor": truth_floor(scene, ref)}
+
+
+def truth_floor(scene: Scene, ref) -> dict:
+    """What the truth is not known better than, per channel: its rounding added up step by
+    step, linearly at worst (Exudyn's rotor-spinup energies at dt/16 and dt/32 differ by 7e-12 J
+    of 7 J, 30× the √steps figure, within the linear 5e-11 J)."""
+    scale = truth_scales(scene, ref)
+    return {c: float(solvers._steps(ref) * solvers.EPS * scale[c]) for c in scene.channels}
+
+
+def truth_scales(scene: Scene, ref) -> dict:
+    """What each channel of the truth rounds with: its largest |value|, and for the energy
+    balance, a residual near zero, the energies it balances (as the energy rule weighs it):
+    andrews-squeezer's far runs (MuJoCo's, lagrange-partial's) disagree on it by 5–7e-13 of
+    the spring energy, MuJoCo's moving by 2–5e-12 J when its step halves again."""
+    scale = {c: float(np.nanmax(np.abs(ref.channels[c]))) for c in scene.channels}
+    if scene.energy_channel in scale:
+        scale[scene.energy_channel] = max(
+            [scale[scene.energy_channel]] + [float(np.nanmax(np.abs(ref.channels[c])))
+                                             for c in scene.energy_scale_channels])
+    return scale
 
 
 def study(scene_name: str, n: int, seed: int = 0, solver_names=None, fixed: dict | None = None,

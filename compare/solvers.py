@@ -162,12 +162,17 @@ def _first_bad_time(t, channels):
     return float(t[np.argmax(bad)]) if bad.any() else None
 
 
-def energy_limit(scene, largest):
-    """The drift the energy rule allows: `scene.energy_bound` × the energy scale, the largest
-    |value| of the energy balance and of the scene's `energy_scale_channels` (`largest`:
-    channel -> its largest |value|, a number or one per run)."""
+def energy_scale(scene, largest):
+    """The energy an energy balance weighs against: the largest |value| of the balance and of
+    the scene's `energy_scale_channels` (`largest`: channel -> its largest |value|, a number or
+    one per run)."""
     names = (scene.energy_channel, *scene.energy_scale_channels)
-    return scene.energy_bound * np.max([np.asarray(largest[c], float) for c in names], axis=0)
+    return np.max([np.asarray(largest[c], float) for c in names], axis=0)
+
+
+def energy_limit(scene, largest):
+    """The drift the energy rule allows: `scene.energy_bound` × the energy scale."""
+    return scene.energy_bound * energy_scale(scene, largest)
 
 
 def _energy_jump(t, channels, scene):
@@ -175,9 +180,9 @@ def _energy_jump(t, channels, scene):
     `scene.energy_bound` of the energy scale (the largest |value| of the energy balance and of
     the scene's `energy_scale_channels`)."""
     e = channels[scene.energy_channel]
-    limit = energy_limit(scene, {c: np.max(np.abs(channels[c]))
+    scale = energy_scale(scene, {c: np.max(np.abs(channels[c]))
                                  for c in (scene.energy_channel, *scene.energy_scale_channels)})
-    scale = limit / scene.energy_bound
+    limit = scene.energy_bound * scale
     drift = np.abs(e - e[0])
     bad = np.nonzero(drift > limit)[0]
     if not len(bad):

@@ -101,14 +101,14 @@ def bars(scene: Scene, tr, ref) -> dict:
             "estimate": {c: float(np.nanmax(tr.errors[c]) + known[c]) for c in scene.channels},
             "true": {c: float(np.nanmax(np.abs(tr.channels[c] - ref.channels[c])))
                      for c in scene.channels},
-            "scale": scale, "floor": truth_floor(scene, ref)}
+            "scale": scale, "floor": truth_floor(scene, ref, scale)}
 
 
-def truth_floor(scene: Scene, ref) -> dict:
+def truth_floor(scene: Scene, ref, scale: dict | None = None) -> dict:
     """What the truth is not known better than, per channel: its rounding added up step by
     step, linearly at worst (Exudyn's rotor-spinup energies at dt/16 and dt/32 differ by 7e-12 J
-    of 7 J, 30× the √steps figure, within the linear 5e-11 J)."""
-    scale = truth_scales(scene, ref)
+    of 7 J, 30× the √steps figure, within the linear 5e-11 J); `scale`: `truth_scales`'."""
+    scale = scale or truth_scales(scene, ref)
     return {c: float(solvers._steps(ref) * solvers.EPS * scale[c]) for c in scene.channels}
 
 
@@ -119,9 +119,7 @@ def truth_scales(scene: Scene, ref) -> dict:
     the spring energy, MuJoCo's moving by 2–5e-12 J when its step halves again."""
     scale = {c: float(np.nanmax(np.abs(ref.channels[c]))) for c in scene.channels}
     if scene.energy_channel in scale:
-        scale[scene.energy_channel] = max(
-            [scale[scene.energy_channel]] + [float(np.nanmax(np.abs(ref.channels[c])))
-                                             for c in scene.energy_scale_channels])
+        scale[scene.energy_channel] = float(solvers.energy_scale(scene, scale))
     return scale
 
 

@@ -55,18 +55,19 @@ def rk_step(f, t, y, p, h, A, B, C, K, ys, y1):
 @nb.njit(cache=True)
 def _one_step(f, acc, t, y, qdd, zd, p, h, tab, cfg, K, ys, y1):
     """One step of the configured method from y = [q, q', z] (and, for linear acceleration,
-    the carried q'', z') into y1. Returns (qdd1, zd1, evals, code)."""
+    the carried q'', z') into y1. Returns (qdd1, zd1, evals, steps, code): steps > 1 where
+    the linear-acceleration step was cut."""
     if cfg[C_METHOD] == M_RK:
         rk_step(f, t, y, p, h, tab[0], tab[1], tab[2], K, ys, y1)
-        return qdd, zd, tab[1].shape[0], 0
+        return qdd, zd, tab[1].shape[0], 1, 0
     n = int(cfg[C_NQ])
-    q1, qd1, qdd1, z1, zd1, ev, _, code = la_step(
+    q1, qd1, qdd1, z1, zd1, ev, taken, code = la_step(
         acc, t, y[:n], y[n:2 * n], qdd, y[2 * n:], zd, p, h, cfg[C_THETA], int(cfg[C_LA_MODE]),
         cfg[C_TOL], int(cfg[C_MAX_ITER]))
     y1[:n] = q1
     y1[n:2 * n] = qd1
     y1[2 * n:] = z1
-    return qdd1, zd1, ev, code
+    return qdd1, zd1, ev, taken, code
 
 
 @nb.njit(nt.Tuple((nt.int64, nt.float64, _VEC, nt.int64, nt.int64, nt.int64))(
@@ -109,10 +110,10 @@ def integrate_segment(f, acc, guard, g, y0, p, t0, t_stop, t_out, i_next, Y, h_n
             ta = t
             for k in range(nsub):
                 tk = ta + k * h
-                qdd1, zd1, ev, code = _one_step(f, acc, tk, y, qdd, zd, p, h, tab, cfg, K, ys,
-                                                y1)
+                qdd1, zd1, ev, taken, code = _one_step(f, acc, tk, y, qdd, zd, p, h, tab, cfg,
+                                                       K, ys, y1)
                 evals += ev
-                steps += 1
+                steps += taken
                 if code == 0 and not _finite(y1):
                     code = FAIL_NONFINITE
                 if code == 0:
@@ -126,7 +127,7 @@ def integrate_segment(f, acc, guard, g, y0, p, t0, t_stop, t_out, i_next, Y, h_n
                         lo, hi = 0.0, h
                         while hi - lo > cfg[C_EVENT_TOL]:
                             mid = 0.5 * (lo + hi)
-                            _, _, ev, _ = _one_step(f, acc, tk, y, qdd, zd, p, mid, tab, cfg, K,
+                            _, _, ev, _, _ = _one_step(f, acc, tk, y, qdd, zd, p, mid, tab, cfg, K,
                                                     ys, ym)
                             evals += ev
                             if g(tk + mid, ym, p) * g0 > 0.0:

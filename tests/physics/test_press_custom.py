@@ -13,6 +13,10 @@ from compare.errors import BadInput
 from compare.physics import press as phys
 from compare.scenes.press import PRESS, PRESS_CYCLE
 from custom_models.integrators import accel_from_mass_force, integrate_wilson, no_guard
+from custom_models.integrators.dense import RHS_INTO, first_class
+from custom_models.integrators.events import EVENT_FN, M_LA, config, integrate_segment
+from custom_models.integrators.explicit import GUARD
+from custom_models.integrators.linear_acceleration import ACC
 from custom_models.press import equations as eqs
 from custom_models.press import exact as press_exact
 from custom_models.press import kinematics as kin
@@ -280,6 +284,25 @@ def test_a_step_newton_cannot_finish_below_the_models_rounding_is_cut_and_stays_
     exact = np.cos(2 * math.pi * t)
     assert np.max(np.abs(noisy[:, 0] - exact)) <= (np.max(np.abs(clean[:, 0] - exact))
                                                    + jit * t[-1] / math.sqrt(w2))
+    # the event driver (press-cycle) takes the same step and counts the cut ones too
+    Y = np.full((len(t), 2), np.nan)
+    code_e, _, _, _, steps_e, _ = integrate_segment(
+        first_class(_no_rhs, RHS_INTO), first_class(_jittered, ACC), first_class(no_guard, GUARD),
+        first_class(_no_event, EVENT_FN), np.array([1.0, 0.0]), np.array([w2, jit, 2e-12]), 0.0,
+        t[-1], t, 1, Y, 1e-3, (np.zeros((1, 1)), np.zeros(1), np.zeros(1)),
+        config(M_LA, n_q=1))
+    assert code_e == 0 and steps_e == steps, (code_e, steps_e, steps)
+    assert np.array_equal(Y[1:, 0], noisy[1:, 0])
+
+
+@nb.njit
+def _no_rhs(t, y, p, dy):
+    dy[:] = 0.0
+
+
+@nb.njit
+def _no_event(t, y, p):
+    return 1.0
 
 
 # ---- slow: whole-press checks ------------------------------------------------------------

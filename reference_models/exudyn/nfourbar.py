@@ -27,12 +27,14 @@ from .. import loop_common as lc
 
 # Newton's relative tolerance 1e-6: at a singular position (all rods horizontal) the iteration
 # matrix is near-singular and the iteration stagnates, at a relative residual that varies with
-# the passage and the step, so a tighter tolerance stops the solver there (measured at the
-# library's case, N = 40 over 10 s: 1e-10 stops it at the first φ = −π; at dt 5e-4 s, the error
-# estimate's halving, 1e-7, 1.5e-7 and 2e-7 stop it at φ = −8π, t = 8.58 s, while 3e-7 and
-# 1e-6 pass at dt 1e-3, 5e-4 and 2.5e-4 s). 1e-6 moves φ by 1.3e-6 rad before the first
-# singular position (the step's own error there 1.9e-6 rad) and by 2e-5 rad over 10 s (the
-# step's 2.0e-4); the absolute tolerance does not decide it (1e-7 or 1e-6: the same run)
+# the passage and the step, so on the run's own grid a tighter tolerance stops the solver there
+# (measured at the library's case, N = 40 over 10 s: 1e-10 stops it at the first φ = −π; at
+# dt 5e-4 s, the error estimate's halving, 1e-7, 1.5e-7 and 2e-7 stop it at φ = −8π, t = 8.58 s,
+# while 3e-7 and 1e-6 pass at dt 1e-3, 5e-4 and 2.5e-4 s). 1e-6 moves φ by 1.3e-6 rad before
+# the first singular position (the step's own error there 1.9e-6 rad) and by 2e-5 rad over 10 s
+# (the step's 2.0e-4); the absolute tolerance does not decide it (1e-7 or 1e-6: the same run).
+# Where a step still lands on one, the interval is solved again on another grid
+# (`loop_common.exudyn_solve`; docs/scenes/n-four-bar.md).
 DEFAULT_SETTINGS = {"integrator": "generalized_alpha", "dt": 1e-3, "spectral_radius": 1.0,
                     "newton_tol": 1e-6, "newton_abs_tol": 1e-7}
 INTEGRATORS = ("generalized_alpha", "trapezoidal")

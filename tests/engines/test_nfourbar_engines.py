@@ -6,7 +6,7 @@ scene's table is `slow`. Each solver within its own error bar: the custom solver
 from the adapter's estimate, the engines' from their own convergence (second order:
 |y(h) − y*| ≈ 4/3 |y(h) − y(h/2)|, bound 2 |y(h) − y(h/2)|). What each does at the singular
 positions is measured as what it is: the chain's spread max|φ_k − φ_0| (the parallelogram
-held or left), Exudyn's Newton stopping at φ = −π at a tight tolerance, MuJoCo's soft loops."""
+held or left), Exudyn's Newton stopping at φ = −π on its own grid, MuJoCo's soft loops."""
 import math
 
 import numpy as np
@@ -18,6 +18,7 @@ from compare import solvers
 from compare.analysis.verdict import Verdict
 from compare.physics import nfourbar as phys
 from compare.scenes import get_scene
+from reference_models import loop_common as lc
 
 SCENE = get_scene("n-four-bar")
 SHORT = SCENE.resolve({"N": "4", "t_end": "2"})
@@ -92,15 +93,42 @@ def test_exudyn_converges_to_the_reference_through_the_singular_positions(refere
     assert np.max(r.channels["parallelogram"]) < 1e-10
 
 
-def test_exudyn_at_a_tight_newton_tolerance_stops_at_a_singular_position():
-    """The finding behind the leaf's Newton tolerance: at 1e-10 (the other loops' value) the
-    index-3 iteration stagnates at a singular position (every rod horizontal; N = 4 here at
-    φ = −π): the run stops within one output step of it (measured: [1.23, 1.24] s, φ = −π at
-    1.236 s)."""
-    r = ex.simulate(dict(SHORT), T_OUT, {"newton_tol": 1e-10, "newton_abs_tol": 1e-12})
+def test_exudyn_at_a_tight_newton_tolerance_passes_a_singular_position_through_the_cut(
+        reference, monkeypatch):
+    """The finding behind the leaf's Newton tolerance and its interval cut
+    (`loop_common.exudyn_solve`): at 1e-10 (the other loops' value) the index-3 iteration
+    stagnates on the step that lands at a singular position (every rod horizontal; N = 4 here
+    at φ = −π): on the run's own grid it stops within one output step of it (measured: [1.23,
+    1.24] s, φ = −π at 1.236 s). Solved again on a grid none of whose inner points is the
+    run's, the run passes and stays within its halving's bound of the reference."""
+    tight = {"newton_tol": 1e-10, "newton_abs_tol": 1e-12}
+    monkeypatch.setattr(lc, "MAX_CUTS", 0)
+    r = ex.simulate(dict(SHORT), T_OUT, tight)
     assert r.status == "diverged" and "exudyn solver failed" in r.reason
     last = r.channels["phi"][np.isfinite(r.channels["phi"])][-1]
     assert abs(math.remainder(last, math.pi)) < 0.05, last
+    monkeypatch.undo()
+    r, _ = converges_to_the_reference(ex, tight, 1e-3, reference)
+    assert r.stats["steps"] > 2000                      # the cut interval's finer grid
+
+
+def test_exudyn_passes_a_drawn_sets_singular_position_through_the_cut(monkeypatch):
+    """`xval calibrate n-four-bar --seed 3141`, set 10 (N = 40, the default Newton 1e-6): the
+    step at t = 0.635 s lands 5e-6 rad from φ = π and Newton fails there, on any grid that
+    holds that instant; with the cut Exudyn completes, within its halving's bound of the
+    reference (here measured 4.3e-5 rad at 1 s)."""
+    params = SCENE.resolve({"t_end": "0.7", "m": "0.7784835572540911",
+                            "L": "0.5551982997448168", "g": "7.290113117719477",
+                            "phi0": "2.5813826680107703", "vx0": "0.7580178741352936"})
+    t_out = SCENE.output_grid(params)
+    monkeypatch.setattr(lc, "MAX_CUTS", 0)
+    assert ex.simulate(dict(params), t_out, {}).status == "diverged"
+    monkeypatch.undo()
+    ref = phys.reference_channels(params, t_out)
+    r1, r2 = (run(ex, {"dt": h}, params, t_out) for h in (1e-3, 5e-4))
+    bound = np.array([np.max(2.0 * np.abs(r1.channels[c] - r2.channels[c])) for c in CH])
+    dev = deviation(r1, ref)
+    assert np.all(dev <= bound) and np.max(bound) < 1e-3, (dev, bound)
 
 
 def test_mujoco_converges_to_the_reference(reference):

@@ -36,6 +36,7 @@ def result_kind(folder) -> str | None:
     for name, kind in (("response.json", "response"), ("bench.json", "bench"),
                        ("map.json", "map"), ("diff.json", "diff"),
                        ("identify.json", "identify"), ("detection.json", "detection"),
+                       ("calibration.json", "calibration"),
                        ("result.json", None)):
         if (p / name).exists():
             try:

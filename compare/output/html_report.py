@@ -183,7 +183,8 @@ def _is_comparison(c) -> bool:
 def write_study_html(out_dir, obj: dict) -> Path:
     """report.html of a study from its JSON (a modes result, bench, extremes, response, …)."""
     from ..scenes import get_scene
-    comps = [c for c in obj.get("comparisons") or [] if _is_comparison(c)]
+    rows = obj.get("comparisons")        # a calibration's is a count
+    comps = [c for c in rows if _is_comparison(c)] if isinstance(rows, list) else []
     name = obj.get("scene")
     kind = obj.get("result") or "study"
     facts, unit = [], lambda p: ""

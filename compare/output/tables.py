@@ -69,7 +69,7 @@ def _widest_cell(d: dict) -> str:
     at, w = d.get("widest_at") or {}, d.get("windows") or {}
     cell = _g(d["widest_window"])
     if at:
-        cell += f" ({' vs '.join(at['pair'])} {at['channel']}, set {at['set']})"
+        cell += f" ({at['a']} vs {at['b']} {at['channel']}, set {at['sample']})"
     if w.get("opened"):
         cell += f"; {w['over_100']} of {w['opened']} > 100×, p95 {_g(w['p95'])}"
     if top := (w.get("typical") or {}).get("widest"):

@@ -18,14 +18,22 @@ class CalibrationResult(StudyResult):
 
     def summary_lines(self):
         d = self.data
-        out = [f"disagree: set {x['set']} {' vs '.join(x['pair'])} {x['channel']} "
+        out = [f"disagree: set {x['sample']} {x['a']} vs {x['b']} {x['channel']} "
                f"Δ/bound {x['ratio']:.2g} at {x['params']}" for x in d["disagree"]]
-        out += [f"explained: set {x['set']} {' vs '.join(x['pair'])} {x['channel']} "
+        out += [f"explained: set {x['sample']} {x['a']} vs {x['b']} {x['channel']} "
                 f"Δ/bound {x['ratio']:.2g}: {x['why']}" for x in d.get("explained", [])]
-        out += [f"skipped: set {x['set']} {x['solver']} {x['status']} ({x['reason']})"
+        out += [f"skipped: set {x['sample']} {x['solver']} {x['status']} ({x['reason']})"
                 + (f" — outside its domain: {x['declared']}" if x.get("declared") else "")
                 for x in d["skipped"]]
         return out + [f"{d['wall_s']:.1f} s"]
+
+    def markdown(self):
+        """The report `save` writes beside the JSON: the tables and the findings."""
+        from ..output.tables import markdown
+        blocks = [f"# {self.title()}", ""]
+        for header, rows in self.tables():
+            blocks += [markdown(header, rows), ""]
+        return blocks + [f"- {line}" for line in self.summary_lines()]
 
     def problems(self, channels=None):
         return calibration_problems(self.data)

@@ -167,9 +167,9 @@ class MapResult(StudyResult):
 def calibration_problems(d: dict) -> list[str]:
     """A calibration's refusals: each comparison that disagrees, and each solver that stopped
     where the scene does not say it may."""
-    return ([f"set {x['set']} {' vs '.join(x['pair'])} {x['channel']}: disagree "
+    return ([f"set {x['sample']} {x['a']} vs {x['b']} {x['channel']}: disagree "
              f"(Δ/bound {x['ratio']:.2g})" for x in d["disagree"]]
-            + [f"set {x['set']} {x['solver']} {x['status']}: {x['reason']} (not declared "
+            + [f"set {x['sample']} {x['solver']} {x['status']}: {x['reason']} (not declared "
                f"outside its domain)" for x in d["skipped"] if not x.get("declared")])
 
 

@@ -58,24 +58,29 @@ class Axis:
         return float(np.sign(self.lo) * np.exp(a + u * (b - a)))
 
 
-def region(scene: Scene) -> tuple[list[Axis], dict]:
-    """The scene's sampling region: (axes, fixed values), `Calibration`'s rules."""
+def region(scene: Scene, held: dict | None = None) -> tuple[list[Axis], dict]:
+    """The scene's sampling region: (axes, fixed values), `Calibration`'s rules; `held`
+    (name -> value, as `xval calibrate --set` gives them) holds those names out of it at
+    that value."""
     cal = scene.calibration or Calibration()
+    held = dict(held or {})
     axes = {}
     for p in scene.params:
         if p.is_float and p.physical and p.name not in RUN_PARAMS and p.default \
-                and p.name not in cal.fixed:
+                and p.name not in cal.fixed and p.name not in held:
             lo, hi = sorted((p.default / SPREAD, p.default * SPREAD))
             lo = max(lo, np.nextafter(p.lo, np.inf) if p.open_lo else p.lo)
             axes[p.name] = Axis(p.name, lo, min(hi, p.hi), True)
     for name, (lo, hi) in cal.region.items():
         scene.param(name)
+        if name in held:
+            continue
         log = name in cal.log
         if log and not lo * hi > 0:
             raise BadInput(f"{scene.name}: calibration axis {name} is log-uniform over "
                            f"[{lo:g}, {hi:g}], which spans zero")
         axes[name] = Axis(name, float(lo), float(hi), log)
-    fixed = dict(cal.fixed)
+    fixed = {**cal.fixed, **held}
     if scene.has_output_grid and "t_end" not in fixed:
         dt = fixed.get("output_dt", scene.param("output_dt").default)
         steps = max(1, round(HORIZON * scene.param("t_end").default / dt))
@@ -97,9 +102,11 @@ def admissible(scene: Scene, over: dict) -> dict | None:
         return None
 
 
-def sample(scene: Scene, n: int, seed: int = 0) -> list[tuple[dict, dict]]:
-    """`n` admissible (overrides, resolved parameters) drawn from the scene's region."""
-    axes, fixed = region(scene)
+def sample(scene: Scene, n: int, seed: int = 0,
+           held: dict | None = None) -> list[tuple[dict, dict]]:
+    """`n` admissible (overrides, resolved parameters) drawn from the scene's region (with
+    `held` names held out of it, `region`)."""
+    axes, fixed = region(scene, held)
     rng = np.random.default_rng(seed)
     out = []
     for _ in range(TRIES * n):
@@ -272,26 +279,37 @@ def explained(scene: Scene, params: dict, comparisons: list, runs: dict) -> dict
     return {(r["a"], r["b"], r["mode"]): r["why"] for r in rows if r["frame"]}
 
 
+def held_values(scene: Scene, overrides: dict | None) -> dict:
+    """`--set` overrides as the values they resolve to (SI; a unit converted, a bad name or
+    value refused with one line)."""
+    if not overrides:
+        return {}
+    resolved = scene.resolve(overrides)
+    return {name: resolved[name] for name in overrides}
+
+
 def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
-              log=None) -> CalibrationResult:
-    """The study over `samples` sets drawn with `seed` (solvers: the scene's unless named)."""
+              log=None, held: dict | None = None) -> CalibrationResult:
+    """The study over `samples` sets drawn with `seed` (solvers: the scene's unless named;
+    `held`: parameters held at a value in every set, `--set`)."""
     t0 = time.perf_counter()
     scene = get_scene(scene_name)
     cal = scene.calibration or Calibration()
     chosen = adapter.pick(scene, solvers)
-    axes, fixed = region(scene)
+    held = held_values(scene, held)
+    axes, fixed = region(scene, held)
     defaults = scene.resolve(fixed)
     rows, skipped, disagree, n_cmp, verdicts = [], [], [], 0, {}
     explained_rows = []
     left_out = {s.name: {} for s in chosen}
     widest, windows = None, []
     bar = progress.task(f"calibrate {scene.name}", samples, "parameter sets")
-    for k, (over, params) in enumerate(sample(scene, samples, seed)):
+    for k, (over, params) in enumerate(sample(scene, samples, seed, held)):
         one = evaluate(scene, chosen, params, first=(k == 0))
         bar.advance()
         changed = {n: _plain(params[n]) for n in over if n not in fixed
                    and not np.array_equal(params[n], defaults[n])}
-        stopped = [{"set": k, "solver": s, "status": r.status, "reason": r.reason,
+        stopped = [{"sample": k, "solver": s, "status": r.status, "reason": r.reason,
                     "declared": cal.outside.get(s, cal.outside.get("*"))}
                    for s, r in one["runs"].items() if r.status != "ok"]
         skipped += stopped
@@ -305,7 +323,7 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
                 continue
             n_cmp += 1
             verdicts[str(c.verdict)] = verdicts.get(str(c.verdict), 0) + 1
-            where = {"set": k, "params": changed, "pair": [c.a, c.b], "channel": c.channel}
+            where = {"sample": k, "params": changed, "a": c.a, "b": c.b, "channel": c.channel}
             why = one["explained"].get((c.a, c.b, c.channel))
             if c.verdict == Verdict.DISAGREE and why:
                 explained_rows.append({**where, "ratio": float(c.ratio), "why": why})
@@ -339,8 +357,18 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
             "floor": f"a deviation below {FLOOR:g}·eps·scale opens no window; a true error "
                      f"below it or the truth's own rounding tests no error bar",
             "wall_s": time.perf_counter() - t0}
+    data["summary"] = summary_line(data)
     bar.close()
     return CalibrationResult(data)
+
+
+def summary_line(d: dict) -> str:
+    """The study in one line: the two error rates' side and the window."""
+    g = lambda x, f=".3g": "—" if x is None else format(x, f)
+    skipped = f", {len(d['skipped'])} solver runs skipped" if d["skipped"] else ""
+    return (f"{d['comparisons']} comparisons over {d['samples']} sets, {len(d['disagree'])} "
+            f"disagree{skipped}; coverage {g(d['coverage'])}, sharpness "
+            f"{g(d['sharpness'], '.2g')}, widest window {g(d['widest_window'])}")
 
 
 # a window past this is a bound that would pass a bug this many times the pair's deviation
@@ -360,7 +388,7 @@ def _windows(windows: list) -> dict:
     wide = sorted((x for x in windows if x[0] > WIDE_WINDOW), key=lambda x: -x[0])[:10]
     return {"opened": len(w), "over_100": int(np.sum(w > WIDE_WINDOW)),
             "over_100_by_pair": dict(sorted(by_pair.items(), key=lambda kv: -kv[1])),
-            "over_100_at": [{"set": k, "pair": pair, "channel": c, "window": float(x)}
+            "over_100_at": [{"sample": k, "pair": pair, "channel": c, "window": float(x)}
                             for x, pair, k, c in wide],
             "median": float(np.median(w)) if len(w) else None,
             "p95": float(np.percentile(w, 95)) if len(w) else None,
@@ -408,5 +436,5 @@ def _coverage(rows) -> dict:
     return {**out, "coverage": float(np.mean(true <= est)),
             "sharpness": float(np.median(true[est > 0] / est[est > 0])) if np.any(est > 0)
             else None,
-            "misses": [{"solver": s, "set": k, "channel": c, "true": t, "estimate": e}
+            "misses": [{"solver": s, "sample": k, "channel": c, "true": t, "estimate": e}
                        for s, k, c, t, e, _ in miss]}

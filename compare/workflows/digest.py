@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import solvers
 
-STORE_VERSION = 1          # bump when the stored result format changes: everything reruns
+STORE_VERSION = 2          # bump when the stored result format changes: everything reruns
 
 
 def _canon(x):

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from compare import solvers
+from compare import cli, solvers
 from compare.analysis.verdict import Verdict
+from compare.errors import BadInput
 from compare.results import CalibrationResult, Result
 from compare.scenes import get_scene
 from compare.workflows import calibrate as cal
@@ -85,7 +86,7 @@ def test_a_parameter_one_percent_off_in_one_leaf_disagrees(monkeypatch):
     monkeypatch.setattr(leaf, "modes", lambda p, s: honest({**p, "k": 1.01 * p["k"]}, s))
     r = cal.calibrate("rotor-whirl", 3, solvers=["closed-form", "euler-vector"])
     assert r["disagree"] and r.problems()
-    assert {tuple(x["pair"]) for x in r["disagree"]} == {("closed-form", "euler-vector")}
+    assert {(x["a"], x["b"]) for x in r["disagree"]} == {("closed-form", "euler-vector")}
 
 
 def test_a_zeroed_error_estimate_loses_its_coverage(monkeypatch):
@@ -120,6 +121,60 @@ def test_the_json_has_the_commands_keys_and_reads_back():
     assert isinstance(back, CalibrationResult) and "rotor-whirl" in str(back)
 
 
+def test_the_contracts_rows_name_the_sample_and_the_pair(monkeypatch):
+    """docs/contract.md: a disagreement row {"sample", "params", "a", "b", "channel", "ratio"},
+    a skipped one {"sample", "solver", "reason"} — seeded: euler-vector's k 1 % off, and
+    MuJoCo stopped at every set."""
+    scene = get_scene("rotor-whirl")
+    leaf = solvers.get_solver("euler-vector").leaf(scene)
+    honest = leaf.modes
+    monkeypatch.setattr(leaf, "modes", lambda p, s: honest({**p, "k": 1.01 * p["k"]}, s))
+    r = cal.calibrate("rotor-whirl", 2, seed=4, solvers=["closed-form", "euler-vector"])
+    row = r["disagree"][0]
+    assert {"sample", "params", "a", "b", "channel", "ratio"} <= set(row)
+    assert row["sample"] in (0, 1) and (row["a"], row["b"]) == ("closed-form", "euler-vector")
+    def stop(p, s):
+        raise RuntimeError("seeded stop")
+    monkeypatch.setattr(solvers.get_solver("mujoco").leaf(scene), "modes", stop)
+    r = cal.calibrate("rotor-whirl", 2, seed=4, solvers=["closed-form", "mujoco"])
+    assert [(x["sample"], x["solver"], x["reason"]) for x in r["skipped"]] == [
+        (k, "mujoco", "RuntimeError: seeded stop") for k in (0, 1)]
+    assert r.problems()                 # an undeclared stop is refused, never agreement
+
+
+def test_a_set_parameter_is_held_in_every_sample_and_leaves_the_region():
+    """`--set NAME=VALUE` (units read as everywhere): that parameter at that value in every
+    drawn set, drawn no longer; the other axes as before."""
+    scene = get_scene("rotor-spinup")
+    free, _ = cal.region(scene)
+    held = cal.held_values(scene, {"l": "60cm", "t_end": "0.2"})
+    assert held == {"l": pytest.approx(0.6), "t_end": pytest.approx(0.2)}
+    axes, fixed = cal.region(scene, held)
+    assert [a.name for a in axes] == [a.name for a in free if a.name != "l"]
+    sets = cal.sample(scene, 5, seed=2, held=held)
+    assert all(p["l"] == 0.6 and p["t_end"] == 0.2 for _, p in sets)
+    assert len({p["k"] for _, p in sets}) == 5
+    with pytest.raises(BadInput, match="unknown parameter"):
+        cal.held_values(scene, {"no_such": "1"})
+
+
+def test_out_writes_the_json_and_report_and_takes_its_own_folder_again(tmp_path):
+    """`--out DIR`: calibration.json and report.md in DIR; the same command again writes over
+    its own result; a folder of other files is refused with exit status 2, nothing written."""
+    out = tmp_path / "cal"
+    args = ["calibrate", "rotor-whirl", "--samples", "2", "--solver", "closed-form",
+            "--solver", "euler-vector", "--set", "c_ext=0.5", "--out", str(out)]
+    assert cli.main(args) == 0 and cli.main(args) == 0
+    obj = json.loads((out / "calibration.json").read_text())
+    assert obj["fixed"]["c_ext"] == 0.5 and obj["comparisons"] > 0
+    assert "| rotor-whirl | 2 |" in (out / "report.md").read_text()
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "notes.txt").write_text("mine")
+    assert cli.main(args[:-1] + [str(other)]) == 2
+    assert sorted(p.name for p in other.iterdir()) == ["notes.txt"]
+
+
 def test_the_windows_spread_says_how_many_are_wide():
     # counted by hand: two of four windows past 100; the 95th percentile interpolates between
     # the third and fourth, 150 + 0.85 · 9850
@@ -127,8 +182,8 @@ def test_the_windows_spread_says_how_many_are_wide():
                       (1e4, "a|b", 2, "x")])
     assert (w["opened"], w["over_100"], w["median"]) == (4, 2, 100.0)
     assert w["over_100_by_pair"] == {"a|b": 1, "a|c": 1}
-    assert w["over_100_at"] == [{"set": 2, "pair": "a|b", "channel": "x", "window": 1e4},
-                                {"set": 1, "pair": "a|c", "channel": "y", "window": 150.0}]
+    assert w["over_100_at"] == [{"sample": 2, "pair": "a|b", "channel": "x", "window": 1e4},
+                                {"sample": 1, "pair": "a|c", "channel": "y", "window": 150.0}]
     assert w["p95"] == pytest.approx(8522.5)
     assert cal._windows([]) == {"opened": 0, "over_100": 0, "over_100_by_pair": {},
                                 "over_100_at": [], "median": None, "p95": None,
@@ -168,7 +223,7 @@ def test_a_true_error_at_round_off_tests_no_error_bar():
             ("a", 2, "work", 2 * floor, 4 * floor, floor)]
     c = _coverage(rows)
     assert (c["pairs"], c["unresolved"], c["coverage"]) == (3, 1, 0.5)
-    assert [m["set"] for m in c["misses"]] == [1]
+    assert [m["sample"] for m in c["misses"]] == [1]
     assert c["sharpness"] == pytest.approx(np.median([1e4 / 10, 0.5]))
     assert _coverage(rows[:1])["coverage"] is None
 

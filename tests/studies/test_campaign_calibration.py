@@ -42,7 +42,7 @@ def test_a_calibration_job_reports_what_xval_calibrate_reports_and_is_reused(tmp
 def test_a_calibration_that_disagrees_or_failed_is_a_campaign_problem():
     base = {"result": "campaign", "name": "c", "n_jobs": 1, "n_run": 1, "n_reused": 0,
             "n_failed": 0, "n_crashed": 0, "wall_s": 1.0, "cases": [], "maps": []}
-    miss = {"set": 0, "pair": ["a", "b"], "channel": "x", "ratio": 3.0, "params": {}}
+    miss = {"sample": 0, "a": "a", "b": "b", "channel": "x", "ratio": 3.0, "params": {}}
     bad = Result.from_json({**base, "calibration": [
         {"scene": "press", "samples": 1, "comparisons": 4, "disagree": [miss],
          "coverage": 1.0, "sharpness": 0.5, "widest_window": 2.0, "skipped": []},

@@ -27,20 +27,21 @@ from .common import positive_int as positive_int_arg
 
 
 def calibrate(scene: str, samples: int = 20, seed: int = 0, solvers=None, *, out=None,
-              force: bool = False, params: dict | None = None, log: Callable | None = None,
-              **kw) -> CalibrationResult:
+              force: bool = False, params: dict | None = None, spread: float = 2.0,
+              log: Callable | None = None, **kw) -> CalibrationResult:
     """Calibration (`xval calibrate`): `samples` parameter sets drawn with `seed` from the
     scene's sampling region (`Calibration`) — the parameters given in `params` or as keywords
-    (`--set`) held at their value in every set — every solver (or those named) run at each
-    with its error estimate. Returns a `CalibrationResult` (`s["disagree"]`, `s["coverage"]`,
-    `s["sharpness"]`, `s["widest_window"]`, `s["skipped"]`), saved in the folder `out` when
-    given (`claim_out`'s rule)."""
+    (`--set`) held at their value in every set, the default axes reaching default/`spread` …
+    default·`spread` — every solver (or those named) run at each with its error estimate.
+    Returns a `CalibrationResult` (`s["disagree"]`, `s["coverage"]`, `s["sharpness"]`,
+    `s["widest_window"]`, `s["skipped"]`), saved in the folder `out` when given (`claim_out`'s
+    rule)."""
     from ..workflows.calibrate import calibrate as run_calibration
     if out is not None:
         claim_out(str(out), "calibration", force)
     res = run_calibration(scene, positive_int("samples", samples), seed=int(seed),
                           solvers=names(solvers), log=log or quiet,
-                          held=overrides(params, kw))
+                          held=overrides(params, kw), spread=spread)
     if out is not None:
         res.save(out)
     return res
@@ -49,7 +50,8 @@ def calibrate(scene: str, samples: int = 20, seed: int = 0, solvers=None, *, out
 def main(args) -> int:
     with stdout_to_stderr():
         r = calibrate(args.scene, args.samples, args.seed, args.solver, out=args.out,
-                      force=args.force, params=parse_sets(args.set), log=log)
+                      force=args.force, params=parse_sets(args.set), spread=args.spread,
+                      log=log)
     return answered(args, r)
 
 
@@ -67,4 +69,7 @@ COMMAND = Command(
           arg("--samples", type=positive_int_arg("--samples"), default=20, metavar="N",
               help="parameter sets to draw (default 20)"),
           arg("--seed", type=int, default=0, metavar="S", help="random seed (default 0)"),
+          arg("--spread", type=float, default=2.0, metavar="F",
+              help="how far a parameter the scene declares no range for is drawn: "
+                   "default/F … default·F within its admissible range (default 2; > 1)"),
           *RESULT_OUT, JSON, STRICT))

@@ -30,7 +30,7 @@ from ..scenes import Calibration, Scene, get_scene
 from ..scenes.params import RUN_PARAMS
 from .coverage import FAR_RTOL, bars, reference_run
 
-SPREAD = 2.0        # the default region: default/SPREAD … default·SPREAD
+SPREAD = 2.0        # the default region: default/SPREAD … default·SPREAD (`--spread`)
 HORIZON = 0.1       # a time scene's default horizon: this fraction of its default t_end
 # a frequency leaf's truth: its mesh (ints named *elements/*segments) ×2, not finer: fem's
 # Hermite beam is at its round-off floor past that (stiffness conditioning ∝ N⁴: rotating-beam's
@@ -58,17 +58,18 @@ class Axis:
         return float(np.sign(self.lo) * np.exp(a + u * (b - a)))
 
 
-def region(scene: Scene, held: dict | None = None) -> tuple[list[Axis], dict]:
-    """The scene's sampling region: (axes, fixed values), `Calibration`'s rules; `held`
-    (name -> value, as `xval calibrate --set` gives them) holds those names out of it at
-    that value."""
+def region(scene: Scene, held: dict | None = None,
+           spread: float = SPREAD) -> tuple[list[Axis], dict]:
+    """The scene's sampling region: (axes, fixed values), `Calibration`'s rules, a default
+    axis default/spread … default·spread; `held` (name -> value, as `xval calibrate --set`
+    gives them) holds those names out of it at that value."""
     cal = scene.calibration or Calibration()
     held = dict(held or {})
     axes = {}
     for p in scene.params:
         if p.is_float and p.physical and p.name not in RUN_PARAMS and p.default \
                 and p.name not in cal.fixed and p.name not in held:
-            lo, hi = sorted((p.default / SPREAD, p.default * SPREAD))
+            lo, hi = sorted((p.default / spread, p.default * spread))
             lo = max(lo, np.nextafter(p.lo, np.inf) if p.open_lo else p.lo)
             axes[p.name] = Axis(p.name, lo, min(hi, p.hi), True)
     for name, (lo, hi) in cal.region.items():
@@ -102,11 +103,11 @@ def admissible(scene: Scene, over: dict) -> dict | None:
         return None
 
 
-def sample(scene: Scene, n: int, seed: int = 0,
-           held: dict | None = None) -> list[tuple[dict, dict]]:
-    """`n` admissible (overrides, resolved parameters) drawn from the scene's region (with
-    `held` names held out of it, `region`)."""
-    axes, fixed = region(scene, held)
+def sample(scene: Scene, n: int, seed: int = 0, held: dict | None = None,
+           spread: float = SPREAD) -> list[tuple[dict, dict]]:
+    """`n` admissible (overrides, resolved parameters) drawn from the scene's region (`held`
+    and `spread` as `region`'s)."""
+    axes, fixed = region(scene, held, spread)
     rng = np.random.default_rng(seed)
     out = []
     for _ in range(TRIES * n):
@@ -289,22 +290,26 @@ def held_values(scene: Scene, overrides: dict | None) -> dict:
 
 
 def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
-              log=None, held: dict | None = None) -> CalibrationResult:
+              log=None, held: dict | None = None, spread: float = SPREAD) -> CalibrationResult:
     """The study over `samples` sets drawn with `seed` (solvers: the scene's unless named;
-    `held`: parameters held at a value in every set, `--set`)."""
+    `held`: parameters held at a value in every set, `--set`; `spread`: how far the default
+    axes reach, `--spread`)."""
     t0 = time.perf_counter()
+    if isinstance(spread, bool) or not (isinstance(spread, (int, float)) and spread > 1
+                                        and np.isfinite(spread)):
+        raise BadInput(f"--spread must be a number greater than 1, got {spread!r}")
     scene = get_scene(scene_name)
     cal = scene.calibration or Calibration()
     chosen = adapter.pick(scene, solvers)
     held = held_values(scene, held)
-    axes, fixed = region(scene, held)
+    axes, fixed = region(scene, held, spread)
     defaults = scene.resolve(fixed)
     rows, skipped, disagree, n_cmp, verdicts = [], [], [], 0, {}
     explained_rows = []
     left_out = {s.name: {} for s in chosen}
     widest, windows = None, []
     bar = progress.task(f"calibrate {scene.name}", samples, "parameter sets")
-    for k, (over, params) in enumerate(sample(scene, samples, seed, held)):
+    for k, (over, params) in enumerate(sample(scene, samples, seed, held, spread)):
         one = evaluate(scene, chosen, params, first=(k == 0))
         bar.advance()
         changed = {n: _plain(params[n]) for n in over if n not in fixed
@@ -353,6 +358,7 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
             "by_solver": {s.name: {**_coverage([r for r in rows if r[0] == s.name]),
                                    "left_out": left_out[s.name]} for s in chosen},
             "region": {a.name: [a.lo, a.hi, "log" if a.log else "uniform"] for a in axes},
+            "spread": float(spread),
             "fixed": {n: _plain(v) for n, v in fixed.items()},
             "floor": f"a deviation below {FLOOR:g}·eps·scale opens no window; a true error "
                      f"below it or the truth's own rounding tests no error bar",

@@ -158,6 +158,20 @@ def test_a_set_parameter_is_held_in_every_sample_and_leaves_the_region():
         cal.held_values(scene, {"no_such": "1"})
 
 
+def test_spread_reaches_further_off_the_defaults_and_must_exceed_one():
+    """`--spread F`: a default axis is default/F … default·F (F = 2 unless given); a declared
+    axis (rotor-whirl's spin 0–150 rad/s) stays as declared; F ≤ 1 is one line, exit 2."""
+    scene = get_scene("rotor-whirl")
+    k = scene.param("k").default
+    for f in (2.0, 4.0):
+        axes = {a.name: a for a in cal.region(scene, spread=f)[0]}
+        assert (axes["k"].lo, axes["k"].hi) == (pytest.approx(k / f), pytest.approx(k * f))
+        assert (axes["spin"].lo, axes["spin"].hi) == (0.0, 150.0)
+    with pytest.raises(BadInput, match="--spread"):
+        cal.calibrate("rotor-whirl", 1, spread=1.0)
+    assert cli.main(["calibrate", "rotor-whirl", "--samples", "1", "--spread", "0.5"]) == 2
+
+
 def test_out_writes_the_json_and_report_and_takes_its_own_folder_again(tmp_path):
     """`--out DIR`: calibration.json and report.md in DIR; the same command again writes over
     its own result; a folder of other files is refused with exit status 2, nothing written."""

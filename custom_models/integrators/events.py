@@ -127,8 +127,8 @@ def integrate_segment(f, acc, guard, g, y0, p, t0, t_stop, t_out, i_next, Y, h_n
                         lo, hi = 0.0, h
                         while hi - lo > cfg[C_EVENT_TOL]:
                             mid = 0.5 * (lo + hi)
-                            _, _, ev, _, _ = _one_step(f, acc, tk, y, qdd, zd, p, mid, tab, cfg, K,
-                                                    ys, ym)
+                            _, _, ev, _, _ = _one_step(f, acc, tk, y, qdd, zd, p, mid, tab,
+                                                       cfg, K, ys, ym)
                             evals += ev
                             if g(tk + mid, ym, p) * g0 > 0.0:
                                 lo = mid

@@ -282,8 +282,10 @@ class Calibration:
     2·default] within its admissible range, a time scene's horizon a tenth of its default;
     `region` (name -> (lo, hi)) adds or replaces axes, drawn log-uniformly where named in `log`
     (else uniformly); `fixed` (name -> value) holds names out of the region (a short horizon);
-    `outside` (solver, "*" any -> why): where in the region that solver leaves its domain and
-    stops (a set it stops at is skipped with this reason, never counted as agreement);
+    `outside` (solver, "*" any -> (why, how its stop's reason starts)): where in the region
+    that solver leaves its domain and stops — a set where it stops so is outside the region,
+    skipped with this reason and never counted as agreement; a stop with another reason is
+    not declared;
     `truth` (solver -> another): whose run is that solver's true answer in place of its own
     far tighter run — where it has none (a closed form of the same model) or where its own
     refinement grows noisier than the run (a stiff FE mesh, index-3 accelerations);

@@ -153,7 +153,7 @@ ANDREWS = TimeScene(
     # ~50 elsewhere, β's least −0.1386 rad), which Exudyn and MuJoCo pass in redundant
     # coordinates: a set where it stops is outside the method's domain
     calibration=Calibration(truth={"exudyn": "mujoco"}, outside={
-        "lagrange-partial": "β reaches a dead point, where one coordinate cannot carry the "
-                            "loop"}),
+        "lagrange-partial": ("β reaches a dead point, where one coordinate cannot carry the "
+                             "loop", "singular:")}),
     group="benchmarks", benchmark=BENCHMARK,
     notes="Energy balance = kinetic + spring − motor work mom·(β − β₀).")

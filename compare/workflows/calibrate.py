@@ -280,6 +280,17 @@ def explained(scene: Scene, params: dict, comparisons: list, runs: dict) -> dict
     return {(r["a"], r["b"], r["mode"]): r["why"] for r in rows if r["frame"]}
 
 
+def declared(cal: Calibration, solver: str, reason: str | None) -> str | None:
+    """Why the scene declares this stop outside the solver's domain (`Calibration.outside`:
+    the solver's entry, else "*"'s, whose reason prefix the stop's reason must start with),
+    or None: an undeclared stop."""
+    entry = cal.outside.get(solver, cal.outside.get("*"))
+    if entry is None:
+        return None
+    why, starts = entry
+    return why if (reason or "").startswith(starts) else None
+
+
 def held_values(scene: Scene, overrides: dict | None) -> dict:
     """`--set` overrides as the values they resolve to (SI; a unit converted, a bad name or
     value refused with one line)."""
@@ -315,8 +326,11 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
         changed = {n: _plain(params[n]) for n in over if n not in fixed
                    and not np.array_equal(params[n], defaults[n])}
         stopped = [{"sample": k, "solver": s, "status": r.status, "reason": r.reason,
-                    "declared": cal.outside.get(s, cal.outside.get("*"))}
+                    "declared": declared(cal, s, r.reason)}
                    for s, r in one["runs"].items() if r.status != "ok"]
+        outside = next((x["declared"] for x in stopped if x["declared"]), None)
+        for x in stopped:          # a set outside the region: every stop there is outside
+            x["declared"] = x["declared"] or outside
         skipped += stopped
         if log:
             log(f"{scene.name} set {k + 1}/{samples}: "

@@ -142,6 +142,31 @@ def test_the_contracts_rows_name_the_sample_and_the_pair(monkeypatch):
     assert r.problems()                 # an undeclared stop is refused, never agreement
 
 
+def test_a_stop_is_declared_only_where_another_solver_shows_the_domain_ends():
+    """press-cycle, seed 2468 set 19 (ψ0 −82°): both custom solvers stop at the rod's vertical,
+    where their (φ, ψ) chart is singular — MuJoCo's redundant coordinates show the rod passing
+    0.6° from it (within `singular_tol`, 0.02 rad) — so the set is outside the region,
+    declared, and no problem; the same solvers stopping for another reason, or an engine
+    stopping, is not declared."""
+    scene = get_scene("press-cycle")
+    p = cal.sample(scene, 20, 2468)[19][1]
+    r = solvers.simulate(scene, solvers.get_solver("mujoco"), p,
+                         solvers.settings_for(solvers.get_solver("mujoco"), scene.name,
+                                              t_out=scene.output_grid(p)))
+    phi, psi = r.channels["crank_angle"], r.channels["rocker_angle"]
+    tilt = np.arccos(np.abs(p["l3"] * np.sin(psi) - p["l1"] * np.sin(phi)) / p["l2"])
+    assert r.status == "ok" and np.min(tilt) < 0.02
+    res = cal.calibrate("press-cycle", 20, seed=2468,
+                        solvers=["lagrange-exact", "lagrange-partial"])
+    stops = [(x["sample"], x["solver"]) for x in res["skipped"]]
+    assert stops == [(19, "lagrange-exact"), (19, "lagrange-partial")], res["skipped"]
+    assert all(x["declared"] for x in res["skipped"]) and not res.problems()
+    c = scene.calibration
+    assert cal.declared(c, "lagrange-exact", "singular: the rod reached the vertical")
+    assert cal.declared(c, "lagrange-exact", "unstable: the energy balance jumped") is None
+    assert cal.declared(c, "exudyn", "singular: the rod reached the vertical") is None
+
+
 def test_a_set_parameter_is_held_in_every_sample_and_leaves_the_region():
     """`--set NAME=VALUE` (units read as everywhere): that parameter at that value in every
     drawn set, drawn no longer; the other axes as before."""

@@ -78,6 +78,15 @@ def _widest_cell(d: dict) -> str:
     return cell
 
 
+def calibration_summary(d: dict) -> str:
+    """`xval calibrate`'s JSON in one line: comparisons, disagreements, stops, the error bars'
+    coverage and sharpness, the widest window."""
+    skipped = f", {len(d['skipped'])} solver runs skipped" if d["skipped"] else ""
+    return (f"{d['comparisons']} comparisons over {d['samples']} sets, {len(d['disagree'])} "
+            f"disagree{skipped}; coverage {_g(d['coverage'])}, sharpness "
+            f"{_g(d['sharpness'], '.2g')}, widest window {_g(d['widest_window'])}")
+
+
 def calibration_tables(d: dict) -> list:
     """`xval calibrate`'s JSON as its two tables: the scene's row, and one row per solver."""
     rows = [[d["scene"], str(d["samples"]), str(d["comparisons"]), str(len(d["disagree"])),

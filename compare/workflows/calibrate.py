@@ -25,10 +25,12 @@ from ..analysis.verdict import Verdict
 from ..contract import rounds_with
 from ..errors import BadInput
 from ..output import progress
+from ..output.tables import calibration_summary
 from ..results.calibrate import CalibrationResult
 from ..scenes import Calibration, Scene, get_scene
 from ..scenes.params import RUN_PARAMS
 from .coverage import FAR_RTOL, bars, reference_run
+from .inputs import positive
 
 SPREAD = 2.0        # the default region: default/SPREAD … default·SPREAD (`--spread`)
 HORIZON = 0.1       # a time scene's default horizon: this fraction of its default t_end
@@ -306,9 +308,8 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
     `held`: parameters held at a value in every set, `--set`; `spread`: how far the default
     axes reach, `--spread`)."""
     t0 = time.perf_counter()
-    if isinstance(spread, bool) or not (isinstance(spread, (int, float)) and spread > 1
-                                        and np.isfinite(spread)):
-        raise BadInput(f"--spread must be a number greater than 1, got {spread!r}")
+    if positive("--spread", spread) <= 1:
+        raise BadInput(f"--spread must be greater than 1, got {spread!r}")
     scene = get_scene(scene_name)
     cal = scene.calibration or Calibration()
     chosen = adapter.pick(scene, solvers)
@@ -377,18 +378,9 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
             "floor": f"a deviation below {FLOOR:g}·eps·scale opens no window; a true error "
                      f"below it or the truth's own rounding tests no error bar",
             "wall_s": time.perf_counter() - t0}
-    data["summary"] = summary_line(data)
+    data["summary"] = calibration_summary(data)
     bar.close()
     return CalibrationResult(data)
-
-
-def summary_line(d: dict) -> str:
-    """The study in one line: the two error rates' side and the window."""
-    g = lambda x, f=".3g": "—" if x is None else format(x, f)
-    skipped = f", {len(d['skipped'])} solver runs skipped" if d["skipped"] else ""
-    return (f"{d['comparisons']} comparisons over {d['samples']} sets, {len(d['disagree'])} "
-            f"disagree{skipped}; coverage {g(d['coverage'])}, sharpness "
-            f"{g(d['sharpness'], '.2g')}, widest window {g(d['widest_window'])}")
 
 
 # a window past this is a bound that would pass a bug this many times the pair's deviation

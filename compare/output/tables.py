@@ -81,7 +81,8 @@ def _widest_cell(d: dict) -> str:
 def calibration_summary(d: dict) -> str:
     """`xval calibrate`'s JSON in one line: comparisons, disagreements, stops, the error bars'
     coverage and sharpness, the widest window."""
-    skipped = f", {len(d['skipped'])} solver runs skipped" if d["skipped"] else ""
+    n = len(d["skipped"])
+    skipped = f", {n} solver run{'s' * (n != 1)} skipped" if n else ""
     return (f"{d['comparisons']} comparisons over {d['samples']} sets, {len(d['disagree'])} "
             f"disagree{skipped}; coverage {_g(d['coverage'])}, sharpness "
             f"{_g(d['sharpness'], '.2g')}, widest window {_g(d['widest_window'])}")

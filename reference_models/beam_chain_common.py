@@ -264,6 +264,29 @@ def richardson(coarse: dict, fine: dict, n_modes: int) -> np.ndarray:
     return np.array(out[:n_modes])
 
 
+def by_label(model: dict, labels: list) -> np.ndarray:
+    """The model's signed frequencies (`signed_hz`) at `labels` (a repeated label in its
+    order), NaN where it lacks one."""
+    own: dict = {}
+    for lab, f in zip(model["labels"], signed_hz(model)):
+        own.setdefault(lab, []).append(f)
+    out, used = [], {}
+    for lab in labels:
+        j = used.get(lab, 0)
+        used[lab] = j + 1
+        cands = own.get(lab, [])
+        out.append(cands[j] if j < len(cands) else np.nan)
+    return np.array(out, float)
+
+
+def raw_ratio(models: list, labels: list) -> np.ndarray:
+    """(f_N/4 − f_N/2)/(f_N/2 − f_N) per label of the N chain, `models` = (N, N/2, N/4): 4 in
+    the chain's 1/N² regime (ASYMPTOTIC_RATIO); NaN where a chain lacks the mode."""
+    f1, f2, f4 = (by_label(m, labels) for m in models)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return (f4 - f2) / (f2 - f1)
+
+
 def checked_segments(settings: dict) -> int:
     """The discretisation setting: an integer ≥ 4, even when extrapolating (N and N/2)."""
     n = settings["n_segments"]
@@ -353,9 +376,10 @@ def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) 
                          else np.inf for i in idx])
         spread = max((d / abs(f_all[i]) for d, i in zip(diff, idx) if np.isfinite(d)),
                      default=0.0)
+        ratio = raw_ratio(models, [fine["labels"][i] for i in idx])
         extra = {"unextrapolated_hz": fine["frequencies_hz"][idx],
                  "richardson_spread_rel": float(spread),
-                 "frequency_error_hz": extrapolate_error(diff, change)}
+                 "frequency_error_hz": extrapolate_error(diff, change, ratio)}
         if spread > SPREAD_NOTE:
             notes.append(f"discretisation: extrapolations from N/4–N/2 and N/2–N differ by "
                          f"{spread:.1e} here; raise n_segments")

@@ -18,25 +18,29 @@ FD_VARY = 10.0      # Exudyn's finite-difference step × this: the linearisation
 # Exudyn forms M, K and D inside the engine, rounding more than the eigensolver's floor: over
 # 140 random rotor-whirl sets its frequencies' distance to the closed form (exact to an ulp)
 # reached 1.25 × that floor (its own round-off plus the closed form's 8 eps); 2.5 × it holds
-# them with a margin of 2
+# them with a margin of 2 (on the tilt block, `whirl_coordinates`: the distance to the exact
+# quadratic ≤ 0.44 of the bar at 100 sweep speeds of six damper pairs)
 FORMATION = 2.5
 
 
 TILT, SPIN = [0, 1], [2]      # the two Cardan tilt angles, the spin angle
 
 
-def tilt_block(M, K, D):
-    """M, K, D on the tilt coordinates alone where the tilt rows do not depend on the spin
-    coordinate (an axisymmetric rotor: nothing depends on the spin angle or its rate to first
-    order), else as they are (an eccentric rotor couples them). Block-triangular, the whirl
-    roots are then the tilt block's; the spin row holds only the finite differences' noise
-    (~1e-8 × c_int Ω), and with it the state matrix's defective zero pair cost the whirl roots
-    40–47 ulp where the block's are 5–9 against the exact quadratic (`xval modes rotor-whirl
-    --set spin=140 --set c_int=0.5 --set c_ext=0.05`: the sweep's forward whirl at 15.15 rad/s
-    8.8e-15 off the closed form against a bar of 8.5e-15: disagree)."""
-    if any(np.any(X[np.ix_(TILT, SPIN)]) for X in (M, K, D)):
-        return M, K, D
-    return tuple(X[np.ix_(TILT, TILT)] for X in (M, K, D))
+def whirl_coordinates(M, K, D) -> list:
+    """The coordinates the whirl roots are solved on: the tilt angles alone where the tilt
+    rows do not depend on the spin coordinate (an axisymmetric rotor: nothing depends on the
+    spin angle or its rate to first order), else all three (an eccentric rotor couples them).
+    Block-triangular, the whirl roots are then the tilt block's; the spin row holds only the
+    finite differences' noise (~1e-8 × c_int Ω), and with it the state matrix's defective zero
+    pair cost the whirl roots 40–47 ulp where the block's are 5–9 against the exact quadratic
+    (`xval modes rotor-whirl --set spin=140 --set c_int=0.5 --set c_ext=0.05`: the sweep's
+    forward whirl at 15.15 rad/s 8.8e-15 off the closed form against a bar of 8.5e-15)."""
+    coupled = any(np.any(X[np.ix_(TILT, SPIN)]) for X in (M, K, D))
+    return TILT + SPIN if coupled else TILT
+
+
+def block(mats, idx):
+    return tuple(X[np.ix_(idx, idx)] for X in mats)
 
 
 def linearised(model, spin, fd_scale=1.0):
@@ -84,13 +88,15 @@ def modes(params, settings=None):
     """Linearised whirl frequencies (Hz) at steady spin params['spin'] about the upright axis."""
     spin = float(params["spin"])
     model = upright(params)
-    M, K, D = tilt_block(*linearised(model, spin))
+    mats = linearised(model, spin)
+    idx = whirl_coordinates(*mats)
+    M, K, D = block(mats, idx)
     w, labels, re = _whirl_pair(M, K, D, spin)
     re = np.asarray(re, float)
     # ζ's and the frequencies' errors: eigen round-off plus the change when the FD step is
     # varied, mode by mode
     A = state_matrix(M, K, D)
-    A_varied = state_matrix(*tilt_block(*linearised(model, spin, FD_VARY)))
+    A_varied = state_matrix(*block(linearised(model, spin, FD_VARY), idx))
     roots = re + 1j * np.asarray(w)
     z_err = eigen.root_zeta_errors(A, roots, A_varied)
     f_err = eigen.root_errors(A, roots, A_varied, FORMATION) / (2 * math.pi)
@@ -111,7 +117,8 @@ def whirl_sweep(params, spins):
     bw = np.empty(len(spins))
     fw = np.empty(len(spins))
     for i, sp in enumerate(spins):
-        w, labels, _ = _whirl_pair(*tilt_block(*linearised(model, sp)), sp)
+        mats = linearised(model, sp)
+        w, labels, _ = _whirl_pair(*block(mats, whirl_coordinates(*mats)), sp)
         if sp == 0.0:
             bw[i], fw[i] = w
         else:

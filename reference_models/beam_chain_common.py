@@ -252,23 +252,15 @@ def richardson(coarse: dict, fine: dict, n_modes: int) -> np.ndarray:
     """Second-order Richardson extrapolation (4 f_fine − f_coarse)/3 per mode label of the
     signed frequencies (`signed_hz`; the chain converges as 1/N²; fine has twice the segments).
     Modes of `fine` whose label the coarse model lacks keep their fine value."""
-    f_c = {}
-    for lab, f in zip(coarse["labels"], signed_hz(coarse)):
-        f_c.setdefault(lab, []).append(f)
-    out, used = [], {}
-    for lab, f in zip(fine["labels"], signed_hz(fine)):
-        j = used.get(lab, 0)
-        used[lab] = j + 1
-        cands = f_c.get(lab, [])
-        out.append((4 * f - cands[j]) / 3 if j < len(cands) else f)
-    return np.array(out[:n_modes])
+    f, c = signed_hz(fine), by_label(coarse, fine["labels"])
+    return np.where(np.isnan(c), f, (4 * f - c) / 3)[:n_modes]
 
 
-def by_label(model: dict, labels: list) -> np.ndarray:
-    """The model's signed frequencies (`signed_hz`) at `labels` (a repeated label in its
-    order), NaN where it lacks one."""
+def by_label(model: dict, labels: list, values=None) -> np.ndarray:
+    """The model's `values` (default its signed frequencies, `signed_hz`) at `labels` (a
+    repeated label in its order), NaN where it lacks one."""
     own: dict = {}
-    for lab, f in zip(model["labels"], signed_hz(model)):
+    for lab, f in zip(model["labels"], signed_hz(model) if values is None else values):
         own.setdefault(lab, []).append(f)
     out, used = [], {}
     for lab in labels:
@@ -330,16 +322,8 @@ def extrapolate_error(diff, change, ratio=None, safety=1.0):
 def damping_change(coarse: dict, fine: dict) -> np.ndarray:
     """|ζ_fine − ζ_coarse| per mode of `fine`, matched by label as `richardson` matches them
     (0 where the coarse model lacks the label): the discretisation's share of ζ's error."""
-    z_c = {}
-    for lab, z in zip(coarse["labels"], coarse["damping"]):
-        z_c.setdefault(lab, []).append(z)
-    out, used = [], {}
-    for lab, z in zip(fine["labels"], fine["damping"]):
-        j = used.get(lab, 0)
-        used[lab] = j + 1
-        cands = z_c.get(lab, [])
-        out.append(abs(z - cands[j]) if j < len(cands) else 0.0)
-    return np.array(out)
+    c = by_label(coarse, fine["labels"], coarse["damping"])
+    return np.where(np.isnan(c), 0.0, np.abs(np.asarray(fine["damping"], float) - c))
 
 
 def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) -> dict:

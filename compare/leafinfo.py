@@ -163,6 +163,10 @@ class Integrator:
     adaptive: bool
 
 
+# the settings that count a frequency leaf's mesh (elements, segments): integers, finer larger
+MESH_SUFFIXES = ("elements", "segments")
+
+
 @dataclass(frozen=True)
 class LeafInfo:
     """What xval knows of one leaf module (`leaf_info(module_name)`, built once)."""

@@ -25,6 +25,7 @@ import numpy as np
 
 from .. import solvers
 from ..analysis import metrics
+from ..leafinfo import MESH_SUFFIXES
 from ..output.bench_report import knob_text as _knob_text
 from ..results import BenchResult
 from ..scenes import Scene
@@ -40,7 +41,6 @@ from .work_precision import (
 
 TOLERANCES = {"rtol": tuple(10.0 ** -k for k in range(1, 14)),      # root refinement
               "fd_step": tuple(10.0 ** -k for k in range(1, 11))}    # finite-difference step
-MESH_SUFFIXES = ("elements", "segments")
 MESH_FACTORS = tuple(2.0 ** k for k in range(-3, 4))     # 1/8 … 8 × the default mesh
 SWITCHES = ("richardson", "extrapolate")                 # accuracy switches of a mesh
 # a root search's grid step (bracketing; too coarse a grid misses roots): 8× … 1/8× the default

@@ -24,6 +24,7 @@ from ..analysis.metrics import ROOTS, frequency_errors, match_modes
 from ..analysis.verdict import Verdict
 from ..contract import rounds_with
 from ..errors import BadInput
+from ..leafinfo import MESH_SUFFIXES
 from ..output import progress
 from ..output.tables import calibration_summary
 from ..results.calibrate import CalibrationResult
@@ -38,7 +39,6 @@ HORIZON = 0.1       # a time scene's default horizon: this fraction of its defau
 # Hermite beam is at its round-off floor past that (stiffness conditioning ∝ N⁴: rotating-beam's
 # third mode moves 3e-6 Hz at ×4 and 1.4e-4 Hz at ×8, above the default's own error)
 MESH_FAR = 2
-MESH_SUFFIXES = ("elements", "segments")
 FLOOR = 1e3         # a deviation below FLOOR·eps·scale is round-off: it opens no window
 TRIES = 100         # draws per admissible set before the region is called inadmissible
 EPS = np.finfo(float).eps

@@ -120,7 +120,8 @@ def quadratic_modes(M: np.ndarray, K: np.ndarray, D: np.ndarray, varied=None,
                     first: int = 0):
     """Eigenvalues s and eigenvectors (coordinates only) of M q̈ + D q̇ + K q = 0: the
     oscillatory ones (Im s > 0) ascending in Im s, the count of eigenvalues with
-    Re s > 0 beyond round-off (divergence or flutter: an unstable linearisation), and, given
+    Re s > 0 beyond round-off (divergence or flutter: an unstable linearisation), the growth
+    rates σ > 0 of the real pairs ±σ (a divergent mode: inside an instability band), and, given
     `varied` (M, K, D linearised at another finite-difference step), the error bound of ζ of
     the `first` roots: eigen round-off (compare.physics.eigen) plus the first-order change
     `varied` makes (None without `varied`), and the same bound on the frequency (Hz): what the
@@ -145,7 +146,8 @@ def quadratic_modes(M: np.ndarray, K: np.ndarray, D: np.ndarray, varied=None,
         # FD_VARY² − 1 = 99 × the error at it (exudyn–mujoco differ by 0.0068–0.0081 of their
         # summed changes at every mode of 9 sets of both beams: an h² error, not h)
         f_err = d_abs / (FD_VARY**2 - 1) / (2 * np.pi)
-    return s[keep], V[:n, keep], n_unstable, z_err, f_err
+    growth = s[fin & (np.abs(s.imag) <= 1e-9 * scale) & (s.real > 0)].real
+    return s[keep], V[:n, keep], n_unstable, growth, z_err, f_err
 
 
 def stations(L: float) -> np.ndarray:
@@ -182,7 +184,7 @@ def blade_modes(chain: dict, M, K, D, n_modes: int, varied=None) -> dict:
     """Frequencies (Hz), labels by the family holding most of the hinge-spring energy, shapes
     [flap z, lag y, (chord/2)·twist] at the stations (Re then Im), damping −Re s/|s| and its
     error bound (`quadratic_modes`)."""
-    s, V, n_unstable, z_err, f_err = quadratic_modes(M, K, D, varied, n_modes)
+    s, V, n_unstable, _, z_err, f_err = quadratic_modes(M, K, D, varied, n_modes)
     fam, hinge, k = joint_table(chain)
     families, shapes = [], []
     arm = _arms(chain)
@@ -220,8 +222,15 @@ def shaft_modes(chain: dict, M, K, D, n_modes: int, varied=None) -> dict:
     mstmm and fem number them, so every solver pairs mode by mode. For the isotropic shaft the
     forward whirl is the lower branch |λ² − Ω*| (its inertial frequency is λ²ω₀ turning with
     the spin) and the backward the upper λ² + Ω*. Shapes: [u, v] at the stations (Re then
-    Im); damping −Re s/|s| and its error bound (`quadratic_modes`)."""
-    s, V, n_unstable, z_err, f_err = quadratic_modes(M, K, D, varied, n_modes)
+    Im); damping −Re s/|s| and its error bound (`quadratic_modes`).
+
+    A divergent mode (a real pair ±σ: inside an anisotropic shaft's instability band) is not
+    listed, and the next mode of its kind takes its label, as mstmm and fem number them; the
+    chains of N and N/2 segments put a band's edges apart, so they are matched by
+    "pair_labels", which number the divergent modes too (at rotating-frame frequency 0), and
+    "band" gives each divergent one's −(σ/2π)²: the continuation of f² through the edge
+    (`richardson`)."""
+    s, V, n_unstable, growth, z_err, f_err = quadratic_modes(M, K, D, varied, n_modes)
     fam, hinge, k = joint_table(chain)
     arm = _arms(chain)
     spin = chain["spin"]
@@ -233,8 +242,12 @@ def shaft_modes(chain: dict, M, K, D, n_modes: int, varied=None) -> dict:
         shapes.append(real_shape(np.concatenate([u_x, v_y])))
         sense.append(1.0 if spin == 0 else float(np.sign(whirl_sense(u_x, v_y))))
     labels = whirl_labels(s.imag / (2 * np.pi), sense, spin / (2 * np.pi))
+    every = whirl_labels(np.r_[s.imag, 0 * growth] / (2 * np.pi), sense + [1.0] * len(growth),
+                         spin / (2 * np.pi))
+    band = dict(zip(every[len(s):], -(growth / (2 * np.pi)) ** 2))
     s = s[:n_modes]
     return {"frequencies_hz": s.imag / (2 * np.pi), "labels": labels[:n_modes],
+            "pair_labels": every[:n_modes], "band": band,
             "sense": np.array(sense[:n_modes]), "shapes": np.array(shapes[:n_modes]),
             "damping": -s.real / np.abs(s), "damping_error": z_err,
             "linearisation_error_hz": f_err, "n_unstable": n_unstable}
@@ -251,16 +264,27 @@ def signed_hz(model: dict) -> np.ndarray:
 def richardson(coarse: dict, fine: dict, n_modes: int) -> np.ndarray:
     """Second-order Richardson extrapolation (4 f_fine − f_coarse)/3 per mode label of the
     signed frequencies (`signed_hz`; the chain converges as 1/N²; fine has twice the segments).
-    Modes of `fine` whose label the coarse model lacks keep their fine value."""
-    f, c = signed_hz(fine), by_label(coarse, fine["labels"])
-    return np.where(np.isnan(c), f, (4 * f - c) / 3)[:n_modes]
+    Where the coarse chain's mode is divergent (its band edge lies past the fine one's), of
+    f², continued through the edge by −(σ/2π)² (`shaft_modes` "band"), which is smooth in
+    N there: the frequency beside an anisotropic shaft's band edge. Modes of `fine` the coarse
+    model lacks otherwise keep their fine value."""
+    labels = pairing(fine)
+    f, c = signed_hz(fine), by_label(coarse, labels)
+    q = np.array([coarse.get("band", {}).get(lab, np.nan) for lab in labels])
+    through = np.sign(f) * np.sqrt(np.maximum(4 * f**2 - q, 0.0) / 3)
+    return np.where(np.isnan(c), np.where(np.isnan(q), f, through), (4 * f - c) / 3)[:n_modes]
+
+
+def pairing(model: dict) -> list:
+    """The labels by which chains of N and N/2 segments match modes (`shaft_modes`)."""
+    return model.get("pair_labels", model["labels"])
 
 
 def by_label(model: dict, labels: list, values=None) -> np.ndarray:
     """The model's `values` (default its signed frequencies, `signed_hz`) at `labels` (a
     repeated label in its order), NaN where it lacks one."""
     own: dict = {}
-    for lab, f in zip(model["labels"], signed_hz(model) if values is None else values):
+    for lab, f in zip(pairing(model), signed_hz(model) if values is None else values):
         own.setdefault(lab, []).append(f)
     out, used = [], {}
     for lab in labels:
@@ -322,7 +346,7 @@ def extrapolate_error(diff, change, ratio=None, safety=1.0):
 def damping_change(coarse: dict, fine: dict) -> np.ndarray:
     """|ζ_fine − ζ_coarse| per mode of `fine`, matched by label as `richardson` matches them
     (0 where the coarse model lacks the label): the discretisation's share of ζ's error."""
-    c = by_label(coarse, fine["labels"], coarse["damping"])
+    c = by_label(coarse, pairing(fine), coarse["damping"])
     return np.where(np.isnan(c), 0.0, np.abs(np.asarray(fine["damping"], float) - c))
 
 
@@ -353,14 +377,15 @@ def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) 
         signed = f_all[idx]
         f = np.abs(signed)
         f_low = richardson(models[2], models[1], want + 6)
-        low = dict(zip([models[1]["labels"][i] for i in range(len(f_low))], f_low))
+        low = dict(zip(pairing(models[1]), f_low))
         # per mode: the two extrapolates' difference (N/4–N/2 against N/2–N)
         change = np.abs(signed - signed_hz(fine)[idx])
-        diff = np.array([abs(low[fine["labels"][i]] - f_all[i]) if fine["labels"][i] in low
-                         else np.inf for i in idx])
+        pair = pairing(fine)
+        diff = np.array([abs(low[pair[i]] - f_all[i]) if pair[i] in low else np.inf
+                         for i in idx])
         spread = max((d / abs(f_all[i]) for d, i in zip(diff, idx) if np.isfinite(d)),
                      default=0.0)
-        ratio = raw_ratio(models, [fine["labels"][i] for i in idx])
+        ratio = raw_ratio(models, [pair[i] for i in idx])
         extra = {"unextrapolated_hz": fine["frequencies_hz"][idx],
                  "richardson_spread_rel": float(spread),
                  "frequency_error_hz": extrapolate_error(diff, change, ratio)}

@@ -14,7 +14,7 @@ import numpy as np
 from scipy.optimize import brentq, linear_sum_assignment
 
 from .. import solvers
-from ..analysis import campbell, metrics
+from ..analysis import band_edge, campbell, metrics
 from ..analysis.campbell import mac
 from ..analysis.trajectory import Modes
 from ..analysis.verdict import Verdict, agree_text
@@ -213,6 +213,16 @@ def _crossing(scene, solver, params, values, i, g, key, f0, shapes, exc, seen, n
         if not x[0] <= v <= x[-1]:
             return (f"{first}; the parabola's root {v:.6g} lies outside the points beside the "
                     f"estimate [{x[0]:.6g}, {x[-1]:.6g}]")
+    edge = band_edge.locate(lambda x: (gap(x), whirl.get("error_hz"),
+                                       whirl.get("linearisation_hz")), v, lo, hi, (g[i], g[i + 1]))
+    if edge is not None:
+        v, error, lin, side = edge
+        gap(v + side * band_edge.PROBE * (hi - lo))          # the mode's whirl, beside the edge
+        # an edge moves with the frequencies as the line does: the allowance over its slope
+        slope = exc.order * abs(cb.excitation_hz(params, hi) - cb.excitation_hz(params, lo)) / (
+            hi - lo)
+        return (v, whirl.get("last"), None if error is None else error + 1e-9 * abs(v), slope,
+                None if lin is None else lin + 1e-9 * abs(v))
     # the crossing's error: the mode's frequency error over the gap's slope across the step,
     # plus the root's own tolerance (1e-9 relative)
     slope = abs((g[i + 1] - g[i]) / (hi - lo))

@@ -118,6 +118,71 @@ def test_every_whirl_seen_from_the_ground_turns_at_the_cantilever_frequency(solv
         assert all(v == (1 if lb.startswith("forward") else -1) for lb, v in sense.items())
 
 
+# `xval calibrate spinning-shaft --seed 7373` set 1: EI_yy = 1.43 EI_xx. The forward whirl 1
+# is divergent (a real pair in the rotating frame) between the two planes' bending
+# frequencies, λ₁² < Ω* < √(EI_yy/EI_xx)·λ₁² (the two-oscillator quartic of
+# tests/engines/test_beam_engines.py): the unbalance line meets it over the whole band and the
+# critical speed each solver reports is the band's upper edge, where the mode reappears.
+BAND = {"L": "0.8592806692053272", "EI_xx": "379.6951962999924",
+        "EI_yy": "541.5535297908771", "m": "2.1195366244353977"}
+BAND_EDGE = np.sqrt(541.5535297908771 / 379.6951962999924) * LAMBDA2[0]     # 4.19907756
+
+
+def band_edge(solver, overrides=BAND):
+    (e,) = [e for e in crossings(solver, (UNBALANCE,), np.array([4.0, 5.0]), overrides)
+            if e["name"] == "forward whirl 1"]
+    return e
+
+
+@pytest.mark.parametrize("solver", ["mstmm", "fem", "exudyn", "mujoco"])
+def test_a_band_edge_critical_speed_holds_the_closed_form_within_its_bar(solver):
+    """The edge located as such (compare/analysis/band_edge.py), not as the jump of a line
+    whose label passes to the next mode there: measured 2.2e-9 (mstmm), 5.6e-9 (fem) and
+    9.1e-5 (the engines) off √(EI_yy/EI_xx)·λ₁², against bars of 1.6e-8, 1.8e-4 and 6.7e-3.
+    As the jump the engines put it at their N = 40 chain's own edge, 6.0e-4 past, with a bar
+    of 1.8e-6 from the extrapolated frequency (3 of 6 pairs disagreed)."""
+    e = band_edge(solver)
+    assert abs(e["value"] - BAND_EDGE) <= e["error"], (e["value"], e["error"])
+    # sharp enough to see a plane 1 % stiffer: the edge moves by 0.5 %, 2.1e-2
+    assert e["error"] < 0.5 * 5e-3 * BAND_EDGE
+
+
+def test_a_band_edge_of_a_plane_one_percent_stiffer_disagrees():
+    """The seeded bug the edge's bar must show: mujoco's EI_yy 1 % high moves its edge by
+    0.5 % (2.1e-2 in Ω*), past both bars; the two solvers of the right model agree."""
+    from compare.workflows.modes import critical_speed_comparisons
+    stiff = {**BAND, "EI_yy": str(541.5535297908771 * 1.01)}
+    entries = {"mstmm": [band_edge("mstmm")], "exudyn": [band_edge("exudyn")],
+               "mujoco": [band_edge("mujoco", stiff)]}
+    verdicts = {(c.a, c.b): c.verdict
+                for c in critical_speed_comparisons(SHAFT, SHAFT.resolve(BAND), entries)}
+    assert verdicts == {("mstmm", "exudyn"): "agree", ("mstmm", "mujoco"): "disagree",
+                        ("exudyn", "mujoco"): "disagree"}
+
+
+@pytest.mark.parametrize("solver", ["exudyn", "mujoco"])
+def test_engines_extrapolate_a_mode_beside_its_band_edge(solver):
+    """Between the N chain's band edge and the N/2 chain's (Ω* = 4.1998, 4.201) only the N
+    chain lists the forward whirl 1, and the N/2 chain's next forward whirl took its label:
+    paired by label the extrapolate was 18.8 Hz with a bar of 19 (the true frequency 0.064).
+    Paired by the labels that count the divergent mode too, and extrapolated in f² through
+    the N/2 chain's −(σ/2π)²: within 1e-4 Hz of the quartic's root (measured 6.6e-5, 4.0e-5),
+    and within the leaf's bar."""
+    s = solvers.get_solver(solver)
+    ratio = 541.5535297908771 / 379.6951962999924
+    for spin in (4.1998, 4.201):
+        p = SHAFT.resolve({**BAND, "spin_ratio": str(spin)})
+        m = solvers.modes(SHAFT, s, p)
+        j = m.labels.index("forward whirl 1")
+        w0 = m.extra["omega0_rad_s"]
+        lam4 = LAMBDA2[0] ** 2
+        b = lam4 * (1 + ratio) + 2 * spin**2
+        c = (lam4 - spin**2) * (ratio * lam4 - spin**2)
+        want = np.sqrt((b - np.sqrt(b * b - 4 * c)) / 2) * w0 / (2 * np.pi)
+        assert m.frequencies_hz[j] == pytest.approx(want, abs=1e-4), spin
+        assert abs(m.frequencies_hz[j] - want) <= m.extra["frequency_error_hz"][j]
+
+
 @pytest.mark.parametrize("solver", ["exudyn", "mujoco"])
 def test_engines_extrapolate_the_forward_whirl_through_its_rotating_frame_zero(solver):
     """Just past a forward critical the chains of N and N/2 segments sit on opposite sides of

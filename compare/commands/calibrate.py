@@ -28,11 +28,12 @@ from .common import positive_int as positive_int_arg
 
 def calibrate(scene: str, samples: int = 20, seed: int = 0, solvers=None, *, out=None,
               force: bool = False, params: dict | None = None, spread: float = 2.0,
-              log: Callable | None = None, **kw) -> CalibrationResult:
+              campbell: bool = False, log: Callable | None = None, **kw) -> CalibrationResult:
     """Calibration (`xval calibrate`): `samples` parameter sets drawn with `seed` from the
     scene's sampling region (`Calibration`) — the parameters given in `params` or as keywords
     (`--set`) held at their value in every set, the default axes reaching default/`spread` …
-    default·`spread` — every solver (or those named) run at each with its error estimate.
+    default·`spread` — every solver (or those named) run at each with its error estimate, and
+    with `campbell` each set's Campbell sweep judged as `xval modes` judges it.
     Returns a `CalibrationResult` (`s["disagree"]`, `s["coverage"]`, `s["sharpness"]`,
     `s["widest_window"]`, `s["skipped"]`), saved in the folder `out` when given (`claim_out`'s
     rule)."""
@@ -41,7 +42,7 @@ def calibrate(scene: str, samples: int = 20, seed: int = 0, solvers=None, *, out
         claim_out(str(out), "calibration", force)
     res = run_calibration(scene, positive_int("samples", samples), seed=int(seed),
                           solvers=names(solvers), log=log or quiet,
-                          held=overrides(params, kw), spread=spread)
+                          held=overrides(params, kw), spread=spread, campbell=campbell)
     if out is not None:
         res.save(out)
     return res
@@ -51,7 +52,7 @@ def main(args) -> int:
     with stdout_to_stderr():
         r = calibrate(args.scene, args.samples, args.seed, args.solver, out=args.out,
                       force=args.force, params=parse_sets(args.set), spread=args.spread,
-                      log=log)
+                      campbell=args.campbell, log=log)
     return answered(args, r)
 
 
@@ -72,4 +73,8 @@ COMMAND = Command(
           arg("--spread", type=float, default=2.0, metavar="F",
               help="how far a parameter the scene declares no range for is drawn: "
                    "default/F … default·F within its admissible range (default 2; > 1)"),
+          arg("--campbell", action="store_true",
+              help="also judge each set's Campbell sweep as `xval modes` does (every sampled "
+                   "speed pairwise, the critical speeds): its disagreements are false alarms "
+                   "too"),
           *RESULT_OUT, JSON, STRICT))

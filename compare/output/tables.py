@@ -83,8 +83,11 @@ def calibration_summary(d: dict) -> str:
     coverage and sharpness, the widest window."""
     n = len(d["skipped"])
     skipped = f", {n} solver run{'s' * (n != 1)} skipped" if n else ""
-    return (f"{d['comparisons']} comparisons over {d['samples']} sets, {len(d['disagree'])} "
-            f"disagree{skipped}; coverage {_g(d['coverage'])}, sharpness "
+    sweep = d.get("campbell")
+    campbell = (f" (and the Campbell sweeps' {sweep['comparisons']} over {sweep['sets']} sets, "
+                f"{sweep['unconfirmed']} critical speeds unconfirmed)" if sweep else "")
+    return (f"{d['comparisons']} comparisons over {d['samples']} sets{campbell}, "
+            f"{len(d['disagree'])} disagree{skipped}; coverage {_g(d['coverage'])}, sharpness "
             f"{_g(d['sharpness'], '.2g')}, widest window {_g(d['widest_window'])}")
 
 

@@ -25,6 +25,12 @@ class CalibrationResult(StudyResult):
         out += [f"skipped: set {x['sample']} {x['solver']} {x['status']} ({x['reason']})"
                 + (f" — outside its domain: {x['declared']}" if x.get("declared") else "")
                 for x in d["skipped"]]
+        sweep = d.get("campbell")
+        if sweep:
+            out.append(f"Campbell sweeps: {sweep['comparisons']} comparisons over "
+                       f"{sweep['sets']} sets ("
+                       + ", ".join(f"{n} {v}" for v, n in sweep["verdicts"].items())
+                       + f"), {sweep['unconfirmed']} critical speeds unconfirmed")
         return out + [f"{d['wall_s']:.1f} s"]
 
     def markdown(self):

@@ -303,14 +303,17 @@ def held_values(scene: Scene, overrides: dict | None) -> dict:
 
 
 def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
-              log=None, held: dict | None = None, spread: float = SPREAD) -> CalibrationResult:
+              log=None, held: dict | None = None, spread: float = SPREAD,
+              campbell: bool = False) -> CalibrationResult:
     """The study over `samples` sets drawn with `seed` (solvers: the scene's unless named;
     `held`: parameters held at a value in every set, `--set`; `spread`: how far the default
-    axes reach, `--spread`)."""
+    axes reach, `--spread`; `campbell`: each set's Campbell sweep judged too, `--campbell`)."""
     t0 = time.perf_counter()
     if positive("--spread", spread) <= 1:
         raise BadInput(f"--spread must be greater than 1, got {spread!r}")
     scene = get_scene(scene_name)
+    if campbell and scene.campbell is None:
+        raise BadInput(f"--campbell: scene {scene.name} has no Campbell sweep")
     cal = scene.calibration or Calibration()
     chosen = adapter.pick(scene, solvers)
     held = held_values(scene, held)
@@ -320,6 +323,7 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
     explained_rows = []
     left_out = {s.name: {} for s in chosen}
     widest, windows = None, []
+    sweeps = {"sets": 0, "comparisons": 0, "verdicts": {}, "unconfirmed": 0}
     bar = progress.task(f"calibrate {scene.name}", samples, "parameter sets")
     for k, (over, params) in enumerate(sample(scene, samples, seed, held, spread)):
         one = evaluate(scene, chosen, params, first=(k == 0))
@@ -338,6 +342,8 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
                 + ", ".join(f"{s} {r.status}" for s, r in one["runs"].items()))
         if any(x["declared"] for x in stopped):
             continue      # outside a solver's declared domain: outside the region
+        if campbell:
+            disagree += _sweep(scene, chosen, params, k, changed, sweeps)
         for c in one["comparisons"]:
             if c.verdict == Verdict.SKIPPED:
                 continue
@@ -370,6 +376,7 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
             "windows": _windows(windows),
             "skipped": skipped, "seed": seed, "solvers": [s.name for s in chosen],
             "verdicts": verdicts, "widest_at": widest,
+            **({"campbell": sweeps} if campbell else {}),
             "by_solver": {s.name: {**_coverage([r for r in rows if r[0] == s.name]),
                                    "left_out": left_out[s.name]} for s in chosen},
             "region": {a.name: [a.lo, a.hi, "log" if a.log else "uniform"] for a in axes},
@@ -381,6 +388,24 @@ def calibrate(scene_name: str, samples: int, seed: int = 0, solvers=None,
     data["summary"] = calibration_summary(data)
     bar.close()
     return CalibrationResult(data)
+
+
+def _sweep(scene: Scene, chosen: list, params: dict, k: int, changed: dict,
+           tally: dict) -> list:
+    """Set k's Campbell sweep as `xval modes` judges it (every sampled speed pairwise, the
+    critical speeds): its counts added to `tally`, its disagreements returned as rows of
+    `disagree` (a false alarm at any speed is one); a critical speed a solver finds but does
+    not confirm is counted, not compared."""
+    from .modes import campbell_diagram
+    obj, _, told, *_ = campbell_diagram(scene, chosen, params, log=lambda *a: None)
+    tally["sets"] += 1
+    tally["comparisons"] += len(told["sweep"])
+    for c in told["sweep"]:
+        tally["verdicts"][str(c.verdict)] = tally["verdicts"].get(str(c.verdict), 0) + 1
+    tally["unconfirmed"] += sum(map(len, obj["unconfirmed_critical_speeds"].values()))
+    return [{"sample": k, "params": changed, "a": c.a, "b": c.b, "channel": c.channel,
+             "ratio": float(c.ratio), "campbell": True}
+            for c in told["sweep"] if c.verdict == Verdict.DISAGREE]
 
 
 # a window past this is a bound that would pass a bug this many times the pair's deviation

@@ -213,11 +213,15 @@ def _crossing(scene, solver, params, values, i, g, key, f0, shapes, exc, seen, n
         if not x[0] <= v <= x[-1]:
             return (f"{first}; the parabola's root {v:.6g} lies outside the points beside the "
                     f"estimate [{x[0]:.6g}, {x[-1]:.6g}]")
+    at_root = dict(whirl)
     edge = band_edge.locate(lambda x: (gap(x), whirl.get("error_hz"),
                                        whirl.get("linearisation_hz")), v, lo, hi, (g[i], g[i + 1]))
-    if edge is not None:
-        v, error, lin, side = edge
-        gap(v + side * band_edge.PROBE * (hi - lo))          # the mode's whirl, beside the edge
+    if edge is None:                            # a crossing: the mode as found at its root
+        whirl.update(at_root)
+    elif isinstance(edge, str):
+        return edge
+    else:
+        v, error, lin = edge                    # the whirl: the last point fitted, beside it
         # an edge moves with the frequencies as the line does: the allowance over its slope
         slope = exc.order * abs(cb.excitation_hz(params, hi) - cb.excitation_hz(params, lo)) / (
             hi - lo)

@@ -89,6 +89,31 @@ def test_a_parameter_one_percent_off_in_one_leaf_disagrees(monkeypatch):
     assert {(x["a"], x["b"]) for x in r["disagree"]} == {("closed-form", "euler-vector")}
 
 
+def test_campbell_judges_every_sets_sweep_and_finds_a_bug_off_its_own_speed(monkeypatch):
+    """`--campbell`: each set's sweep judged as `xval modes` judges it. euler-vector's stiffness
+    1 % high only at the sweep's 5th speed (not the set's own, a drawn spin): the set's own
+    verdicts all agree, the sweep's comparisons with it at that speed disagree — and only
+    those, listed among the set's false alarms with `campbell`."""
+    scene = get_scene("rotor-whirl")
+    leaf = solvers.get_solver("euler-vector").leaf(scene)
+    honest = leaf.modes
+    one = float(scene.campbell.values(scene.resolve())[4])
+    monkeypatch.setattr(leaf, "modes", lambda p, s: honest(
+        {**p, "k": 1.01 * p["k"]} if p["spin"] == one else p, s))
+    names = ["closed-form", "euler-vector"]
+    plain = cal.calibrate("rotor-whirl", 2, seed=3, solvers=names)
+    assert plain["comparisons"] and not plain["disagree"] and "campbell" not in plain.data
+    r = cal.calibrate("rotor-whirl", 2, seed=3, solvers=names, campbell=True)
+    assert r["comparisons"] == plain["comparisons"]
+    assert r["campbell"]["sets"] == 2 and r["campbell"]["comparisons"] > 50
+    assert r["disagree"] and r.problems()
+    assert all(x["campbell"] and x["channel"].endswith(f"@ spin {one:.6g}")
+               for x in r["disagree"]), r["disagree"]
+    assert "Campbell sweeps" in r.data["summary"]
+    with pytest.raises(BadInput, match="no Campbell sweep"):
+        cal.calibrate("press", 1, campbell=True)
+
+
 def test_a_zeroed_error_estimate_loses_its_coverage(monkeypatch):
     leaf = solvers.get_solver("fem").leaf(get_scene("rotating-beam"))
     assert cal.calibrate("rotating-beam", 2, solvers=["fem"])["coverage"] >= 0.95

@@ -58,3 +58,28 @@ def test_engines_differ_by_their_linearisation_bars(scene, overrides):
         if d > 1e-11 * f:
             ratios.append(bar / d)
     assert ratios and max(ratios) <= 10, ratios
+
+
+# `xval calibrate spinning-shaft --samples 20 --seed 11` set 4 (EI_yy = 1.52 EI_xx): along the
+# Campbell sweep the forward whirl 2's extrapolate from N/2 and N changes sign of its residual
+# near Ω* = 20, where the claimed seventh of the two extrapolates' difference fell short
+SHAFT_SET_4 = {"L": "1.6336424203133195", "EI_xx": "593.0898211735569",
+               "EI_yy": "904.3986614940769", "m": "3.0720491001409314"}
+
+
+@pytest.mark.parametrize("engine", ["exudyn", "mujoco"])
+def test_an_extrapolate_whose_residual_is_no_one_order_is_not_claimed_a_seventh(engine):
+    """The chain's successive extrapolates (N/8–N/4, N/4–N/2, N/2–N) differ by ratios 16–34 where
+    an order-4/5 residual rules (the claim holds with true/claimed 0.44–0.47), by −91 at
+    Ω* = 20: there the extrapolate was 2.26e-6 Hz off mstmm against a claim of 1.67e-6
+    (2 Campbell disagreements at this set). The bar covers it there; at Ω* = 19.5 (ratio 27)
+    the claim stands, within 5× of the true error (unclaimed it would be 18×)."""
+    sc = get_scene("spinning-shaft")
+    for spin, within in ((20.0, None), (19.5, 5.0)):
+        p = sc.resolve({**SHAFT_SET_4, "spin_ratio": str(spin)})
+        ref, run = (reg.modes(sc, reg.get_solver(n), p) for n in ("mstmm", engine))
+        j = run.labels.index("forward whirl 2")
+        true = abs(run.frequencies_hz[j] - ref.frequencies_hz[ref.labels.index("forward whirl 2")])
+        bar = frequency_errors(run)[j]
+        assert true <= bar, (spin, true, bar)
+        assert within is None or bar <= within * true, (spin, true, bar)

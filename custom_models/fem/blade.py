@@ -95,10 +95,11 @@ def solve(b, spin, r_h, n_modes, n_el, richardson=True, stations=13):
         bar = np.zeros(len(w))
         if richardson:
             w2, V, sample = family_modes(b, spin, r_h, fam, 2 * n_f, count)
-            half = family_modes(b, spin, r_h, fam, n_f // 2, count)[0]
+            half, quarter = (family_modes(b, spin, r_h, fam, n_f // k, count)[0] for k in (2, 4))
             # torsion and extension (no quotient: their conditioning ∝ n² only) keep the
             # round-off of their lowest mode as every mode's floor
-            w, bar = richardson_pair(half, w, w2, lowest=0 if fam in ("flap", "lag") else 1)
+            w, bar = richardson_pair(half, w, w2, lowest=0 if fam in ("flap", "lag") else 1,
+                                     quarter=quarter)
             err = max(err, float(np.max(bar / np.abs(w))))
         rows += [(w[i], fam, i + 1, sample(V[:, i]), bar[i]) for i in range(len(w))]
     rows.sort(key=lambda r: r[0])
@@ -107,17 +108,24 @@ def solve(b, spin, r_h, n_modes, n_el, richardson=True, stations=13):
 
 ROUND_OFF_SAFETY = 3.0
 H6 = 2.0**6 - 1      # the extrapolates' own error goes as h⁶: the n/2–n one's is 63 × the n–2n's
+H6_RULES = 48.0      # successive distances shrinking by this (of 64) show the h⁶ term rules
 # what a Rayleigh quotient (beam.bending_rayleigh) keeps of round-off, relative: measured ≤ 1.8e-13
 # on the blade's flap 1 and lag 1 at 96 elements (11 sets), where the solver's own λ was 1e-8 off
 QUOTIENT_ROUND_OFF = 1e3 * np.finfo(float).eps
 
 
-def richardson_pair(half, w, w2, rate=15.0, lowest=0, carry=0):
+def richardson_pair(half, w, w2, rate=15.0, lowest=0, carry=0, quarter=None):
     """The h⁴ extrapolate of the n and 2n meshes' ω (rate 2⁴ − 1 for both element types) and
     its error estimate per mode, × ROUND_OFF_SAFETY: the larger of
     - its discretisation error: its distance to the n/2–n extrapolate / 63 (the h⁶ term;
       measured 60–67 × between the two at rotating-beam's flap 3 and spinning-shaft's whirl 5,
-      and, the round-off gone, equal to the true error at flap 2 and 3 of 11 sets);
+      and, the round-off gone, equal to the true error at flap 2 and 3 of 11 sets) — where
+      the n/4 mesh's `quarter` is given, the ratio q of the extrapolates' successive
+      distances says whether that term rules: from H6_RULES the h⁶ claim, else the distance
+      over q − 1 (an order read off the meshes: a long, thin blade's flap at speed, whose
+      tension leaves bending a boundary layer, converges at q = 8.5 → 20.6 → 64 from n = 48,
+      `xval calibrate rotating-beam --seed 2027` set 18 at 38 rad/s, where /63 fell 1.05 ×
+      short), and below q = 4 (no order) the distance as it is;
     - its round-off: QUOTIENT_ROUND_OFF where ω is a Rayleigh quotient; where it is not (an
       unsymmetric state-space solve: a spinning anisotropic shaft), `lowest` > 0 takes the
       largest distance of the `lowest` modes (2 for the shaft's two bending planes: there the
@@ -126,13 +134,19 @@ def richardson_pair(half, w, w2, rate=15.0, lowest=0, carry=0):
       that carries it).
     The safety: where round-off dominated, the distance was 0.45–1.1 × the true error."""
     ext = w2 + (w2 - w) / rate
-    dist = np.abs(ext - (w + (w - half) / rate))
+    mid = w + (w - half) / rate
+    dist = np.abs(ext - mid)
+    over = np.full(len(ext), H6)
+    if quarter is not None:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            q = (half + (half - quarter) / rate - mid) / (mid - ext)
+        over = np.where(q >= H6_RULES, H6, np.where(q >= 4, q - 1, 1.0))
     floor = QUOTIENT_ROUND_OFF * np.abs(ext)
     if lowest:
         low = np.argsort(np.abs(ext))[:lowest]
         floor = np.maximum(floor, np.max(dist[low] * np.abs(ext[low]) ** carry)
                            / np.abs(ext) ** carry)
-    return ext, ROUND_OFF_SAFETY * np.maximum(dist / H6, floor)
+    return ext, ROUND_OFF_SAFETY * np.maximum(dist / over, floor)
 
 
 def modes(params: dict, settings: dict) -> LeafModes:

@@ -46,6 +46,11 @@ from reference_models import beam_chain_common as bc
 
 MODES_SETTINGS = {"n_segments": 40, "extrapolate": True, "psi": 0.0}
 FD_VARY = bc.FD_VARY       # the finite-difference step × this: the linearisation's own error
+# and × this: where the forward differences are rounding-bound (Exudyn's at 1e-8), the ×10
+# probe's change can be small by chance, truncation there cancelling rounding (hover, `xval
+# calibrate --seed 3030` set 0, root 1: Exudyn 7.5e-8 off MuJoCo, the ×10 bar 5e-8); rounding
+# changes completely at a step ×3 away (the root moved 5.5e-8), truncation hardly
+FD_NEAR = 3.0
 SPIN = ("drive", "spin", 0)                # the coordinate held at speed Ω
 TINY_MASS, TINY_INERTIA = 1e-9, 1e-12      # the massless frames (drive, blade roots)
 # the aircraft's extrapolates in their 1/N² regime were off by up to 2.1 × diff/7 against the
@@ -244,16 +249,21 @@ def roots(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False
     keep = lam.imag >= 0
     moved = None
     if vary:     # the oscillating roots only (the free aircraft's rigid-body roots are nearly
-        K2, D2, _, secs2 = mbc_matrices(       # defective, their dual rows huge), their dual
-            lambda *a: linearised(*a, fd_scale=FD_VARY), params, n, psi, free)   # rows alone
-        secs += secs2
-        idx = np.nonzero(_is_mode(lam) & keep)[0]
-        idx = idx[np.argsort(lam[idx].imag)][:vary]
+        idx = np.nonzero(_is_mode(lam) & keep)[0]     # defective, their dual rows huge), their
+        idx = idx[np.argsort(lam[idx].imag)][:vary]   # dual rows alone
         W = lu_solve(lu_factor(V), np.eye(len(lam))[:, idx], trans=1).T
         lam_v, V_v = lam[idx], V[:, idx]
+        change = []
+        for scale in (FD_VARY, FD_NEAR):
+            K2, D2, _, secs2 = mbc_matrices(
+                lambda *a, scale=scale: linearised(*a, fd_scale=scale), params, n, psi, free)
+            secs += secs2
+            change.append(eigen.change(_state(K2, D2) - A, lam_v, V_v, W)[1])
         moved = np.full((3, len(lam)), np.nan)
-        moved[:2, idx] = (eigen.change(_state(K2, D2) - A, lam_v, V_v, W)[1],
-                          eigen.solve_spread(A, lam_v))
+        # the step's error read off either probe as the ×FD_VARY one is read (its change over
+        # 1 − 1/FD_VARY): the near one's change over 1 − 1/FD_NEAR
+        near = change[1] * (1 - 1 / FD_VARY) / (1 - 1 / FD_NEAR)
+        moved[:2, idx] = np.maximum(change[0], near), eigen.solve_spread(A, lam_v)
         if sections and params["speed"] == 0:      # their own shift: at rest only (above)
             K3, D3, _, secs3 = mbc_matrices(
                 lambda *a: linearised(*a, sections=0.0), params, n, psi, free)

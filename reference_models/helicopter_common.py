@@ -226,8 +226,9 @@ def roots(linearised, params: dict, n: int, psi: float = 0.0, free: bool = False
     """Every root s of p̈ = K p + D ṗ with Im s ≥ 0 — oscillating, real (growing or decaying)
     and rigid-body alike — and its eigenvector in multi-blade coordinates, the coordinate
     names, the seconds the engine spent linearising and, for the lowest `vary` oscillating
-    roots, (|δs| the engine's finite-difference step × FD_VARY makes — first order, a cluster
-    by its Gershgorin discs: compare.physics.eigen.change —, the eigen solve's spread
+    roots, (|δs| the engine's finite-difference step × FD_VARY makes, or × FD_NEAR's rescaled
+    to it where larger — first order, a cluster by its Gershgorin discs:
+    compare.physics.eigen.change —, the eigen solve's spread
     (eigen.solve_spread), |δs| the sections' rotary inertia makes where `sections`, first
     order: the change on removing it), NaN for the others; None where `vary` is 0. The
     sections' shift is taken at rest only: there, removing them leaves the paper's beams
@@ -291,7 +292,8 @@ def oscillating(linearised, params: dict, n: int, psi: float = 0.0, free: bool =
     coordinates, the coordinate names, the seconds the engine spent linearising, every root
     (`roots`: real ones included, for the stability finding) and, for the lowest `vary`, each
     oscillating root's linearisation error (Hz; NaN beyond): the change the step × FD_VARY
-    makes over 1 − 1/FD_VARY, × LINEARISATION_SAFETY, plus the eigen solve's spread (with its
+    makes over 1 − 1/FD_VARY (or × FD_NEAR's over 1 − 1/FD_NEAR, where larger),
+    × LINEARISATION_SAFETY, plus the eigen solve's spread (with its
     own safety: compare.physics.eigen.solve_spread) — and the first-order
     shift its sections' rotary inertia makes (Hz; `roots`). The aircraft's finite
     differences are bound by rounding, not by their h² truncation as the beams' chains are

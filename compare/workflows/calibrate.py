@@ -398,10 +398,11 @@ def _sweep(scene: Scene, chosen: list, params: dict, k: int, changed: dict,
     not confirm is counted, not compared."""
     from .modes import campbell_diagram
     obj, _, told, *_ = campbell_diagram(scene, chosen, params, log=lambda *a: None)
+    counted = obj["sweep_verdicts"]            # the sweep's own tally (Verdict.tally)
     tally["sets"] += 1
-    tally["comparisons"] += len(told["sweep"])
-    for c in told["sweep"]:
-        tally["verdicts"][str(c.verdict)] = tally["verdicts"].get(str(c.verdict), 0) + 1
+    tally["comparisons"] += counted["comparisons"]
+    for v, n in counted["counts"].items():
+        tally["verdicts"][str(v)] = tally["verdicts"].get(str(v), 0) + n
     tally["unconfirmed"] += sum(map(len, obj["unconfirmed_critical_speeds"].values()))
     return [{"sample": k, "params": changed, "a": c.a, "b": c.b, "channel": c.channel,
              "ratio": float(c.ratio), "campbell": True}

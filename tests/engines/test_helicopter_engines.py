@@ -427,7 +427,7 @@ def test_the_engine_pair_agrees_where_exudyns_step_probe_changed_by_chance_littl
     p = sample(sc, 2, 3030)[0][1]
     runs = [solvers.modes(sc, solvers.get_solver(n), p) for n in ("exudyn", "mujoco")]
     got = sc.verdicts(p, runs)
-    assert abs(runs[0].frequencies_hz[0] - 2.0566568) < 1e-6
+    assert abs(runs[0].frequencies_hz[0] - runs[1].frequencies_hz[0]) < 1e-6   # one root 1
     assert len(got) >= 8 and [c.verdict for c in got] == ["agree"] * len(got), \
         [(c.channel, c.ratio) for c in got if c.verdict != "agree"]
 

@@ -21,7 +21,7 @@ nor an anisotropic shaft, and in the rotating frame it needs the centrifugal and
 matrices added by hand. The chain converges at second order in 1/N (measured, see
 `MODES_SETTINGS`); the default extrapolates N and N/2 (Richardson), which removes the 1/N² term,
 and reports the spread against the N/4–N/2 extrapolate as an error bound (with a note to
-raise n_segments where it exceeds 5e-3: the blade above ~100 rad/s at N = 40).
+raise n_segments where it exceeds 5e-3: the blade above ~230 rad/s at N = 40).
 
 Physics differences to the paper's Euler–Bernoulli model (all from the rigid section, see
 `beam_chain_common.blade_chain`): lag n carries the section rotary inertia ρI_lag (lag 1

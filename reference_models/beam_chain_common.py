@@ -194,7 +194,7 @@ def blade_modes(chain: dict, M, K, D, n_modes: int, varied=None) -> dict:
     label paired the N chain's flap 3 with the N/2 chain's flap 2."""
     s, V, n_unstable, _, z_err, f_err = quadratic_modes(M, K, D, varied, n_modes)
     fam, hinge, k = joint_table(chain)
-    families, shapes = [], []
+    families, shares, shapes = [], [], []
     arm = _arms(chain)
     on = (arm > 0).astype(float)
     m_line = chain["masses"][0] / chain["lengths"][0]
@@ -207,10 +207,12 @@ def blade_modes(chain: dict, M, K, D, n_modes: int, varied=None) -> dict:
         e = {"flap": m_line * np.sum(np.abs(z) ** 2), "lag": m_line * np.sum(np.abs(y) ** 2),
              "torsion": i_alpha * np.sum(np.abs(twist) ** 2)}
         families.append(max(e, key=e.get))
+        shares.append({f: x / sum(e.values()) for f, x in e.items()})
         shapes.append(real_shape(np.concatenate([z, y, 0.5 * chain["chord"] * twist])))
     s, shapes = s[:n_modes], np.array(shapes[:n_modes])
     return {"frequencies_hz": s.imag / (2 * np.pi),
-            "labels": family_labels(families)[:n_modes], "shapes": shapes,
+            "labels": family_labels(families)[:n_modes], "shares": shares[:n_modes],
+            "shapes": shapes,
             "damping": -s.real / np.abs(s), "damping_error": z_err,
             "linearisation_error_hz": f_err, "n_unstable": n_unstable}
 
@@ -399,6 +401,44 @@ def _shrink(models: list, low: dict, f_all: np.ndarray, idx) -> np.ndarray:
                          / (low.get(pair[i], np.nan) - f_all[i]) for i in idx])
 
 
+def veering_error(fine: dict, coarse: dict, f_all: np.ndarray, idx) -> np.ndarray:
+    """Per mode of the N chain (`idx`), what a veering with a mode of another family adds to
+    the extrapolate's error: 2c²/max(g, c), c the pair's coupling, g its least gap over the N
+    and N/2 chains and the extrapolates (0 without "shares": a chain whose families do not mix).
+
+    Two modes coupled by c veer as the eigenvalues of [[a, c], [c, b]]: each is pushed by
+    √((a − b)²/4 + c²) − |a − b|/2, c at the crossing, c²/|a − b| apart from it. Each chain
+    holds its own push (its a − b moves with N), and the 1/N² extrapolation of the pushes does
+    not give the converged chain's. c is read off the N chain: its two modes, g apart, share
+    s(1 − s) of each family, so c = g √(s(1 − s)), s the mode's share of the partner's family
+    and the partner the nearest mode of that family (measured at seed 11 set 2 of `xval
+    calibrate rotating-beam`, flap 2 and torsion 1: c = 1.3e-3 Hz at 28.0 rad/s, mid-veering, and
+    1.5e-3 at 28.1, 3.4e-2 apart). There the extrapolated torsion 1 sat 9.3e-4 and 1.7e-4 Hz
+    off the N = 320 chain against its 1/N² bar of 4.0e-4 and 3.6e-5; this term adds 1.1e-3 and
+    5e-4 (twice the push at g: the converged chain's gap may be narrower than all three)."""
+    if "shares" not in fine:
+        return np.zeros(len(idx))
+    f_n = np.abs(signed_hz(fine))
+    f_c = np.abs(by_label(coarse, pairing(fine)))
+    fams = [lab.rsplit(" ", 1)[0] for lab in fine["labels"]]
+    out = []
+    for i in idx:
+        add = 0.0
+        for fam in set(fams) - {fams[i]}:
+            js = [j for j, f in enumerate(fams) if f == fam]
+            j = min(js, key=lambda k: abs(f_n[k] - f_n[i]))
+            s = fine["shares"][i][fam]
+            c = abs(f_n[i] - f_n[j]) * np.sqrt(max(s * (1 - s), 0.0))
+            g_n, g_c = abs(f_n[i] - f_n[j]), abs(f_c[i] - f_c[j])
+            g = np.nanmin([g_n, g_c, abs(abs(f_all[i]) - abs(f_all[j]))])
+            # away from the crossing the push is smooth in N: what the extrapolation leaves
+            # of c²/g(h), g = g₀ + κh², is its h⁴ term, ~ c²(g_c − g_n)²/g³ (×4/9)
+            far = min(1.0, ((g_c - g_n) / g) ** 2) if np.isfinite(g_c) and g > 0 else 1.0
+            add += 2 * c**2 / max(g, c) * far if c > 0 else 0.0
+        out.append(add)
+    return np.array(out)
+
+
 def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) -> dict:
     """Modes of the N-segment chain, Richardson-extrapolated with the N/2 chain when asked;
     returns the LeafModes fields (frequencies ascending) plus notes and extra.
@@ -439,7 +479,8 @@ def solve(make_chain, linearise, post, n: int, extrapolate: bool, n_modes: int) 
         extra = {"unextrapolated_hz": fine["frequencies_hz"][idx],
                  "richardson_spread_rel": float(spread),
                  "frequency_error_hz": extrapolate_error(diff, change, ratio,
-                                                         shrink=_shrink(models, low, f_all, idx))}
+                                                         shrink=_shrink(models, low, f_all, idx))
+                 + veering_error(fine, models[1], f_all, idx)}
         if spread > SPREAD_NOTE:
             notes.append(f"discretisation: extrapolations from N/4–N/2 and N/2–N differ by "
                          f"{spread:.1e} here; raise n_segments")

@@ -193,7 +193,7 @@ def blade_modes(chain: dict, M, K, D, n_modes: int, varied=None) -> dict:
     named torsion, every higher flap mode's number shifted by one, and the extrapolation by
     label paired the N chain's flap 3 with the N/2 chain's flap 2."""
     s, V, n_unstable, _, z_err, f_err = quadratic_modes(M, K, D, varied, n_modes)
-    fam, hinge, k = joint_table(chain)
+    fam = joint_table(chain)[0]
     families, shares, shapes = [], [], []
     arm = _arms(chain)
     on = (arm > 0).astype(float)
@@ -415,7 +415,7 @@ def veering_error(fine: dict, coarse: dict, f_all: np.ndarray, idx) -> np.ndarra
     calibrate rotating-beam`, flap 2 and torsion 1: c = 1.3e-3 Hz at 28.0 rad/s, mid-veering, and
     1.5e-3 at 28.1, 3.4e-2 apart). There the extrapolated torsion 1 sat 9.3e-4 and 1.7e-4 Hz
     off the N = 320 chain against its 1/N² bar of 4.0e-4 and 3.6e-5; this term adds 1.1e-3 and
-    5e-4 (twice the push at g: the converged chain's gap may be narrower than all three)."""
+    3.9e-4 (twice the push at g: the converged chain's gap may be narrower than all three)."""
     if "shares" not in fine:
         return np.zeros(len(idx))
     f_n = np.abs(signed_hz(fine))

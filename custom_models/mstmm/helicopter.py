@@ -56,7 +56,7 @@ from compare.physics.mstmm import AXIAL, AXIAL_RIGID, axial_shift, helicopter_la
 from compare.physics.rotation import skew
 
 from . import elements as el
-from .roots import SEARCH_RTOL, find_roots, root_error_hz
+from .roots import SEARCH_RTOL, find_roots, hidden_roots, root_error_hz
 
 
 def frame_blocks(R):
@@ -298,6 +298,7 @@ def frequencies(L, spin, hub_radius, clamped, omega_max, rtol=1e-10, step_hz=0.1
     found = find_roots(g, grid, rtol)
     found += narrow_pairs(L, spin, hub_radius, clamped, grid, found + exact, g, rtol,
                           clusters=iso)
+    found += hidden_roots(g, grid, found, rtol)
     return sorted(found + exact), exact
 
 

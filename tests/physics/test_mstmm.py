@@ -462,6 +462,33 @@ def test_helicopter_clamped_four_roots_in_a_core_found_at_rest():
                        atol=1e-5)
 
 
+def test_helicopter_clamped_pair_beside_a_steep_root_found_at_rest():
+    """helicopter-clamped, `sample(scene, 6, 6161)[3]` at rest: the second cyclic flap pair,
+    9e-5 Hz apart, sits one cell of the grid above lag collective 1, whose zero falls through
+    both cells: no sign change, no dip of |g|, and mstmm lost the pair (its at-rest list then
+    misaligned with the engines' and 8 engine pairs at 21 rad/s stayed unexplained). The
+    independent fem: 3.39050, 3.39149, 3.39158 Hz (lag collective 1, flap cyclic 3 and 4)."""
+    from compare.workflows.calibrate import sample
+    from custom_models.mstmm import helicopter as mh
+    p = {**sample(HELICOPTER_CLAMPED, 6, 6161)[3][1], "speed": 0.0}
+    a = mh.modes(p, {})
+    assert a.labels[4:7] == ["lag collective 1", "flap cyclic 3", "flap cyclic 4"]
+    assert np.allclose(a.frequencies_hz[4:7], [3.39050, 3.39149, 3.39158], rtol=0, atol=1e-5)
+
+
+def test_a_pair_one_cell_beside_a_root_is_found():
+    """The root finder on a polynomial with known roots: 1.0003 and, one grid cell above it,
+    a pair 1e-5 apart (1.0013, 1.00131). The first pass sees the lone root's sign change and,
+    beside its steep zero, no dip at the pair; the deflated pass finds it."""
+    from custom_models.mstmm.roots import find_roots, hidden_roots
+    truth = [1.0003, 1.0013, 1.00131]
+    g = lambda w: float(np.prod([w - r for r in truth]) * (w + 2.0))  # noqa: E731
+    grid = np.arange(0.99, 1.01, 1e-3)
+    found = find_roots(g, grid)
+    found += hidden_roots(g, grid, found, 1e-12)
+    assert np.allclose(sorted(found), truth, rtol=0, atol=1e-9)
+
+
 def test_helicopter_fem_keeps_roots_arpack_left_off_the_axis():
     """helicopter-clamped, `sample(scene, 20, 777)[4]` (57 rad/s, a 0.95 m chord): on fem's ×2
     mesh ARPACK returned the lag modes with Re λ up to 4e-3 |λ|, the filter dropped them

@@ -420,7 +420,7 @@ def veering_error(fine: dict, coarse: dict, f_all: np.ndarray, idx) -> np.ndarra
         return np.zeros(len(idx))
     f_n = np.abs(signed_hz(fine))
     f_c = np.abs(by_label(coarse, pairing(fine)))
-    fams = [lab.rsplit(" ", 1)[0] for lab in fine["labels"]]
+    fams = [max(share, key=share.get) for share in fine["shares"]]     # as the labels name them
     out = []
     for i in idx:
         add = 0.0
